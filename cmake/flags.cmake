@@ -1,0 +1,29 @@
+# One INTERFACE target carries the project's compile flags; every meltlab target links it.
+add_library(meltlab_flags INTERFACE)
+target_compile_options(meltlab_flags INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wcast-align -Wunused
+  -Woverloaded-virtual -Wnull-dereference -Wdouble-promotion -Wimplicit-fallthrough
+  # Serial and parallel cycles must give bitwise-identical meshes. Identical source
+  # expressions only give identical results if the compiler never fuses a*b+c into an FMA
+  # in one code path and not in the other, so contraction is off everywhere.
+  -ffp-contract=off)
+if(MELTLAB_WERROR)
+  target_compile_options(meltlab_flags INTERFACE -Werror)
+endif()
+if(MELTLAB_SANITIZE)
+  target_compile_options(meltlab_flags INTERFACE
+    -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer)
+  target_link_options(meltlab_flags INTERFACE -fsanitize=address,undefined)
+endif()
+
+# Third-party headers are included as system headers so their warnings do not fail -Werror.
+function(meltlab_system_includes target)
+  foreach(dep IN LISTS ARGN)
+    if(TARGET ${dep})
+      get_target_property(dirs ${dep} INTERFACE_INCLUDE_DIRECTORIES)
+      if(dirs)
+        target_include_directories(${target} SYSTEM PRIVATE ${dirs})
+      endif()
+    endif()
+  endforeach()
+endfunction()

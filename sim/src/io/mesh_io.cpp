@@ -1,0 +1,299 @@
+// Mesh files through OpenMesh's IO layer. Reading uses a custom importer that records the
+// raw polygons (OpenMesh's own mesh types would build half-edges and silently drop faces
+// that make the surface non-manifold, which is exactly what we must report).
+
+#include <meltlab/sim/atomic_file.h>
+#include <meltlab/sim/error.h>
+#include <meltlab/sim/mesh_io.h>
+
+#include <OpenMesh/Core/IO/IOManager.hh>
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/IO/importer/BaseImporter.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace meltlab::sim {
+
+namespace fs = std::filesystem;
+
+std::string mesh_format_of(const fs::path& file) {
+  std::string ext = file.extension().string();
+  if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
+}
+
+namespace {
+
+bool supported_format(const std::string& ext) {
+  return ext == "obj" || ext == "ply" || ext == "off" || ext == "stl";
+}
+
+// Collects vertices and polygons exactly as the reader delivers them.
+class SoupImporter final : public OpenMesh::IO::BaseImporter {
+ public:
+  PolygonMesh mesh;
+  std::size_t bad_index_faces = 0;
+
+  OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3f& p) override {
+    mesh.V.emplace_back(static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2]));
+    return OpenMesh::VertexHandle(static_cast<int>(mesh.V.size() - 1));
+  }
+  OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3d& p) override {
+    mesh.V.emplace_back(p[0], p[1], p[2]);
+    return OpenMesh::VertexHandle(static_cast<int>(mesh.V.size() - 1));
+  }
+  OpenMesh::VertexHandle add_vertex() override { return add_vertex(OpenMesh::Vec3d(0, 0, 0)); }
+  OpenMesh::HalfedgeHandle add_edge(OpenMesh::VertexHandle, OpenMesh::VertexHandle) override { return OpenMesh::HalfedgeHandle(); }
+  OpenMesh::FaceHandle add_face(const VHandles& idx) override {
+    PolygonFace f;
+    f.outer.reserve(idx.size());
+    for (const auto& vh : idx) {
+      if (!vh.is_valid() || static_cast<std::size_t>(vh.idx()) >= mesh.V.size()) {
+        ++bad_index_faces;
+        return OpenMesh::FaceHandle();
+      }
+      f.outer.push_back(vh.idx());
+    }
+    mesh.faces.push_back(std::move(f));
+    return OpenMesh::FaceHandle(static_cast<int>(mesh.faces.size() - 1));
+  }
+  OpenMesh::FaceHandle add_face(OpenMesh::HalfedgeHandle) override { return OpenMesh::FaceHandle(); }
+  void add_face_texcoords(OpenMesh::FaceHandle, OpenMesh::VertexHandle, const std::vector<OpenMesh::Vec2f>&) override {}
+  void add_face_texcoords(OpenMesh::FaceHandle, OpenMesh::VertexHandle, const std::vector<OpenMesh::Vec3f>&) override {}
+  void set_face_texindex(OpenMesh::FaceHandle, int) override {}
+  void set_point(OpenMesh::VertexHandle vh, const OpenMesh::Vec3f& p) override {
+    if (vh.is_valid() && static_cast<std::size_t>(vh.idx()) < mesh.V.size())
+      mesh.V[static_cast<std::size_t>(vh.idx())] = Vec3<double>(p[0], p[1], p[2]);
+  }
+  void set_halfedge(OpenMesh::VertexHandle, OpenMesh::HalfedgeHandle) override {}
+  void set_normal(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
+  void set_normal(OpenMesh::VertexHandle, const OpenMesh::Vec3d&) override {}
+  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec3uc&) override {}
+  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec4uc&) override {}
+  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
+  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec4f&) override {}
+  void set_texcoord(OpenMesh::VertexHandle, const OpenMesh::Vec2f&) override {}
+  void set_status(OpenMesh::VertexHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+  void set_next(OpenMesh::HalfedgeHandle, OpenMesh::HalfedgeHandle) override {}
+  void set_face(OpenMesh::HalfedgeHandle, OpenMesh::FaceHandle) override {}
+  void request_face_texcoords2D() override {}
+  void set_texcoord(OpenMesh::HalfedgeHandle, const OpenMesh::Vec2f&) override {}
+  void set_texcoord(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
+  void set_texcoord(OpenMesh::HalfedgeHandle, const OpenMesh::Vec3f&) override {}
+  void set_status(OpenMesh::HalfedgeHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec3uc&) override {}
+  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec4uc&) override {}
+  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec3f&) override {}
+  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec4f&) override {}
+  void set_status(OpenMesh::EdgeHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+  void set_normal(OpenMesh::FaceHandle, const OpenMesh::Vec3f&) override {}
+  void set_normal(OpenMesh::FaceHandle, const OpenMesh::Vec3d&) override {}
+  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec3uc&) override {}
+  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec4uc&) override {}
+  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec3f&) override {}
+  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec4f&) override {}
+  void set_status(OpenMesh::FaceHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+  void add_texture_information(int, std::string) override {}
+  std::size_t n_vertices() const override { return mesh.V.size(); }
+  std::size_t n_faces() const override { return mesh.faces.size(); }
+  std::size_t n_edges() const override { return 0; }
+};
+
+// OpenMesh reports parse problems on its own log streams; capture them so our one-line
+// error can say what the reader saw, and so nothing is printed behind the user's back.
+class CapturedOpenMeshLog {
+ public:
+  // OpenMesh connects omerr to std::cerr, omlog to std::clog and omout to std::cout.
+  CapturedOpenMeshLog() {
+    omerr().disconnect(std::cerr);
+    omerr().connect(err_);
+    omlog().disconnect(std::clog);
+    omlog().connect(log_);
+    omout().disconnect(std::cout);
+    omout().connect(log_);
+  }
+  ~CapturedOpenMeshLog() {
+    omerr().disconnect(err_);
+    omerr().connect(std::cerr);
+    omlog().disconnect(log_);
+    omlog().connect(std::clog);
+    omout().disconnect(log_);
+    omout().connect(std::cout);
+  }
+  CapturedOpenMeshLog(const CapturedOpenMeshLog&) = delete;
+  CapturedOpenMeshLog& operator=(const CapturedOpenMeshLog&) = delete;
+  std::string first_error_line() const {
+    std::string s = err_.str();
+    if (s.empty()) s = log_.str();
+    std::istringstream in(s);
+    std::string line;
+    while (std::getline(in, line))
+      if (line.find_first_not_of(" \t\r") != std::string::npos) return line;
+    return {};
+  }
+
+ private:
+  std::ostringstream err_, log_;
+};
+
+// Counts the elements an OFF header declares, so a truncated OFF file (which OpenMesh's
+// reader accepts silently, keeping what it read) is refused.
+struct OffHeader {
+  bool ok = false;
+  std::size_t vertices = 0, faces = 0;
+};
+OffHeader read_off_header(const fs::path& file) {
+  OffHeader h;
+  std::ifstream in(file);
+  std::string token;
+  if (!(in >> token)) return h;
+  if (token.find("OFF") == std::string::npos) return h;
+  if (token.find("ST") != std::string::npos || token.find("n") != std::string::npos) return h;
+  std::string line;
+  // Skip comments and read the three counts.
+  std::size_t counts[3];
+  int got = 0;
+  while (got < 3 && in >> token) {
+    if (token[0] == '#') {
+      std::getline(in, line);
+      continue;
+    }
+    try {
+      counts[got++] = static_cast<std::size_t>(std::stoull(token));
+    } catch (...) {
+      return h;
+    }
+  }
+  if (got < 3) return h;
+  h.ok = true;
+  h.vertices = counts[0];
+  h.faces = counts[1];
+  return h;
+}
+
+}  // namespace
+
+PolygonMesh read_polygon_mesh(const fs::path& file) {
+  const std::string name = file.string();
+  std::error_code ec;
+  if (!fs::exists(file, ec)) throw InputError(fmt::format("{}: no such file", name));
+  if (fs::is_directory(file, ec)) throw InputError(fmt::format("{}: is a folder, not a mesh file", name));
+  const std::string ext = mesh_format_of(file);
+  if (!supported_format(ext))
+    throw InputError(fmt::format("{}: unknown mesh format '.{}' (use .obj, .ply, .off or .stl)", name, ext));
+  {
+    std::ifstream probe(file, std::ios::binary);
+    if (!probe) throw InputError(fmt::format("{}: cannot open for reading", name));
+    if (probe.peek() == std::ifstream::traits_type::eof()) throw InputError(fmt::format("{}: file is empty", name));
+  }
+  SoupImporter importer;
+  OpenMesh::IO::Options opt;
+  bool ok = false;
+  std::string reader_says;
+  {
+    CapturedOpenMeshLog capture;
+    try {
+      ok = OpenMesh::IO::IOManager().read(name, importer, opt);
+    } catch (const std::exception& e) {
+      ok = false;
+      reader_says = e.what();
+    }
+    if (reader_says.empty()) reader_says = capture.first_error_line();
+  }
+  if (!ok)
+    throw InputError(fmt::format("{}: cannot parse as {}{}{}", name, ext, reader_says.empty() ? "" : ": ", reader_says));
+  PolygonMesh& m = importer.mesh;
+  if (importer.bad_index_faces > 0)
+    throw InputError(fmt::format("{}: {} face(s) use vertex indices out of range", name, importer.bad_index_faces));
+  if (ext == "off") {
+    const OffHeader h = read_off_header(file);
+    if (h.ok && (m.V.size() != h.vertices || m.faces.size() != h.faces))
+      throw InputError(fmt::format("{}: truncated or corrupt OFF: header declares {} vertices and {} faces, read {} and {}",
+                                   name, h.vertices, h.faces, m.V.size(), m.faces.size()));
+  }
+  if (m.V.empty() || m.faces.empty())
+    throw InputError(fmt::format("{}: no {} in the file", name, m.V.empty() ? "vertices" : "faces"));
+  for (std::size_t v = 0; v < m.V.size(); ++v)
+    if (!m.V[v].allFinite())
+      throw InputError(fmt::format("{}: vertex v{} has a non-finite coordinate ({}, {}, {})", name, v, m.V[v].x(),
+                                   m.V[v].y(), m.V[v].z()));
+  return m;
+}
+
+LoadedMesh load_mesh(const fs::path& file, const LoadOptions& options) {
+  LoadedMesh out;
+  const std::string name = file.string();
+  if (!(options.weld_tolerance >= 0.0) || !std::isfinite(options.weld_tolerance))
+    throw InputError(fmt::format("{}: weld tolerance must be a finite number >= 0", name));
+  PolygonMesh raw = read_polygon_mesh(file);
+  out.report.file_vertices = raw.V.size();
+  out.report.file_faces = raw.faces.size();
+  WeldResult welded = weld_vertices(raw, options.weld_tolerance);
+  out.report.welded_vertices = welded.merged_vertices;
+  out.report.unreferenced_vertices = welded.unreferenced_removed;
+  out.report.degenerate_faces = welded.degenerate_faces_removed;
+  out.polygons = std::move(welded.mesh);
+  if (out.polygons.faces.empty()) throw InputError(fmt::format("{}: every face is degenerate", name));
+  const TopologyReport poly_topo = check_topology(out.polygons);
+  out.report.file_counts = poly_topo.counts;
+  out.mesh = triangulate(out.polygons, name);
+  TriMesh<double> tm = TriMesh<double>::from_indexed(out.mesh);
+  const TopologyReport topo = check_topology(tm);
+  if (!topo.valid()) {
+    if (!options.repair) {
+      const std::string what = topo.problems.empty() ? "invalid topology" : topo.problems.front().describe();
+      std::string more;
+      const std::int64_t others = topo.boundary_edges + topo.nonmanifold_edges + topo.nonmanifold_vertices +
+                                  topo.misoriented_edges + topo.low_valence_vertices - 1;
+      if (others > 0) more = fmt::format(" (and {} more problem(s))", others);
+      throw InputError(fmt::format("{}: {}{}; use --repair to fix it with CGAL", name, what, more));
+    }
+    throw InputError(fmt::format("{}: repair is not available in this build", name));
+  }
+  return out;
+}
+
+void save_mesh(const IndexedMesh& mesh, const fs::path& file) {
+  const std::string ext = mesh_format_of(file);
+  if (!supported_format(ext))
+    throw InputError(fmt::format("{}: unknown mesh format '.{}' (use .obj, .ply, .off or .stl)", file.string(), ext));
+  struct Traits : OpenMesh::DefaultTraits {
+    using Point = OpenMesh::Vec3d;
+    using Normal = OpenMesh::Vec3d;
+  };
+  using OMesh = OpenMesh::TriMesh_ArrayKernelT<Traits>;
+  OMesh om;
+  std::vector<OMesh::VertexHandle> vh;
+  vh.reserve(mesh.V.size());
+  for (const auto& p : mesh.V) vh.push_back(om.add_vertex(OMesh::Point(p.x(), p.y(), p.z())));
+  std::size_t dropped = 0;
+  {
+    CapturedOpenMeshLog capture;
+    for (const auto& t : mesh.F) {
+      auto fh = om.add_face(vh[static_cast<std::size_t>(t[0])], vh[static_cast<std::size_t>(t[1])],
+                            vh[static_cast<std::size_t>(t[2])]);
+      if (!fh.is_valid()) ++dropped;
+    }
+  }
+  if (dropped > 0)
+    throw InputError(fmt::format("{}: cannot write: {} face(s) are non-manifold", file.string(), dropped));
+  OpenMesh::IO::Options opt;
+  if (ext == "ply" || ext == "stl") opt += OpenMesh::IO::Options::Binary;
+  write_atomically(file, [&](const fs::path& tmp) {
+    bool ok = false;
+    {
+      CapturedOpenMeshLog capture;
+      ok = OpenMesh::IO::write_mesh(om, tmp.string(), opt, 17);
+    }
+    if (!ok) throw InputError(fmt::format("{}: cannot write mesh", file.string()));
+  });
+}
+
+}  // namespace meltlab::sim
