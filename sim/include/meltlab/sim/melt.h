@@ -1,0 +1,145 @@
+#pragma once
+// The melt/sublimation cycle of the monograph (chapter 3): per cycle
+//   Alg. 1  deform       every vertex moves by kg·kl(P)·M, M from M_E and M_N (Eq. 3.6, 3.8)
+//   Alg. 2  collapse     edges shorter than kr are collapsed (index-ordering trick, chains)
+//   Alg. 3  glued+sort   glued triangle pairs are removed, triangles rotated min-index first
+//   repair  (harness)    non-manifold configurations Alg. 2/3 leave behind are resolved
+//                        locally: glued pairs the vertex count misses are removed, pinched
+//                        vertices split into one vertex per fan (this is how a neck that
+//                        collapsed to a point separates the object into parts), and
+//                        non-manifold edges are collapsed into such pinches.
+// Each step is a sweep over the fixed-length arrays, so a cycle is O(n).
+//
+// Serial and parallel (TBB) execution give bitwise-identical meshes: every floating-point
+// sum is taken in the same order (a vertex sums its triangles in ascending triangle index;
+// a merge cluster sums its members in ascending vertex index), and every conflict is
+// resolved by an order-independent rule (a vertex marked for merging by several triangles
+// takes the smallest target). See melt.cpp for the details and the open choices of §12.
+
+#include <meltlab/sim/kl_field.h>
+#include <meltlab/sim/mesh.h>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace meltlab::sim {
+
+/// Which displacement Alg. 1 uses (the single-vector variants reproduce Figs. 3.1 / 3.4).
+enum class DeformMode {
+  kCombined,    ///< Eq. 3.6: kE·M_E + kN·M_N where they agree, kN·M_N elsewhere
+  kNormalOnly,  ///< M = kN·M_N only (Fig. 3.1: triangles escape after ~1500 cycles)
+  kEdgeOnly,    ///< M = kE·M_E only (smooths concavities instead of shrinking, Fig. 3.4)
+};
+
+/// The tie N·M_E = 0 (open choice `sign_test_tie`).
+enum class TieRule {
+  kLessEqual,  ///< Alg. 1: dot(N, M_E) <= 0 takes the combined branch (default)
+  kStrict,     ///< Eq. 3.6: only dot(N, M_E) < 0 does
+};
+
+/// M_E as the mean of the unit edge vectors (Alg. 1) or their sum (Eq. 3.5, second form).
+enum class EdgeSumMode { kMean, kSum };
+
+/// How a merge cluster's position is formed (open choice `merge_position_mode`).
+enum class MergeMode {
+  kClusterMean,         ///< GPU §5.4: arithmetic mean of the survivor and all vertices merged into it (default)
+  kSequentialPairwise,  ///< CPU Alg. 2: survivor absorbs members in ascending order, P_r = (P_k + P_r)/2
+};
+
+enum class Execution { kSerial, kParallel };
+
+struct MeltParams {
+  double kg = 1.0;   ///< global rate coefficient, in [0, 1] (ambient temperature)
+  double kE = 0.0;   ///< weight of M_E, mesh units per cycle (M_E is a mean of unit vectors)
+  double kN = 0.0;   ///< weight of M_N, mesh units per cycle; the monograph uses kE ≈ 100 kN
+  double kr = 0.0;   ///< minimum edge length, mesh units (Eq. 3.7)
+  DeformMode deform = DeformMode::kCombined;
+  TieRule tie = TieRule::kLessEqual;
+  EdgeSumMode edge_sum = EdgeSumMode::kMean;
+  MergeMode merge = MergeMode::kClusterMean;
+  bool repair = true;  ///< run the harness's topology repair after Alg. 3
+
+  /// Throws InputError naming the parameter if a value is not finite or out of range.
+  void validate() const;
+};
+
+/// What one cycle did.
+struct CycleReport {
+  std::int64_t merged_vertices = 0;       ///< Alg. 2: vertices merged into another
+  std::int64_t degenerate_triangles = 0;  ///< Alg. 2: triangles deleted for a repeated index
+  std::int64_t glued_triangles = 0;       ///< Alg. 3: triangles on a vertex with count 2
+  std::int64_t glued_vertices = 0;        ///< Alg. 3: vertices with count 2
+  std::int64_t orphan_vertices = 0;       ///< vertices left without triangles, deleted
+  std::int64_t repair_glued_pairs = 0;    ///< repair: glued pairs Alg. 3's count test missed
+  std::int64_t repair_edge_collapses = 0; ///< repair: non-manifold edges collapsed
+  std::int64_t repair_vertex_splits = 0;  ///< repair: extra vertices created by splitting pinches
+  std::int64_t live_vertices = 0;         ///< after the cycle
+  std::int64_t live_triangles = 0;        ///< after the cycle
+  bool topology_changed() const {
+    return repair_vertex_splits > 0 || repair_edge_collapses > 0 || repair_glued_pairs > 0;
+  }
+};
+
+struct MeltWorkspace;  // scratch arrays kept across cycles (defined in melt.cpp)
+
+/// Runs the melt cycle on a mesh it owns. Keeps its scratch buffers across cycles, so a
+/// cycle allocates nothing once the arrays have grown to size.
+template <class Real>
+class MeltSimulator {
+ public:
+  /// `mesh` must be a valid closed solid (see check_topology); its triangles are sorted
+  /// min-index first here (the "once" step before the first cycle, §3.6).
+  MeltSimulator(TriMesh<Real> mesh, MeltParams params, KlFieldPtr kl, Execution exec = Execution::kSerial);
+  ~MeltSimulator();
+  MeltSimulator(MeltSimulator&&) noexcept;
+  MeltSimulator& operator=(MeltSimulator&&) noexcept;
+
+  /// One cycle: Alg. 1, Alg. 2, Alg. 3, repair.
+  CycleReport step();
+
+  const TriMesh<Real>& mesh() const { return mesh_; }
+  TriMesh<Real>& mutable_mesh() { return mesh_; }
+  const MeltParams& params() const { return params_; }
+  void set_params(const MeltParams& p);
+  Execution execution() const { return exec_; }
+  void set_execution(Execution e) { exec_ = e; }
+  std::int64_t cycle() const { return cycle_; }
+  bool empty() const;  ///< true once every triangle has melted away
+
+ private:
+  TriMesh<Real> mesh_;
+  MeltParams params_;
+  KlFieldPtr kl_;
+  Execution exec_;
+  std::int64_t cycle_ = 0;
+  std::unique_ptr<MeltWorkspace> ws_;
+};
+
+// ---- the individual algorithms, for tests and for callers that compose their own cycle ----
+
+/// Alg. 1 on all live vertices: face normals, vertex normals, M_E, and the move.
+template <class Real>
+void deform(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execution exec = Execution::kSerial);
+
+/// Alg. 2: collapses edges shorter than kr. Returns the vertices merged and the triangles
+/// deleted as degenerate. Precondition: triangles sorted min-index first.
+template <class Real>
+CycleReport collapse_short_edges(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec = Execution::kSerial);
+
+/// Alg. 3: removes glued triangle pairs (vertex triangle count 2), deletes vertices left
+/// with count 2 or 0, and rotates triangles min-index first.
+template <class Real>
+CycleReport remove_glued_and_sort(TriMesh<Real>& m, Execution exec = Execution::kSerial);
+
+/// The harness's local topology repair over the given vertices (see the header comment).
+/// Returns what it did. Throws InvariantError if it cannot converge (never observed; a bug).
+template <class Real>
+CycleReport repair_topology(TriMesh<Real>& m, const std::vector<Index>& vertices);
+
+/// Rotates every live triangle min-index first (Alg. 3's sort step alone).
+template <class Real>
+void sort_triangle_indices(TriMesh<Real>& m);
+
+}  // namespace meltlab::sim
