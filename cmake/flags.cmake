@@ -2,7 +2,7 @@
 add_library(meltlab_flags INTERFACE)
 target_compile_options(meltlab_flags INTERFACE
   -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wcast-align -Wunused
-  -Woverloaded-virtual -Wnull-dereference -Wdouble-promotion -Wimplicit-fallthrough
+  -Woverloaded-virtual -Wdouble-promotion -Wimplicit-fallthrough
   # Serial and parallel cycles must give bitwise-identical meshes. Identical source
   # expressions only give identical results if the compiler never fuses a*b+c into an FMA
   # in one code path and not in the other, so contraction is off everywhere.

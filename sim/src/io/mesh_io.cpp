@@ -143,39 +143,87 @@ class CapturedOpenMeshLog {
   std::ostringstream err_, log_;
 };
 
-// Counts the elements an OFF header declares, so a truncated OFF file (which OpenMesh's
-// reader accepts silently, keeping what it read) is refused.
+// An ASCII OFF file as declared by its header: the counts, and the first vertex line whose
+// coordinates are not finite numbers (OpenMesh's reader stops or misreads at "nan"/"inf"
+// and accepts a truncated file silently, keeping what it read).
 struct OffHeader {
   bool ok = false;
   std::size_t vertices = 0, faces = 0;
+  std::string bad_vertex;  // "line L: ..." or empty
 };
 OffHeader read_off_header(const fs::path& file) {
   OffHeader h;
   std::ifstream in(file);
-  std::string token;
-  if (!(in >> token)) return h;
-  if (token.find("OFF") == std::string::npos) return h;
-  if (token.find("ST") != std::string::npos || token.find("n") != std::string::npos) return h;
   std::string line;
-  // Skip comments and read the three counts.
-  std::size_t counts[3];
-  int got = 0;
-  while (got < 3 && in >> token) {
-    if (token[0] == '#') {
-      std::getline(in, line);
-      continue;
+  int line_no = 0;
+  auto next_content_line = [&](std::string& out) {
+    while (std::getline(in, out)) {
+      ++line_no;
+      const auto hash = out.find('#');
+      if (hash != std::string::npos) out.erase(hash);
+      if (out.find_first_not_of(" \t\r") != std::string::npos) return true;
     }
-    try {
-      counts[got++] = static_cast<std::size_t>(std::stoull(token));
-    } catch (...) {
-      return h;
+    return false;
+  };
+  if (!next_content_line(line)) return h;
+  std::istringstream first(line);
+  std::string magic;
+  first >> magic;
+  if (magic != "OFF") return h;  // COFF, NOFF, binary OFF...: leave them to OpenMesh
+  std::vector<std::string> tokens;
+  for (std::string t; first >> t;) tokens.push_back(t);
+  while (tokens.size() < 3 && next_content_line(line)) {
+    std::istringstream ls(line);
+    for (std::string t; ls >> t;) tokens.push_back(t);
+  }
+  if (tokens.size() < 3) return h;
+  try {
+    h.vertices = static_cast<std::size_t>(std::stoull(tokens[0]));
+    h.faces = static_cast<std::size_t>(std::stoull(tokens[1]));
+  } catch (...) {
+    return h;
+  }
+  h.ok = true;
+  for (std::size_t v = 0; v < h.vertices && h.bad_vertex.empty(); ++v) {
+    if (!next_content_line(line)) break;  // truncation is reported by the count check
+    std::istringstream ls(line);
+    std::string tok;
+    for (int k = 0; k < 3; ++k) {
+      if (!(ls >> tok)) {
+        h.bad_vertex = fmt::format("line {}: vertex v{} has fewer than 3 coordinates", line_no, v);
+        break;
+      }
+      char* end = nullptr;
+      const double x = std::strtod(tok.c_str(), &end);
+      if (end == tok.c_str() || *end != '\0' || !std::isfinite(x)) {
+        h.bad_vertex = fmt::format("line {}: vertex v{} coordinate '{}' is not a finite number", line_no, v, tok);
+        break;
+      }
     }
   }
-  if (got < 3) return h;
-  h.ok = true;
-  h.vertices = counts[0];
-  h.faces = counts[1];
   return h;
+}
+
+// OpenMesh's OBJ reader skips a vertex line it cannot parse ("v nan 1 0"), which shifts
+// every later index. Find the first such line so the error names it.
+std::string first_bad_obj_vertex(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != '\t')) continue;
+    std::istringstream ls(line.substr(2));
+    std::string tok;
+    for (int k = 0; k < 3; ++k) {
+      if (!(ls >> tok)) return fmt::format("line {}: vertex has fewer than 3 coordinates", line_no);
+      char* end = nullptr;
+      const double x = std::strtod(tok.c_str(), &end);
+      if (end == tok.c_str() || *end != '\0' || !std::isfinite(x))
+        return fmt::format("line {}: vertex coordinate '{}' is not a finite number", line_no, tok);
+    }
+  }
+  return {};
 }
 
 }  // namespace
@@ -207,17 +255,20 @@ PolygonMesh read_polygon_mesh(const fs::path& file) {
     }
     if (reader_says.empty()) reader_says = capture.first_error_line();
   }
+  if (ext == "obj") {
+    const std::string bad = first_bad_obj_vertex(file);
+    if (!bad.empty()) throw InputError(fmt::format("{}:{}", name, bad));
+  }
+  const OffHeader off = ext == "off" ? read_off_header(file) : OffHeader{};
+  if (!off.bad_vertex.empty()) throw InputError(fmt::format("{}:{}", name, off.bad_vertex));
   if (!ok)
     throw InputError(fmt::format("{}: cannot parse as {}{}{}", name, ext, reader_says.empty() ? "" : ": ", reader_says));
   PolygonMesh& m = importer.mesh;
   if (importer.bad_index_faces > 0)
     throw InputError(fmt::format("{}: {} face(s) use vertex indices out of range", name, importer.bad_index_faces));
-  if (ext == "off") {
-    const OffHeader h = read_off_header(file);
-    if (h.ok && (m.V.size() != h.vertices || m.faces.size() != h.faces))
-      throw InputError(fmt::format("{}: truncated or corrupt OFF: header declares {} vertices and {} faces, read {} and {}",
-                                   name, h.vertices, h.faces, m.V.size(), m.faces.size()));
-  }
+  if (off.ok && (m.V.size() != off.vertices || m.faces.size() != off.faces))
+    throw InputError(fmt::format("{}: truncated or corrupt OFF: header declares {} vertices and {} faces, read {} and {}",
+                                 name, off.vertices, off.faces, m.V.size(), m.faces.size()));
   if (m.V.empty() || m.faces.empty())
     throw InputError(fmt::format("{}: no {} in the file", name, m.V.empty() ? "vertices" : "faces"));
   for (std::size_t v = 0; v < m.V.size(); ++v)

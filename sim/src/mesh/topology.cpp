@@ -84,6 +84,8 @@ TopologyReport analyse(const Loops& L, std::size_t max_problems) {
       used[static_cast<std::size_t>(L.verts[j])] = 1;
       uf.unite(L.verts[j], L.verts[j + 1 < e ? j + 1 : s]);
     }
+    // A hole loop belongs to the same shell as its face's outer loop (the face joins them).
+    if (k > 0 && L.face_of[k] == L.face_of[k - 1]) uf.unite(L.verts[s], L.verts[L.start[k - 1]]);
   }
 
   // ---- directed edges: key (lo, hi), forward = (from < to) ----

@@ -128,6 +128,11 @@ void deform(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execution 
 template <class Real>
 CycleReport collapse_short_edges(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec = Execution::kSerial);
 
+/// Alg. 2's chain flattening: given merge targets with target[k] <= k (k merges into
+/// target[k]; target[k] == k for none), returns the end of every chain (Fig. 3.11).
+/// Throws InvariantError if some target[k] > k.
+std::vector<Index> flatten_merge_targets(const std::vector<Index>& target);
+
 /// Alg. 3: removes glued triangle pairs (vertex triangle count 2), deletes vertices left
 /// with count 2 or 0, and rotates triangles min-index first.
 template <class Real>

@@ -10,6 +10,7 @@
 // (b - a) x (c - a) point out of the solid (Eq. 2.9).
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
 #include <span>

@@ -1,0 +1,350 @@
+// The harness's local topology repair, run after Alg. 3 on the vertices whose
+// neighbourhood changed this cycle (the monograph's Alg. 2/3 do not keep a mesh manifold
+// in every configuration: a collapse can merge two vertices that share more than the two
+// neighbours of their edge, e.g. the last three-edge loop of a neck, and the single
+// count-2 test of Alg. 3 misses glued pairs on a vertex that has other triangles too).
+//
+// For a vertex v, every triangle (v, x, y) contributes the directed link edge x -> y. On a
+// closed, oriented 2-manifold the link is one directed cycle of length >= 3. Otherwise:
+//   * a 2-cycle x -> y -> x is a glued pair (v, x, y), (v, y, x): both triangles go;
+//   * several disjoint cycles: v is a pinch point where parts of the surface touch (a
+//     neck that collapsed to a point): v is split into one vertex per cycle, which is how
+//     the object separates into parts (S grows) or a handle breaks (G shrinks);
+//   * a node with two or more outgoing link edges: edge (v, x) has more than two
+//     triangles; it is collapsed (x merged into v, or v into x, keeping the smaller index
+//     as Alg. 2 does), which turns it into one of the cases above.
+// Every step deletes at least one element or removes a pinch, and touched neighbours are
+// re-examined, so the worklist empties. Directed-edge balance (each edge used equally often
+// in both directions) is preserved by merging, which guarantees the link decomposes into
+// cycles. The common case (nothing to repair) costs one sweep over the triangles.
+
+#include "workspace.h"
+
+#include <meltlab/sim/error.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <deque>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace meltlab::sim {
+
+namespace {
+
+struct LinkEdge {
+  Index from, to, tri;
+};
+
+// Link of v from its triangles (each must contain v exactly once).
+template <class Real>
+void build_link(const TriMesh<Real>& m, Index v, const std::vector<Index>& tris, std::vector<LinkEdge>& link) {
+  link.clear();
+  for (Index t : tris) {
+    const Triangle& tri = m.triangle[static_cast<std::size_t>(t)];
+    const int k = tri[0] == v ? 0 : (tri[1] == v ? 1 : 2);
+    link.push_back({tri[static_cast<std::size_t>((k + 1) % 3)], tri[static_cast<std::size_t>((k + 2) % 3)], t});
+  }
+}
+
+// True if the link is a single directed cycle of length >= 3 (v is a manifold vertex).
+bool link_is_single_cycle(std::vector<LinkEdge>& link) {
+  const std::size_t k = link.size();
+  if (k < 3) return false;
+  std::sort(link.begin(), link.end(), [](const LinkEdge& a, const LinkEdge& b) { return a.from < b.from; });
+  for (std::size_t i = 1; i < k; ++i)
+    if (link[i].from == link[i - 1].from) return false;  // a node with two out-edges
+  auto find_from = [&](Index x) -> std::ptrdiff_t {
+    auto it = std::lower_bound(link.begin(), link.end(), x, [](const LinkEdge& e, Index val) { return e.from < val; });
+    return (it != link.end() && it->from == x) ? it - link.begin() : -1;
+  };
+  std::size_t steps = 0;
+  std::ptrdiff_t at = 0;
+  do {
+    at = find_from(link[static_cast<std::size_t>(at)].to);
+    if (at < 0) return false;
+    ++steps;
+  } while (at != 0 && steps <= k);
+  return at == 0 && steps == k;
+}
+
+// Vertex -> triangles, built once when a repair is needed; lists of vertices the repair
+// changes are kept in `changed`. Reads filter out dead triangles and triangles that no
+// longer contain the vertex, so stale entries are harmless.
+template <class Real>
+class Adjacency {
+ public:
+  explicit Adjacency(const TriMesh<Real>& m) : m_(m) {
+    const std::size_t nv = m.vertex_slots(), nt = m.triangle_slots();
+    offset_.assign(nv + 1, 0);
+    for (std::size_t t = 0; t < nt; ++t)
+      if (m.triangle_alive[t])
+        for (Index v : m.triangle[t]) ++offset_[static_cast<std::size_t>(v) + 1];
+    for (std::size_t v = 0; v < nv; ++v) offset_[v + 1] += offset_[v];
+    entry_.resize(static_cast<std::size_t>(offset_[nv]));
+    std::vector<std::int64_t> cursor(offset_.begin(), offset_.end() - 1);
+    for (std::size_t t = 0; t < nt; ++t)
+      if (m.triangle_alive[t])
+        for (Index v : m.triangle[t]) entry_[static_cast<std::size_t>(cursor[static_cast<std::size_t>(v)]++)] = static_cast<Index>(t);
+  }
+
+  std::vector<Index> triangles_of(Index v) const {
+    std::vector<Index> out;
+    auto keep = [&](Index t) {
+      const auto ts = static_cast<std::size_t>(t);
+      if (!m_.triangle_alive[ts]) return;
+      const Triangle& tri = m_.triangle[ts];
+      if (tri[0] == v || tri[1] == v || tri[2] == v) out.push_back(t);
+    };
+    auto it = changed_.find(v);
+    if (it != changed_.end()) {
+      for (Index t : it->second) keep(t);
+    } else if (static_cast<std::size_t>(v) + 1 < offset_.size()) {
+      for (auto i = offset_[static_cast<std::size_t>(v)]; i < offset_[static_cast<std::size_t>(v) + 1]; ++i)
+        keep(entry_[static_cast<std::size_t>(i)]);
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+  }
+  void set(Index v, std::vector<Index> tris) { changed_[v] = std::move(tris); }
+
+ private:
+  const TriMesh<Real>& m_;
+  std::vector<std::int64_t> offset_;
+  std::vector<Index> entry_;
+  std::unordered_map<Index, std::vector<Index>> changed_;
+};
+
+template <class Real>
+class Repairer {
+ public:
+  Repairer(TriMesh<Real>& m, CycleReport& report) : m_(m), adj_(m), report_(report) {}
+
+  void run(const std::vector<Index>& start) {
+    for (Index v : start) enqueue(v);
+    const std::size_t cap = 64 * start.size() + 100000;
+    std::size_t steps = 0;
+    while (!queue_.empty()) {
+      const Index v = queue_.front();
+      queue_.pop_front();
+      queued_.erase(v);
+      if (++steps > cap)
+        throw InvariantError(fmt::format("topology repair did not converge after {} steps (at vertex v{})", steps, v));
+      process(v);
+    }
+    for (Index v : touched_) {
+      if (!m_.vertex_alive[static_cast<std::size_t>(v)]) continue;
+      m_.triangle_count[static_cast<std::size_t>(v)] = static_cast<Index>(adj_.triangles_of(v).size());
+    }
+  }
+
+ private:
+  void enqueue(Index v) {
+    if (queued_.insert(v).second) queue_.push_back(v);
+    touched_.push_back(v);
+  }
+  void enqueue_triangle(Index t) {
+    for (Index v : m_.triangle[static_cast<std::size_t>(t)]) enqueue(v);
+  }
+  void kill_triangle(Index t) {
+    m_.triangle_alive[static_cast<std::size_t>(t)] = 0;
+    enqueue_triangle(t);
+  }
+
+  void process(Index v) {
+    const auto vs = static_cast<std::size_t>(v);
+    if (!m_.vertex_alive[vs]) return;
+    std::vector<Index> tris = adj_.triangles_of(v);
+    if (tris.empty()) {
+      m_.vertex_alive[vs] = 0;
+      ++report_.orphan_vertices;
+      return;
+    }
+    build_link(m_, v, tris, link_);
+    std::vector<LinkEdge> sorted = link_;
+    if (link_is_single_cycle(sorted)) return;
+
+    // (1) glued pairs: x -> y and y -> x.
+    std::sort(link_.begin(), link_.end(), [](const LinkEdge& a, const LinkEdge& b) {
+      return a.from != b.from ? a.from < b.from : (a.to != b.to ? a.to < b.to : a.tri < b.tri);
+    });
+    std::vector<std::uint8_t> used(link_.size(), 0);
+    bool removed = false;
+    for (std::size_t i = 0; i < link_.size(); ++i) {
+      if (used[i]) continue;
+      for (std::size_t j = 0; j < link_.size(); ++j) {
+        if (j == i || used[j]) continue;
+        if (link_[j].from == link_[i].to && link_[j].to == link_[i].from) {
+          used[i] = used[j] = 1;
+          kill_triangle(link_[i].tri);
+          kill_triangle(link_[j].tri);
+          ++report_.repair_glued_pairs;
+          removed = true;
+          break;
+        }
+      }
+    }
+    if (removed) {
+      enqueue(v);
+      return;
+    }
+
+    // (2) a node with several out-edges: non-manifold edge (v, x) -> collapse it.
+    for (std::size_t i = 1; i < link_.size(); ++i) {
+      if (link_[i].from == link_[i - 1].from) {
+        collapse_edge(v, link_[i].from);
+        return;
+      }
+    }
+
+    // (3) every node has one out-edge (and, by balance, one in-edge): disjoint cycles.
+    std::vector<std::vector<Index>> cycles;
+    std::vector<std::uint8_t> seen(link_.size(), 0);
+    auto index_of_from = [&](Index x) -> std::ptrdiff_t {
+      auto it = std::lower_bound(link_.begin(), link_.end(), x, [](const LinkEdge& e, Index val) { return e.from < val; });
+      return (it != link_.end() && it->from == x) ? it - link_.begin() : -1;
+    };
+    for (std::size_t s = 0; s < link_.size(); ++s) {
+      if (seen[s]) continue;
+      std::vector<Index> cyc;
+      std::ptrdiff_t at = static_cast<std::ptrdiff_t>(s);
+      while (at >= 0 && !seen[static_cast<std::size_t>(at)]) {
+        seen[static_cast<std::size_t>(at)] = 1;
+        cyc.push_back(link_[static_cast<std::size_t>(at)].tri);
+        at = index_of_from(link_[static_cast<std::size_t>(at)].to);
+      }
+      if (at < 0)
+        throw InvariantError(fmt::format("vertex v{}: open link (a boundary edge) during topology repair", v));
+      cycles.push_back(std::move(cyc));
+    }
+    // The cycle holding v's smallest triangle keeps v; each other gets a new vertex.
+    std::sort(cycles.begin(), cycles.end(), [](const auto& a, const auto& b) {
+      return *std::min_element(a.begin(), a.end()) < *std::min_element(b.begin(), b.end());
+    });
+    adj_.set(v, cycles[0]);
+    for (std::size_t c = 1; c < cycles.size(); ++c) {
+      const Vec3<Real> p = m_.position[vs];
+      const Vec3<Real> n = m_.normal[vs];
+      const Index u = m_.add_vertex(p);
+      m_.normal[static_cast<std::size_t>(u)] = n;
+      for (Index t : cycles[c]) {
+        Triangle& tri = m_.triangle[static_cast<std::size_t>(t)];
+        for (Index& x : tri)
+          if (x == v) x = u;
+        tri = rotate_min_first(tri);
+      }
+      adj_.set(u, cycles[c]);
+      touched_.push_back(u);
+      ++report_.repair_vertex_splits;
+    }
+  }
+
+  void collapse_edge(Index v, Index x) {
+    const Index keep = std::min(v, x), gone = std::max(v, x);
+    const auto ks = static_cast<std::size_t>(keep), gs = static_cast<std::size_t>(gone);
+    std::vector<Index> tk = adj_.triangles_of(keep);
+    std::vector<Index> tg = adj_.triangles_of(gone);
+    m_.position[ks] = (m_.position[ks] + m_.position[gs]) / Real(2);
+    m_.vertex_alive[gs] = 0;
+    m_.reindex[gs] = keep;
+    for (Index t : tg) {
+      Triangle& tri = m_.triangle[static_cast<std::size_t>(t)];
+      for (Index& y : tri)
+        if (y == gone) y = keep;
+      if (is_degenerate(tri)) {
+        kill_triangle(t);
+      } else {
+        tri = rotate_min_first(tri);
+        enqueue_triangle(t);
+      }
+    }
+    for (Index t : tk) enqueue_triangle(t);
+    tk.insert(tk.end(), tg.begin(), tg.end());
+    adj_.set(keep, std::move(tk));
+    enqueue(keep);
+    ++report_.repair_edge_collapses;
+  }
+
+  TriMesh<Real>& m_;
+  Adjacency<Real> adj_;
+  CycleReport& report_;
+  std::deque<Index> queue_;
+  std::unordered_set<Index> queued_;
+  std::vector<Index> touched_;
+  std::vector<LinkEdge> link_;
+};
+
+}  // namespace
+
+template <class Real>
+void repair_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report) {
+  resize_vertex_scratch(ws, m);
+  const std::size_t nv = m.vertex_slots();
+  ws.dirty_list.clear();
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (!ws.dirty[v]) continue;
+    ws.dirty[v] = 0;
+    if (m.vertex_alive[v]) ws.dirty_list.push_back(static_cast<Index>(v));
+  }
+  if (ws.dirty_list.empty()) return;
+
+  // Cheap check first: gather the triangles of the dirty vertices in one sweep and test
+  // each link. Only if some vertex is not manifold is the full repair machinery built.
+  std::vector<Index>& local = ws.root;  // reuse: root is free after the collapse pass
+  std::fill(local.begin(), local.begin() + static_cast<std::ptrdiff_t>(nv), -1);
+  for (std::size_t i = 0; i < ws.dirty_list.size(); ++i) local[static_cast<std::size_t>(ws.dirty_list[i])] = static_cast<Index>(i);
+  std::vector<std::int32_t> offset(ws.dirty_list.size() + 1, 0);
+  std::vector<std::pair<Index, Index>> pairs;  // (local id, triangle)
+  for (std::size_t t = 0; t < m.triangle_slots(); ++t) {
+    if (!m.triangle_alive[t]) continue;
+    for (Index v : m.triangle[t]) {
+      const Index l = local[static_cast<std::size_t>(v)];
+      if (l >= 0) pairs.push_back({l, static_cast<Index>(t)});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<Index> bad;
+  std::vector<Index> tris;
+  std::vector<LinkEdge> link;
+  for (std::size_t i = 0; i < pairs.size();) {
+    std::size_t j = i;
+    tris.clear();
+    while (j < pairs.size() && pairs[j].first == pairs[i].first) tris.push_back(pairs[j++].second);
+    const Index v = ws.dirty_list[static_cast<std::size_t>(pairs[i].first)];
+    build_link(m, v, tris, link);
+    if (!link_is_single_cycle(link)) bad.push_back(v);
+    local[static_cast<std::size_t>(v)] = -2;  // seen
+    i = j;
+  }
+  for (Index v : ws.dirty_list) {
+    if (local[static_cast<std::size_t>(v)] != -2) {  // dirty vertex without triangles: orphan
+      m.vertex_alive[static_cast<std::size_t>(v)] = 0;
+      ++report.orphan_vertices;
+    }
+    local[static_cast<std::size_t>(v)] = -1;
+  }
+  if (bad.empty()) return;
+  std::sort(bad.begin(), bad.end());
+  Repairer<Real> repairer(m, report);
+  repairer.run(bad);
+  resize_vertex_scratch(ws, m);
+}
+
+template <class Real>
+CycleReport repair_topology(TriMesh<Real>& m, const std::vector<Index>& vertices) {
+  MeltWorkspace ws;
+  resize_vertex_scratch(ws, m);
+  for (Index v : vertices) ws.dirty[static_cast<std::size_t>(v)] = 1;
+  CycleReport report;
+  repair_pass(m, ws, report);
+  return report;
+}
+
+template void repair_pass(TriMesh<float>&, MeltWorkspace&, CycleReport&);
+template void repair_pass(TriMesh<double>&, MeltWorkspace&, CycleReport&);
+template CycleReport repair_topology(TriMesh<float>&, const std::vector<Index>&);
+template CycleReport repair_topology(TriMesh<double>&, const std::vector<Index>&);
+
+}  // namespace meltlab::sim

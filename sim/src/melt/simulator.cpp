@@ -1,0 +1,77 @@
+// MeltSimulator: one cycle = Alg. 1 -> Alg. 2 -> Alg. 3 -> repair (§3.6).
+
+#include "workspace.h"
+
+#include <meltlab/sim/error.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace meltlab::sim {
+
+void MeltParams::validate() const {
+  auto finite_nonneg = [](double x, const char* name) {
+    if (!std::isfinite(x) || x < 0.0)
+      throw InputError(fmt::format("{}: must be a finite number >= 0 (got {})", name, x));
+  };
+  finite_nonneg(kg, "kg");
+  if (kg > 1.0) throw InputError(fmt::format("kg: must lie in [0, 1] (got {})", kg));
+  finite_nonneg(kE, "kE");
+  finite_nonneg(kN, "kN");
+  finite_nonneg(kr, "kr");
+}
+
+template <class Real>
+MeltSimulator<Real>::MeltSimulator(TriMesh<Real> mesh, MeltParams params, KlFieldPtr kl, Execution exec)
+    : mesh_(std::move(mesh)), params_(params), kl_(std::move(kl)), exec_(exec), ws_(std::make_unique<MeltWorkspace>()) {
+  params_.validate();
+  if (!kl_) kl_ = make_constant_kl(1.0);
+  sort_triangle_indices(mesh_);  // "once: sort triangle indices" before the first cycle
+  for (std::size_t v = 0; v < mesh_.vertex_slots(); ++v) mesh_.reindex[v] = static_cast<Index>(v);
+}
+
+template <class Real>
+MeltSimulator<Real>::~MeltSimulator() = default;
+template <class Real>
+MeltSimulator<Real>::MeltSimulator(MeltSimulator&&) noexcept = default;
+template <class Real>
+MeltSimulator<Real>& MeltSimulator<Real>::operator=(MeltSimulator&&) noexcept = default;
+
+template <class Real>
+void MeltSimulator<Real>::set_params(const MeltParams& p) {
+  p.validate();
+  params_ = p;
+}
+
+template <class Real>
+bool MeltSimulator<Real>::empty() const {
+  return std::find(mesh_.triangle_alive.begin(), mesh_.triangle_alive.end(), 1) == mesh_.triangle_alive.end();
+}
+
+template <class Real>
+CycleReport MeltSimulator<Real>::step() {
+  CycleReport r;
+  MeltWorkspace& ws = *ws_;
+  deform_pass(mesh_, params_, *kl_, exec_, ws);
+  collapse_pass(mesh_, params_.kr, params_.merge, exec_, ws, r);
+  // Without a merge the connectivity is unchanged: no glued pairs can have appeared and the
+  // triangles are still sorted, so Alg. 3 and the repair would find nothing to do.
+  if (r.merged_vertices > 0) {
+    glued_pass(mesh_, exec_, ws, r);
+    if (params_.repair)
+      repair_pass(mesh_, ws, r);
+    else
+      std::fill(ws.dirty.begin(), ws.dirty.end(), std::uint8_t{0});
+  }
+  r.live_vertices = static_cast<std::int64_t>(mesh_.live_vertex_count());
+  r.live_triangles = static_cast<std::int64_t>(mesh_.live_triangle_count());
+  ++cycle_;
+  return r;
+}
+
+template class MeltSimulator<float>;
+template class MeltSimulator<double>;
+
+}  // namespace meltlab::sim

@@ -1,0 +1,111 @@
+#include <meltlab/sim/melt.h>
+#include <meltlab/sim/topology.h>
+
+#include <gtest/gtest.h>
+
+#include "hand_meshes.h"
+
+namespace meltlab::sim {
+namespace {
+
+using V3 = Vec3<double>;
+
+// Fig. 3.7's pinch: a valence-3 bump N on face (0,2,4) of an octahedron, and the edge
+// (0,2) made short. Collapsing it turns (2,4,N) and (4,0,N) into (0,4,N) and (4,0,N): a
+// glued pair whose apex N is left with two triangles. Alg. 3 removes the pair and N; the
+// rest is a valid triangular bipyramid.
+TEST(Glued, ConstructedPinchProducesGluedPairThatIsRemoved) {
+  auto mesh = test::octahedron(1.0);
+  mesh.V.push_back(V3(0.4, 0.4, 0.4));  // N = v6
+  mesh.F[0] = {0, 2, 6};
+  mesh.F.push_back({2, 4, 6});
+  mesh.F.push_back({4, 0, 6});
+  ASSERT_TRUE(check_topology(TriMesh<double>::from_indexed(mesh)).valid());
+  mesh.V[2] = V3(0.9, 0.1, 0.0);
+  auto m = TriMesh<double>::from_indexed(mesh);
+  const auto c = collapse_short_edges(m, 0.3, MergeMode::kClusterMean);
+  EXPECT_EQ(c.merged_vertices, 1);
+  const auto before = check_topology(m);
+  EXPECT_FALSE(before.valid()) << "the collapse leaves a glued pair";
+  const auto g = remove_glued_and_sort(m);
+  EXPECT_EQ(g.glued_triangles, 2);
+  EXPECT_EQ(g.glued_vertices, 1);
+  EXPECT_FALSE(m.vertex_alive[6]);
+  const auto after = check_topology(m);
+  EXPECT_TRUE(after.valid());
+  EXPECT_EQ(after.counts.V, 5);
+  EXPECT_EQ(after.counts.F, 6);
+  EXPECT_EQ(after.counts.chi, 0);
+  for (std::size_t t = 0; t < m.triangle_slots(); ++t) {
+    if (m.triangle_alive[t]) {
+      EXPECT_EQ(m.triangle[t], rotate_min_first(m.triangle[t])) << "sorted min-first";
+    }
+  }
+}
+
+// Two solids touching at one vertex: the repair splits the pinch into one vertex per fan,
+// which is how a neck that collapsed to a point separates the object into two parts.
+TEST(Repair, PinchVertexIsSplitIntoParts) {
+  auto mesh = test::disjoint_union(test::octahedron(), test::translated(test::octahedron(), {2, 0, 0}));
+  for (auto& t : mesh.F)
+    for (auto& v : t)
+      if (v == 7) v = 0;  // the second octahedron's -x vertex is the first one's +x vertex
+  auto m = TriMesh<double>::from_indexed(mesh);
+  m.vertex_alive[7] = 0;
+  ASSERT_EQ(check_topology(m).nonmanifold_vertices, 1);
+  const auto r = repair_topology(m, {0});
+  EXPECT_EQ(r.repair_vertex_splits, 1);
+  const auto topo = check_topology(m);
+  EXPECT_TRUE(topo.valid());
+  EXPECT_EQ(topo.counts.S, 2);
+  EXPECT_EQ(topo.counts.V, 12);
+  EXPECT_EQ(topo.counts.chi, 0);
+}
+
+// An edge with four triangles (a tetrahedral fin on the octahedron's edge (0,2)) is
+// collapsed; the fin then degenerates into a glued pair that is removed.
+TEST(Repair, NonManifoldEdgeIsCollapsed) {
+  auto mesh = test::octahedron();
+  mesh.V.push_back({0.5, 0.5, -2.0});  // v6
+  mesh.V.push_back({0.6, 0.6, -3.0});  // v7
+  mesh.F.push_back({0, 6, 2});
+  mesh.F.push_back({2, 6, 7});
+  mesh.F.push_back({0, 7, 6});
+  mesh.F.push_back({0, 2, 7});
+  auto m = TriMesh<double>::from_indexed(mesh);
+  ASSERT_EQ(check_topology(m).nonmanifold_edges, 1);
+  const auto r = repair_topology(m, {0, 2});
+  EXPECT_GE(r.repair_edge_collapses, 1);
+  const auto topo = check_topology(m);
+  EXPECT_TRUE(topo.valid()) << (topo.problems.empty() ? "" : topo.problems.front().describe());
+  EXPECT_EQ(topo.counts.S, 1);
+}
+
+// A glued pair lying on top of a face: no vertex has exactly two triangles, so Alg. 3's
+// count test cannot see it; the repair's link test does.
+TEST(Repair, GluedPairMissedByTheCountTest) {
+  auto mesh = test::octahedron();
+  mesh.F.push_back({0, 4, 2});
+  mesh.F.push_back({0, 2, 4});
+  auto m = TriMesh<double>::from_indexed(mesh);
+  const auto g = remove_glued_and_sort(m);
+  EXPECT_EQ(g.glued_triangles, 0);
+  const auto r = repair_topology(m, {0, 2, 4});
+  EXPECT_EQ(r.repair_glued_pairs, 1);
+  const auto topo = check_topology(m);
+  EXPECT_TRUE(topo.valid());
+  EXPECT_EQ(topo.counts.F, 8);
+}
+
+TEST(Repair, ValidMeshIsLeftAlone) {
+  auto m = TriMesh<double>::from_indexed(test::icosahedron());
+  const auto before = m.triangle;
+  std::vector<Index> all(12);
+  for (Index v = 0; v < 12; ++v) all[static_cast<std::size_t>(v)] = v;
+  const auto r = repair_topology(m, all);
+  EXPECT_FALSE(r.topology_changed());
+  EXPECT_EQ(m.triangle, before);
+}
+
+}  // namespace
+}  // namespace meltlab::sim
