@@ -1,12 +1,20 @@
 # One INTERFACE target carries the project's compile flags; every meltlab target links it.
 add_library(meltlab_flags INTERFACE)
+target_compile_features(meltlab_flags INTERFACE cxx_std_20)
 target_compile_options(meltlab_flags INTERFACE
   -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wcast-align -Wunused
   -Woverloaded-virtual -Wdouble-promotion -Wimplicit-fallthrough
   # Serial and parallel cycles must give bitwise-identical meshes. Identical source
   # expressions only give identical results if the compiler never fuses a*b+c into an FMA
   # in one code path and not in the other, so contraction is off everywhere.
-  -ffp-contract=off)
+  -ffp-contract=off
+  # sqrt() need not set errno, so it compiles to the (exactly rounded) SIMD instruction.
+  -fno-math-errno)
+# The melt kernels are written so the compiler can vectorise them; let it use the machine's
+# SIMD width. Results do not depend on the width (no contraction, no fast-math).
+if(MELTLAB_NATIVE)
+  target_compile_options(meltlab_flags INTERFACE -march=native)
+endif()
 if(MELTLAB_WERROR)
   target_compile_options(meltlab_flags INTERFACE -Werror)
 endif()

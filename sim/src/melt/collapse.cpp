@@ -1,29 +1,33 @@
 // Alg. 2: short-edge collapse (monograph §3.2, Eq. 3.7, Fig. 3.6, Fig. 3.11).
 //
-// Mark: each live triangle (a, b, c), a the smallest index, tests its edges in the order
-// ab, bc, ca and marks at most one (if/else-if, as in the monograph). The higher index of a
-// short edge is to be merged into the lower one. Several triangles may mark the same
-// vertex with different targets (the monograph's `reindex_conflict_policy`): the smallest
-// target wins, which is independent of the order the triangles are visited in, so serial
-// and parallel runs mark identically.
-// Chains: targets are always smaller indices, so every chain ends at a root and an
-// ascending sweep resolves it in O(n) (root[k] = root[target[k]], target[k] < k).
+// Mark (one sweep over the triangles): each live triangle (a, b, c), a the smallest index,
+// tests its edges in the order ab, bc, ca and marks at most one (if/else-if, as in the
+// monograph): the higher index of a short edge is to be merged into the lower one. Several
+// triangles may mark one vertex with different targets (`reindex_conflict_policy`): the
+// smallest target wins, which does not depend on the order the triangles are visited in,
+// so serial and parallel runs mark identically.
+// Flatten: targets are always smaller indices, so an ascending sweep resolves every chain
+// in O(n) (root[k] = root[target[k]], target[k] < k; Fig. 3.11).
 // Merge (`merge_position_mode`): cluster mean (GPU §5.4, default) or the CPU's sequential
-// pairwise mean; both sum a cluster's members in ascending index order.
-// Re-point + delete degenerate triangles; the triangle counts for Alg. 3 are taken in the
-// same sweep. Vertices around every re-pointed triangle are marked dirty for the repair.
+// pairwise mean; both take a cluster's members in ascending index order.
+// Re-point: only the triangles of merged vertices change; they are re-pointed to the
+// roots, deleted if degenerate, and rotated min-index first (Alg. 3's sort, applied where
+// indices changed). Every vertex whose triangles changed is marked dirty for Alg. 3 and the
+// repair.
 
+#include "triangle_kernels.h"
 #include "workspace.h"
 
 #include <meltlab/sim/error.h>
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 namespace meltlab::sim {
 
 namespace {
-// Chains strictly decrease (target[k] < k), so an ascending sweep finds every root in O(n):
-// root[target[k]] is final by the time k is reached. Returns the number of merged vertices.
+// Returns the number of merged vertices; root[k] = end of k's chain.
 std::int64_t flatten_chains(const Index* target, Index* root, std::size_t n) {
   std::int64_t merged = 0;
   for (std::size_t v = 0; v < n; ++v) {
@@ -47,109 +51,122 @@ std::vector<Index> flatten_merge_targets(const std::vector<Index>& target) {
 template <class Real>
 void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec, MeltWorkspace& ws,
                    CycleReport& report) {
-  resize_vertex_scratch(ws, m);
+  prepare_workspace(ws, m);
   const std::size_t nv = m.vertex_slots();
   const std::size_t nt = m.triangle_slots();
   const auto kr2 = static_cast<Real>(kr * kr);
   std::vector<Index>& target = m.reindex;
-
-  for_range(exec, nv, [&](std::size_t b, std::size_t e) {
-    for (std::size_t v = b; v < e; ++v) target[v] = static_cast<Index>(v);
-  });
+  for (std::size_t v = 0; v < nv; ++v) target[v] = static_cast<Index>(v);
 
   // ---- mark ----
   const bool parallel = exec == Execution::kParallel;
-  for_range(exec, nt, [&](std::size_t b, std::size_t e) {
-    for (std::size_t t = b; t < e; ++t) {
-      if (!m.triangle_alive[t]) continue;
-      const Triangle& tri = m.triangle[t];
-      const Vec3<Real>& pa = m.position[static_cast<std::size_t>(tri[0])];
-      const Vec3<Real>& pb = m.position[static_cast<std::size_t>(tri[1])];
-      const Vec3<Real>& pc = m.position[static_cast<std::size_t>(tri[2])];
-      Index from = -1, to = -1;
-      if ((pb - pa).squaredNorm() < kr2) {
-        from = tri[1], to = tri[0];
-      } else if ((pc - pb).squaredNorm() < kr2) {
-        from = std::max(tri[1], tri[2]), to = std::min(tri[1], tri[2]);
-      } else if ((pa - pc).squaredNorm() < kr2) {
-        from = tri[2], to = tri[0];
+  std::atomic<bool> any_mark{false};
+  const std::size_t blocks = (nt + kTriangleBlock - 1) / kTriangleBlock;
+  auto mark_blocks = [&](std::size_t blk_begin, std::size_t blk_end) {
+    bool local_mark = false;
+    Real l2[3][kTriangleBlock];
+    for (std::size_t blk = blk_begin; blk < blk_end; ++blk) {
+      const std::size_t first = blk * kTriangleBlock;
+      const std::size_t count = std::min(kTriangleBlock, nt - first);
+      triangle_block_edge_lengths2(m, first, count, l2);
+      for (std::size_t i = 0; i < count; ++i) {
+        const std::size_t t = first + i;
+        if (!(l2[0][i] < kr2 || l2[1][i] < kr2 || l2[2][i] < kr2) || !m.triangle_alive[t]) continue;
+        const Triangle& tri = m.triangle[t];
+        Index from, to;
+        if (l2[0][i] < kr2) {
+          from = tri[1], to = tri[0];
+        } else if (l2[1][i] < kr2) {
+          from = std::max(tri[1], tri[2]), to = std::min(tri[1], tri[2]);
+        } else {
+          from = tri[2], to = tri[0];
+        }
+        local_mark = true;
+        Index& slot = target[static_cast<std::size_t>(from)];
+        if (parallel)
+          atomic_min(slot, to);
+        else if (to < slot)
+          slot = to;
       }
-      if (from < 0) continue;
-      Index& slot = target[static_cast<std::size_t>(from)];
-      if (parallel)
-        atomic_min(slot, to);
-      else if (to < slot)
-        slot = to;
     }
-  });
+    if (local_mark) any_mark.store(true, std::memory_order_relaxed);
+  };
+  if (parallel && nt >= 2 * kParallelGrain)
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, kParallelGrain / kTriangleBlock),
+                      [&](const tbb::blocked_range<std::size_t>& r) { mark_blocks(r.begin(), r.end()); });
+  else
+    mark_blocks(0, blocks);
+  if (!any_mark.load()) return;
 
-  // ---- flatten chains (ascending: target[k] < k is already resolved) ----
+  // ---- flatten chains, list merged vertices ----
   std::vector<Index>& root = ws.root;
   const std::int64_t merged = flatten_chains(target.data(), root.data(), nv);
   report.merged_vertices += merged;
-  if (merged == 0) return;
-
-  // ---- merge positions, in ascending member order (identical for both executions) ----
-  ws.touched_roots.clear();
+  ws.merged.clear();
   for (std::size_t v = 0; v < nv; ++v) {
-    const auto r = static_cast<std::size_t>(root[v]);
     target[v] = root[v];  // the monograph's i after flattening
-    if (r == v) continue;
-    if (merge == MergeMode::kSequentialPairwise) {
-      m.position[r] = (m.position[v] + m.position[r]) / Real(2);
-    } else {
-      if (ws.cluster_size[r] == 0) {
-        ws.touched_roots.push_back(static_cast<Index>(r));
-        ws.cluster_size[r] = 1;
-      }
-      m.position[r] += m.position[v];
-      ++ws.cluster_size[r];
+    if (root[v] != static_cast<Index>(v)) ws.merged.push_back(static_cast<Index>(v));
+  }
+
+  // ---- merge positions, members in ascending order ----
+  ws.touched_roots.clear();
+  for (Index k : ws.merged) {
+    const auto ks = static_cast<std::size_t>(k);
+    const auto r = static_cast<std::size_t>(root[ks]);
+    if (ws.cluster_size[r] == 0) {
+      ws.touched_roots.push_back(static_cast<Index>(r));
+      ws.cluster_size[r] = 1;
     }
-    m.vertex_alive[v] = 0;
-    ws.dirty[r] = 1;
+    ++ws.cluster_size[r];
+    if (merge == MergeMode::kSequentialPairwise)
+      m.position[r] = (m.position[ks] + m.position[r]) / Real(2);
+    else
+      m.position[r] += m.position[ks];
+    m.vertex_alive[ks] = 0;
   }
   for (Index r : ws.touched_roots) {
     auto& size = ws.cluster_size[static_cast<std::size_t>(r)];
-    m.position[static_cast<std::size_t>(r)] /= static_cast<Real>(size);
+    if (merge == MergeMode::kClusterMean) m.position[static_cast<std::size_t>(r)] /= static_cast<Real>(size);
     size = 0;
   }
 
-  // ---- re-point corners, delete degenerate triangles ----
+  // ---- re-point the triangles of merged vertices ----
+  std::vector<Index>& affected = ws.affected;
+  affected.clear();
+  for (Index k : ws.merged)
+    for (Index t : ws.adj.of(k)) affected.push_back(t);
+  std::sort(affected.begin(), affected.end());
+  affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
   std::int64_t degenerate = 0;
-  if (exec == Execution::kSerial) {
-    for (std::size_t t = 0; t < nt; ++t) {
-      if (!m.triangle_alive[t]) continue;
-      Triangle& tri = m.triangle[t];
-      const Triangle old = tri;
-      for (Index& v : tri) v = root[static_cast<std::size_t>(v)];
-      if (tri == old) continue;
-      for (Index v : tri) ws.dirty[static_cast<std::size_t>(v)] = 1;
-      if (is_degenerate(tri)) {
-        m.triangle_alive[t] = 0;
-        ++degenerate;
-      }
+  for (Index t : affected) {
+    const auto ts = static_cast<std::size_t>(t);
+    Triangle& tri = m.triangle[ts];
+    for (Index& v : tri) {
+      v = root[static_cast<std::size_t>(v)];
+      ws.mark_dirty(v);
     }
-  } else {
-    std::atomic<std::int64_t> deg{0};
-    for_range(exec, nt, [&](std::size_t b, std::size_t e) {
-      std::int64_t local = 0;
-      for (std::size_t t = b; t < e; ++t) {
-        if (!m.triangle_alive[t]) continue;
-        Triangle& tri = m.triangle[t];
-        const Triangle old = tri;
-        for (Index& v : tri) v = root[static_cast<std::size_t>(v)];
-        if (tri == old) continue;
-        for (Index v : tri) atomic_flag_set(ws.dirty[static_cast<std::size_t>(v)]);
-        if (is_degenerate(tri)) {
-          m.triangle_alive[t] = 0;
-          ++local;
-        }
-      }
-      deg.fetch_add(local, std::memory_order_relaxed);
-    });
-    degenerate = deg.load();
+    if (is_degenerate(tri)) {
+      m.triangle_alive[ts] = 0;
+      ++degenerate;
+    } else {
+      tri = rotate_min_first(tri);
+    }
   }
   report.degenerate_triangles += degenerate;
+
+  // ---- update the triangle lists: roots take their members' triangles ----
+  for (Index k : ws.merged) {
+    const Index r = root[static_cast<std::size_t>(k)];
+    // Append k's triangles to r's list (sorted merge, duplicates removed), then drop k's.
+    std::vector<Index>& merged_list = ws.scratch;
+    merged_list.clear();
+    const auto a = ws.adj.of(r);
+    const auto b = ws.adj.of(k);
+    std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged_list));
+    ws.adj.assign(r, merged_list);
+    ws.adj.assign(k, {});
+  }
+  for (Index v : ws.dirty_list) refresh_list(ws, m, v);
 }
 
 template <class Real>

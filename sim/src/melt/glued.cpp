@@ -1,77 +1,62 @@
 // Alg. 3: glued-triangle removal and index re-sorting (monograph §3.2, Fig. 3.7).
 // A vertex of a valid closed mesh is on at least three triangles, so a vertex on exactly
-// two marks a glued pair: both triangles and the vertex are deleted. The counts are taken
-// before any deletion (as in the monograph); a pair that this single test misses is left to
-// the repair pass. Surviving triangles are rotated min-index first, which Alg. 2 needs.
+// two marks a glued pair: both triangles and the vertex are deleted; a vertex left on none
+// is deleted too. The counts are taken before any deletion, as in the monograph; a pair
+// this single test misses is left to the repair pass.
+// Only vertices whose triangles changed this cycle (the dirty set) can have a count below
+// three, so only they are examined; only re-pointed triangles can be out of order, and the
+// collapse already rotated them, so the sort step has nothing left to do here.
 
 #include "workspace.h"
+
+#include <algorithm>
 
 namespace meltlab::sim {
 
 template <class Real>
-void glued_pass(TriMesh<Real>& m, Execution exec, MeltWorkspace& ws, CycleReport& report) {
-  resize_vertex_scratch(ws, m);
-  const std::size_t nv = m.vertex_slots();
-  const std::size_t nt = m.triangle_slots();
-  std::vector<Index>& count = m.triangle_count;
-
-  // ---- t: live triangles per vertex ----
-  for_range(exec, nv, [&](std::size_t b, std::size_t e) {
-    for (std::size_t v = b; v < e; ++v) count[v] = 0;
-  });
-  if (exec == Execution::kSerial) {
-    for (std::size_t t = 0; t < nt; ++t)
-      if (m.triangle_alive[t])
-        for (Index v : m.triangle[t]) ++count[static_cast<std::size_t>(v)];
-  } else {
-    for_range(exec, nt, [&](std::size_t b, std::size_t e) {
-      for (std::size_t t = b; t < e; ++t)
-        if (m.triangle_alive[t])
-          for (Index v : m.triangle[t]) atomic_increment(count[static_cast<std::size_t>(v)]);
-    });
+void glued_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report) {
+  prepare_workspace(ws, m);
+  std::vector<Index> glued_vertices, orphans;
+  for (Index v : ws.dirty_list) {
+    const auto vs = static_cast<std::size_t>(v);
+    if (!m.vertex_alive[vs]) continue;
+    const auto count = static_cast<Index>(ws.adj.of(v).size());
+    m.triangle_count[vs] = count;
+    if (count == 2) glued_vertices.push_back(v);
+    else if (count == 0) orphans.push_back(v);
   }
-
-  // ---- delete triangles on a count-2 vertex; rotate the others min-index first ----
-  std::atomic<std::int64_t> glued{0};
-  for_range(exec, nt, [&](std::size_t b, std::size_t e) {
-    std::int64_t local = 0;
-    for (std::size_t t = b; t < e; ++t) {
-      if (!m.triangle_alive[t]) continue;
-      Triangle& tri = m.triangle[t];
-      if (count[static_cast<std::size_t>(tri[0])] == 2 || count[static_cast<std::size_t>(tri[1])] == 2 ||
-          count[static_cast<std::size_t>(tri[2])] == 2) {
-        m.triangle_alive[t] = 0;
-        ++local;
-        for (Index v : tri) atomic_flag_set(ws.dirty[static_cast<std::size_t>(v)]);
-        continue;
+  std::vector<Index> killed;
+  for (Index v : glued_vertices)
+    for (Index t : ws.adj.of(v))
+      if (m.triangle_alive[static_cast<std::size_t>(t)]) {
+        m.triangle_alive[static_cast<std::size_t>(t)] = 0;
+        killed.push_back(t);
       }
-      tri = rotate_min_first(tri);
-    }
-    glued.fetch_add(local, std::memory_order_relaxed);
-  });
-  report.glued_triangles += glued.load();
-
-  // ---- delete count-2 vertices (glued) and count-0 vertices (orphans) ----
-  std::int64_t glued_v = 0, orphans = 0;
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (!m.vertex_alive[v]) continue;
-    if (count[v] == 2) {
-      m.vertex_alive[v] = 0;
-      ++glued_v;
-    } else if (count[v] == 0) {
-      m.vertex_alive[v] = 0;
-      ++orphans;
-    }
+  for (Index v : glued_vertices) {
+    m.vertex_alive[static_cast<std::size_t>(v)] = 0;
+    ws.adj.assign(v, {});
   }
-  report.glued_vertices += glued_v;
-  report.orphan_vertices += orphans;
+  for (Index v : orphans) m.vertex_alive[static_cast<std::size_t>(v)] = 0;
+  for (Index t : killed)
+    for (Index v : m.triangle[static_cast<std::size_t>(t)]) {
+      if (!m.vertex_alive[static_cast<std::size_t>(v)]) continue;
+      ws.adj.erase(v, t);
+      ws.mark_dirty(v);
+    }
+  report.glued_triangles += static_cast<std::int64_t>(killed.size());
+  report.glued_vertices += static_cast<std::int64_t>(glued_vertices.size());
+  report.orphan_vertices += static_cast<std::int64_t>(orphans.size());
 }
 
 template <class Real>
-CycleReport remove_glued_and_sort(TriMesh<Real>& m, Execution exec) {
+CycleReport remove_glued_and_sort(TriMesh<Real>& m, Execution) {
   MeltWorkspace ws;
+  prepare_workspace(ws, m);
+  sort_triangle_indices(m);
+  for (std::size_t v = 0; v < m.vertex_slots(); ++v)
+    if (m.vertex_alive[v]) ws.mark_dirty(static_cast<Index>(v));
   CycleReport report;
-  glued_pass(m, exec, ws, report);
+  glued_pass(m, ws, report);
   return report;
 }
 
@@ -81,8 +66,8 @@ void sort_triangle_indices(TriMesh<Real>& m) {
     if (m.triangle_alive[t]) m.triangle[t] = rotate_min_first(m.triangle[t]);
 }
 
-template void glued_pass(TriMesh<float>&, Execution, MeltWorkspace&, CycleReport&);
-template void glued_pass(TriMesh<double>&, Execution, MeltWorkspace&, CycleReport&);
+template void glued_pass(TriMesh<float>&, MeltWorkspace&, CycleReport&);
+template void glued_pass(TriMesh<double>&, MeltWorkspace&, CycleReport&);
 template CycleReport remove_glued_and_sort(TriMesh<float>&, Execution);
 template CycleReport remove_glued_and_sort(TriMesh<double>&, Execution);
 template void sort_triangle_indices(TriMesh<float>&);

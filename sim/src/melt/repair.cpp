@@ -16,7 +16,7 @@
 // Every step deletes at least one element or removes a pinch, and touched neighbours are
 // re-examined, so the worklist empties. Directed-edge balance (each edge used equally often
 // in both directions) is preserved by merging, which guarantees the link decomposes into
-// cycles. The common case (nothing to repair) costs one sweep over the triangles.
+// cycles. The common case (nothing to repair) costs one link test per dirty vertex.
 
 #include "workspace.h"
 
@@ -69,58 +69,10 @@ bool link_is_single_cycle(std::vector<LinkEdge>& link) {
   return at == 0 && steps == k;
 }
 
-// Vertex -> triangles, built once when a repair is needed; lists of vertices the repair
-// changes are kept in `changed`. Reads filter out dead triangles and triangles that no
-// longer contain the vertex, so stale entries are harmless.
-template <class Real>
-class Adjacency {
- public:
-  explicit Adjacency(const TriMesh<Real>& m) : m_(m) {
-    const std::size_t nv = m.vertex_slots(), nt = m.triangle_slots();
-    offset_.assign(nv + 1, 0);
-    for (std::size_t t = 0; t < nt; ++t)
-      if (m.triangle_alive[t])
-        for (Index v : m.triangle[t]) ++offset_[static_cast<std::size_t>(v) + 1];
-    for (std::size_t v = 0; v < nv; ++v) offset_[v + 1] += offset_[v];
-    entry_.resize(static_cast<std::size_t>(offset_[nv]));
-    std::vector<std::int64_t> cursor(offset_.begin(), offset_.end() - 1);
-    for (std::size_t t = 0; t < nt; ++t)
-      if (m.triangle_alive[t])
-        for (Index v : m.triangle[t]) entry_[static_cast<std::size_t>(cursor[static_cast<std::size_t>(v)]++)] = static_cast<Index>(t);
-  }
-
-  std::vector<Index> triangles_of(Index v) const {
-    std::vector<Index> out;
-    auto keep = [&](Index t) {
-      const auto ts = static_cast<std::size_t>(t);
-      if (!m_.triangle_alive[ts]) return;
-      const Triangle& tri = m_.triangle[ts];
-      if (tri[0] == v || tri[1] == v || tri[2] == v) out.push_back(t);
-    };
-    auto it = changed_.find(v);
-    if (it != changed_.end()) {
-      for (Index t : it->second) keep(t);
-    } else if (static_cast<std::size_t>(v) + 1 < offset_.size()) {
-      for (auto i = offset_[static_cast<std::size_t>(v)]; i < offset_[static_cast<std::size_t>(v) + 1]; ++i)
-        keep(entry_[static_cast<std::size_t>(i)]);
-    }
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
-    return out;
-  }
-  void set(Index v, std::vector<Index> tris) { changed_[v] = std::move(tris); }
-
- private:
-  const TriMesh<Real>& m_;
-  std::vector<std::int64_t> offset_;
-  std::vector<Index> entry_;
-  std::unordered_map<Index, std::vector<Index>> changed_;
-};
-
 template <class Real>
 class Repairer {
  public:
-  Repairer(TriMesh<Real>& m, CycleReport& report) : m_(m), adj_(m), report_(report) {}
+  Repairer(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report) : m_(m), ws_(ws), report_(report) {}
 
   void run(const std::vector<Index>& start) {
     for (Index v : start) enqueue(v);
@@ -134,29 +86,35 @@ class Repairer {
         throw InvariantError(fmt::format("topology repair did not converge after {} steps (at vertex v{})", steps, v));
       process(v);
     }
-    for (Index v : touched_) {
-      if (!m_.vertex_alive[static_cast<std::size_t>(v)]) continue;
-      m_.triangle_count[static_cast<std::size_t>(v)] = static_cast<Index>(adj_.triangles_of(v).size());
-    }
   }
 
  private:
+  std::vector<Index> live_triangles_of(Index v) const {
+    std::vector<Index> out;
+    for (Index t : ws_.adj.of(v)) {
+      const auto ts = static_cast<std::size_t>(t);
+      if (!m_.triangle_alive[ts]) continue;
+      const Triangle& tri = m_.triangle[ts];
+      if (tri[0] == v || tri[1] == v || tri[2] == v) out.push_back(t);
+    }
+    return out;
+  }
   void enqueue(Index v) {
     if (queued_.insert(v).second) queue_.push_back(v);
-    touched_.push_back(v);
-  }
-  void enqueue_triangle(Index t) {
-    for (Index v : m_.triangle[static_cast<std::size_t>(t)]) enqueue(v);
   }
   void kill_triangle(Index t) {
     m_.triangle_alive[static_cast<std::size_t>(t)] = 0;
-    enqueue_triangle(t);
+    for (Index c : m_.triangle[static_cast<std::size_t>(t)]) {
+      ws_.adj.erase(c, t);
+      enqueue(c);
+    }
   }
 
   void process(Index v) {
     const auto vs = static_cast<std::size_t>(v);
     if (!m_.vertex_alive[vs]) return;
-    std::vector<Index> tris = adj_.triangles_of(v);
+    const std::vector<Index> tris = live_triangles_of(v);
+    m_.triangle_count[vs] = static_cast<Index>(tris.size());
     if (tris.empty()) {
       m_.vertex_alive[vs] = 0;
       ++report_.orphan_vertices;
@@ -217,38 +175,39 @@ class Repairer {
       }
       if (at < 0)
         throw InvariantError(fmt::format("vertex v{}: open link (a boundary edge) during topology repair", v));
+      std::sort(cyc.begin(), cyc.end());
       cycles.push_back(std::move(cyc));
     }
     // The cycle holding v's smallest triangle keeps v; each other gets a new vertex.
-    std::sort(cycles.begin(), cycles.end(), [](const auto& a, const auto& b) {
-      return *std::min_element(a.begin(), a.end()) < *std::min_element(b.begin(), b.end());
-    });
-    adj_.set(v, cycles[0]);
+    std::sort(cycles.begin(), cycles.end(), [](const auto& a, const auto& b) { return a.front() < b.front(); });
+    ws_.adj.assign(v, cycles[0]);
     for (std::size_t c = 1; c < cycles.size(); ++c) {
       const Vec3<Real> p = m_.position[vs];
       const Vec3<Real> n = m_.normal[vs];
       const Index u = m_.add_vertex(p);
       m_.normal[static_cast<std::size_t>(u)] = n;
+      m_.triangle_count[static_cast<std::size_t>(u)] = static_cast<Index>(cycles[c].size());
       for (Index t : cycles[c]) {
         Triangle& tri = m_.triangle[static_cast<std::size_t>(t)];
         for (Index& x : tri)
           if (x == v) x = u;
         tri = rotate_min_first(tri);
       }
-      adj_.set(u, cycles[c]);
-      touched_.push_back(u);
+      ws_.adj.grow(m_.vertex_slots());
+      ws_.adj.assign(u, cycles[c]);
       ++report_.repair_vertex_splits;
     }
+    m_.triangle_count[vs] = static_cast<Index>(cycles[0].size());
   }
 
   void collapse_edge(Index v, Index x) {
     const Index keep = std::min(v, x), gone = std::max(v, x);
     const auto ks = static_cast<std::size_t>(keep), gs = static_cast<std::size_t>(gone);
-    std::vector<Index> tk = adj_.triangles_of(keep);
-    std::vector<Index> tg = adj_.triangles_of(gone);
+    const std::vector<Index> tg = live_triangles_of(gone);
     m_.position[ks] = (m_.position[ks] + m_.position[gs]) / Real(2);
     m_.vertex_alive[gs] = 0;
     m_.reindex[gs] = keep;
+    std::vector<Index> moved;
     for (Index t : tg) {
       Triangle& tri = m_.triangle[static_cast<std::size_t>(t)];
       for (Index& y : tri)
@@ -257,22 +216,28 @@ class Repairer {
         kill_triangle(t);
       } else {
         tri = rotate_min_first(tri);
-        enqueue_triangle(t);
+        moved.push_back(t);
+        for (Index c : tri) enqueue(c);
       }
     }
-    for (Index t : tk) enqueue_triangle(t);
-    tk.insert(tk.end(), tg.begin(), tg.end());
-    adj_.set(keep, std::move(tk));
+    std::vector<Index> kl = live_triangles_of(keep);
+    for (Index t : kl) enqueue_corners(t);
+    std::vector<Index> all;
+    std::set_union(kl.begin(), kl.end(), moved.begin(), moved.end(), std::back_inserter(all));
+    ws_.adj.assign(keep, all);
+    ws_.adj.assign(gone, {});
     enqueue(keep);
     ++report_.repair_edge_collapses;
   }
+  void enqueue_corners(Index t) {
+    for (Index c : m_.triangle[static_cast<std::size_t>(t)]) enqueue(c);
+  }
 
   TriMesh<Real>& m_;
-  Adjacency<Real> adj_;
+  MeltWorkspace& ws_;
   CycleReport& report_;
   std::deque<Index> queue_;
   std::unordered_set<Index> queued_;
-  std::vector<Index> touched_;
   std::vector<LinkEdge> link_;
 };
 
@@ -280,63 +245,41 @@ class Repairer {
 
 template <class Real>
 void repair_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report) {
-  resize_vertex_scratch(ws, m);
-  const std::size_t nv = m.vertex_slots();
-  ws.dirty_list.clear();
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (!ws.dirty[v]) continue;
-    ws.dirty[v] = 0;
-    if (m.vertex_alive[v]) ws.dirty_list.push_back(static_cast<Index>(v));
-  }
-  if (ws.dirty_list.empty()) return;
-
-  // Cheap check first: gather the triangles of the dirty vertices in one sweep and test
-  // each link. Only if some vertex is not manifold is the full repair machinery built.
-  std::vector<Index>& local = ws.root;  // reuse: root is free after the collapse pass
-  std::fill(local.begin(), local.begin() + static_cast<std::ptrdiff_t>(nv), -1);
-  for (std::size_t i = 0; i < ws.dirty_list.size(); ++i) local[static_cast<std::size_t>(ws.dirty_list[i])] = static_cast<Index>(i);
-  std::vector<std::int32_t> offset(ws.dirty_list.size() + 1, 0);
-  std::vector<std::pair<Index, Index>> pairs;  // (local id, triangle)
-  for (std::size_t t = 0; t < m.triangle_slots(); ++t) {
-    if (!m.triangle_alive[t]) continue;
-    for (Index v : m.triangle[t]) {
-      const Index l = local[static_cast<std::size_t>(v)];
-      if (l >= 0) pairs.push_back({l, static_cast<Index>(t)});
-    }
-  }
-  std::sort(pairs.begin(), pairs.end());
+  prepare_workspace(ws, m);
+  // Cheap check first: one link test per dirty vertex; the repair machinery runs only if
+  // some vertex is not manifold.
   std::vector<Index> bad;
   std::vector<Index> tris;
   std::vector<LinkEdge> link;
-  for (std::size_t i = 0; i < pairs.size();) {
-    std::size_t j = i;
-    tris.clear();
-    while (j < pairs.size() && pairs[j].first == pairs[i].first) tris.push_back(pairs[j++].second);
-    const Index v = ws.dirty_list[static_cast<std::size_t>(pairs[i].first)];
+  for (Index v : ws.dirty_list) {
+    const auto vs = static_cast<std::size_t>(v);
+    if (!m.vertex_alive[vs]) continue;
+    const auto list = ws.adj.of(v);
+    if (list.empty()) {
+      m.vertex_alive[vs] = 0;
+      ++report.orphan_vertices;
+      continue;
+    }
+    tris.assign(list.begin(), list.end());
     build_link(m, v, tris, link);
     if (!link_is_single_cycle(link)) bad.push_back(v);
-    local[static_cast<std::size_t>(v)] = -2;  // seen
-    i = j;
   }
-  for (Index v : ws.dirty_list) {
-    if (local[static_cast<std::size_t>(v)] != -2) {  // dirty vertex without triangles: orphan
-      m.vertex_alive[static_cast<std::size_t>(v)] = 0;
-      ++report.orphan_vertices;
-    }
-    local[static_cast<std::size_t>(v)] = -1;
+  if (!bad.empty()) {
+    std::sort(bad.begin(), bad.end());
+    Repairer<Real> repairer(m, ws, report);
+    repairer.run(bad);
+    prepare_workspace(ws, m);
   }
-  if (bad.empty()) return;
-  std::sort(bad.begin(), bad.end());
-  Repairer<Real> repairer(m, report);
-  repairer.run(bad);
-  resize_vertex_scratch(ws, m);
+  for (Index v : ws.dirty_list)
+    if (m.vertex_alive[static_cast<std::size_t>(v)])
+      m.triangle_count[static_cast<std::size_t>(v)] = static_cast<Index>(ws.adj.of(v).size());
 }
 
 template <class Real>
 CycleReport repair_topology(TriMesh<Real>& m, const std::vector<Index>& vertices) {
   MeltWorkspace ws;
-  resize_vertex_scratch(ws, m);
-  for (Index v : vertices) ws.dirty[static_cast<std::size_t>(v)] = 1;
+  prepare_workspace(ws, m);
+  for (Index v : vertices) ws.mark_dirty(v);
   CycleReport report;
   repair_pass(m, ws, report);
   return report;

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 namespace meltlab::sim {
@@ -30,6 +31,7 @@ MeltSimulator<Real>::MeltSimulator(TriMesh<Real> mesh, MeltParams params, KlFiel
   if (!kl_) kl_ = make_constant_kl(1.0);
   sort_triangle_indices(mesh_);  // "once: sort triangle indices" before the first cycle
   for (std::size_t v = 0; v < mesh_.vertex_slots(); ++v) mesh_.reindex[v] = static_cast<Index>(v);
+  prepare_workspace(*ws_, mesh_);
 }
 
 template <class Real>
@@ -54,17 +56,25 @@ template <class Real>
 CycleReport MeltSimulator<Real>::step() {
   CycleReport r;
   MeltWorkspace& ws = *ws_;
+  using Clock = std::chrono::steady_clock;
+  auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
+  auto t = Clock::now();
   deform_pass(mesh_, params_, *kl_, exec_, ws);
+  r.deform_ms = ms_since(t);
+  t = Clock::now();
   collapse_pass(mesh_, params_.kr, params_.merge, exec_, ws, r);
+  r.collapse_ms = ms_since(t);
   // Without a merge the connectivity is unchanged: no glued pairs can have appeared and the
   // triangles are still sorted, so Alg. 3 and the repair would find nothing to do.
   if (r.merged_vertices > 0) {
-    glued_pass(mesh_, exec_, ws, r);
-    if (params_.repair)
-      repair_pass(mesh_, ws, r);
-    else
-      std::fill(ws.dirty.begin(), ws.dirty.end(), std::uint8_t{0});
+    t = Clock::now();
+    glued_pass(mesh_, ws, r);
+    r.glued_ms = ms_since(t);
+    t = Clock::now();
+    if (params_.repair) repair_pass(mesh_, ws, r);
+    r.repair_ms = ms_since(t);
   }
+  ws.clear_dirty();
   r.live_vertices = static_cast<std::int64_t>(mesh_.live_vertex_count());
   r.live_triangles = static_cast<std::int64_t>(mesh_.live_triangle_count());
   ++cycle_;

@@ -1,6 +1,8 @@
 #pragma once
-// Private to the melt cycle: scratch arrays kept across cycles and small helpers shared by
-// the passes. Not installed.
+// Private to the melt cycle: the state kept across cycles (vertex -> triangle lists,
+// per-triangle unit edges) and helpers shared by the passes. Not installed.
+
+#include "adjacency.h"
 
 #include <meltlab/sim/melt.h>
 
@@ -17,41 +19,52 @@ namespace meltlab::sim {
 /// Grain of the TBB loops: large enough that task overhead stays below ~1% of a pass.
 inline constexpr std::size_t kParallelGrain = 2048;
 
-struct MeltWorkspace {
-  // Parallel deform: vertex -> incident (triangle, corner) lists in ascending triangle
-  // order (CSR), and per-triangle unit edge vectors computed before the gather.
-  std::vector<std::int32_t> adj_offset;  // size V + 1
-  std::vector<std::int32_t> adj_cursor;  // size V
-  std::vector<std::int32_t> adj_entry;   // 3T entries: triangle * 3 + corner
-  std::vector<float> unit_edges_f;       // 9 per triangle (float meshes)
-  std::vector<double> unit_edges_d;      // 9 per triangle (double meshes)
+/// What a triangle contributes to its corners in Alg. 1: the unit face normal and, per
+/// corner, the unit edge vector to the next corner.
+template <class Real>
+struct TriangleTerms {
+  Vec3<Real> normal;
+  Vec3<Real> edge[3];
+};
 
-  // Collapse: flattened merge target of every vertex, and merge accumulators.
-  std::vector<Index> root;
+struct MeltWorkspace {
+  VertexTriangles adj;  ///< triangles of every vertex, ascending; kept up to date by every pass
+
+  // Parallel deform: per-triangle terms (unit normal + 3 unit edges), one record per triangle
+  // so a vertex's gather touches one cache line per triangle.
+  std::vector<TriangleTerms<float>> terms_f;
+  std::vector<TriangleTerms<double>> terms_d;
+
+  std::vector<Index> root;        ///< flattened merge target of every vertex
+  std::vector<Index> merged;      ///< vertices merged this cycle (ascending)
   std::vector<std::int32_t> cluster_size;
   std::vector<Index> touched_roots;
 
-  // Topology repair: vertices whose neighbourhood changed this cycle.
-  std::vector<std::uint8_t> dirty;
-  std::vector<Index> dirty_list;
+  std::vector<std::uint8_t> dirty;  ///< vertex whose triangles changed this cycle
+  std::vector<Index> dirty_list;    ///< the same vertices, in the order they were marked
+  std::vector<Index> affected;      ///< triangles whose indices changed this cycle
+  std::vector<Index> scratch;       ///< temporary list (merging sorted lists)
 
   template <class Real>
-  std::vector<Real>& unit_edges() {
-    if constexpr (std::is_same_v<Real, float>) return unit_edges_f;
-    else return unit_edges_d;
+  std::vector<TriangleTerms<Real>>& triangle_terms() {
+    if constexpr (std::is_same_v<Real, float>) return terms_f;
+    else return terms_d;
+  }
+  void mark_dirty(Index v) {
+    auto& d = dirty[static_cast<std::size_t>(v)];
+    if (!d) {
+      d = 1;
+      dirty_list.push_back(v);
+    }
+  }
+  void clear_dirty() {
+    for (Index v : dirty_list) dirty[static_cast<std::size_t>(v)] = 0;
+    dirty_list.clear();
   }
 };
 
-/// v / |v|, or the zero vector if |v|² is zero (open choice `zero_guard`: a degenerate
-/// triangle or a vanished edge contributes nothing instead of NaN).
-template <class Real>
-inline Vec3<Real> normalized_or_zero(const Vec3<Real>& v) {
-  const Real n2 = v.squaredNorm();
-  if (!(n2 > Real(0))) return Vec3<Real>::Zero();
-  return v / std::sqrt(n2);
-}
-
-/// Runs body(begin, end) over [0, n) serially or as TBB tasks.
+/// Runs body(begin, end) over [0, n) serially or as TBB tasks. The body must not depend on
+/// how the range is split (every element's result is computed by the same code).
 template <class Body>
 inline void for_range(Execution exec, std::size_t n, const Body& body) {
   if (exec == Execution::kSerial || n < 2 * kParallelGrain) {
@@ -70,21 +83,33 @@ inline void atomic_min(Index& x, Index value) {
   }
 }
 
-inline void atomic_increment(std::int32_t& x) {
-  std::atomic_ref<std::int32_t>(x).fetch_add(1, std::memory_order_relaxed);
-}
-
-inline void atomic_flag_set(std::uint8_t& x) { std::atomic_ref<std::uint8_t>(x).store(1, std::memory_order_relaxed); }
-
 inline bool is_degenerate(const Triangle& t) { return t[0] == t[1] || t[1] == t[2] || t[2] == t[0]; }
 
-/// Grows the per-vertex workspace arrays to the mesh's slot count (splits add slots).
+/// Position of v among the corners of t (v must be a corner).
+inline int corner_of(const Triangle& t, Index v) { return t[0] == v ? 0 : (t[1] == v ? 1 : 2); }
+
+/// Makes the workspace match the mesh: per-vertex arrays sized, adjacency built if needed.
 template <class Real>
-void resize_vertex_scratch(MeltWorkspace& ws, const TriMesh<Real>& m) {
+void prepare_workspace(MeltWorkspace& ws, const TriMesh<Real>& m) {
   const std::size_t n = m.vertex_slots();
+  if (!ws.adj.built()) ws.adj.build(m);
+  ws.adj.grow(n);
   if (ws.dirty.size() < n) ws.dirty.resize(n, 0);
   if (ws.root.size() < n) ws.root.resize(n);
   if (ws.cluster_size.size() < n) ws.cluster_size.resize(n, 0);
+}
+
+/// Replaces v's list by its triangles that are still alive and still contain v.
+template <class Real>
+void refresh_list(MeltWorkspace& ws, const TriMesh<Real>& m, Index v) {
+  ws.scratch.clear();
+  for (Index t : ws.adj.of(v)) {
+    const auto ts = static_cast<std::size_t>(t);
+    if (!m.triangle_alive[ts]) continue;
+    const Triangle& tri = m.triangle[ts];
+    if (tri[0] == v || tri[1] == v || tri[2] == v) ws.scratch.push_back(t);
+  }
+  ws.adj.assign(v, ws.scratch);
 }
 
 // Pass implementations shared by the free functions and MeltSimulator.
@@ -94,7 +119,7 @@ template <class Real>
 void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec, MeltWorkspace& ws,
                    CycleReport& report);
 template <class Real>
-void glued_pass(TriMesh<Real>& m, Execution exec, MeltWorkspace& ws, CycleReport& report);
+void glued_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report);
 template <class Real>
 void repair_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report);
 

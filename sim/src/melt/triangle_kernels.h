@@ -1,0 +1,103 @@
+#pragma once
+// Private to the melt cycle: the per-triangle arithmetic of Alg. 1 and Alg. 2, computed a
+// block of triangles at a time. Positions are first gathered into structure-of-arrays
+// buffers, then plain loops over them do the arithmetic (the compiler turns these into
+// SIMD instructions: sqrt and division are exactly rounded in SIMD too, and contraction is
+// off, so the result of every element is the same as a scalar evaluation). Serial and
+// parallel execution call the same kernels, so their results are bitwise identical.
+
+#include <meltlab/sim/mesh.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <cstddef>
+
+namespace meltlab::sim {
+
+inline constexpr std::size_t kTriangleBlock = 64;
+
+/// Unit face normal and the three unit edge vectors (a->b, b->c, c->a) of a block.
+template <class Real>
+struct TriangleBlockTerms {
+  std::size_t count = 0;
+  Real nx[kTriangleBlock], ny[kTriangleBlock], nz[kTriangleBlock];
+  Real ex[3][kTriangleBlock], ey[3][kTriangleBlock], ez[3][kTriangleBlock];
+};
+
+// 1/|v| for |v|² = n2, or 0 for a zero vector (`zero_guard`: a degenerate triangle or a
+// vanished edge contributes nothing instead of NaN). Written without a branch on a
+// division so that it vectorises: max() keeps the division finite and the multiplication
+// by (n2 > 0) zeroes the result for a zero vector. For n2 >= the smallest normal number
+// this is exactly 1/sqrt(n2).
+template <class Real>
+inline Real inverse_length(Real n2) {
+  constexpr Real kTiny = std::numeric_limits<Real>::min();
+  const Real inv = Real(1) / std::sqrt(std::max(n2, kTiny));
+  return n2 > Real(0) ? inv : Real(0);
+}
+
+/// Triangles [first, first + count) of `m` (dead slots give zero terms).
+template <class Real>
+inline void triangle_block_terms(const TriMesh<Real>& m, std::size_t first, std::size_t count,
+                                 TriangleBlockTerms<Real>& out) {
+  Real px[3][kTriangleBlock], py[3][kTriangleBlock], pz[3][kTriangleBlock];
+  out.count = count;
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::size_t t = first + i;
+    const bool alive = m.triangle_alive[t] != 0;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3<Real>& p = m.position[alive ? static_cast<std::size_t>(m.triangle[t][static_cast<std::size_t>(k)]) : 0];
+      px[k][i] = alive ? p.x() : Real(0);
+      py[k][i] = alive ? p.y() : Real(0);
+      pz[k][i] = alive ? p.z() : Real(0);
+    }
+  }
+  for (std::size_t i = 0; i < count; ++i) {
+    const Real abx = px[1][i] - px[0][i], aby = py[1][i] - py[0][i], abz = pz[1][i] - pz[0][i];
+    const Real bcx = px[2][i] - px[1][i], bcy = py[2][i] - py[1][i], bcz = pz[2][i] - pz[1][i];
+    const Real cax = px[0][i] - px[2][i], cay = py[0][i] - py[2][i], caz = pz[0][i] - pz[2][i];
+    const Real acx = px[2][i] - px[0][i], acy = py[2][i] - py[0][i], acz = pz[2][i] - pz[0][i];
+    // Eq. 2.9: (b - a) x (c - a)
+    const Real nx = aby * acz - abz * acy;
+    const Real ny = abz * acx - abx * acz;
+    const Real nz = abx * acy - aby * acx;
+    const Real inv_n = inverse_length(nx * nx + ny * ny + nz * nz);
+    out.nx[i] = nx * inv_n;
+    out.ny[i] = ny * inv_n;
+    out.nz[i] = nz * inv_n;
+    const Real i0 = inverse_length(abx * abx + aby * aby + abz * abz);
+    const Real i1 = inverse_length(bcx * bcx + bcy * bcy + bcz * bcz);
+    const Real i2 = inverse_length(cax * cax + cay * cay + caz * caz);
+    out.ex[0][i] = abx * i0, out.ey[0][i] = aby * i0, out.ez[0][i] = abz * i0;
+    out.ex[1][i] = bcx * i1, out.ey[1][i] = bcy * i1, out.ez[1][i] = bcz * i1;
+    out.ex[2][i] = cax * i2, out.ey[2][i] = cay * i2, out.ez[2][i] = caz * i2;
+  }
+}
+
+/// Squared lengths of the edges ab, bc, ca of triangles [first, first + count).
+template <class Real>
+inline void triangle_block_edge_lengths2(const TriMesh<Real>& m, std::size_t first, std::size_t count,
+                                         Real (&l2)[3][kTriangleBlock]) {
+  Real px[3][kTriangleBlock], py[3][kTriangleBlock], pz[3][kTriangleBlock];
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::size_t t = first + i;
+    const bool alive = m.triangle_alive[t] != 0;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3<Real>& p = m.position[alive ? static_cast<std::size_t>(m.triangle[t][static_cast<std::size_t>(k)]) : 0];
+      px[k][i] = p.x();
+      py[k][i] = p.y();
+      pz[k][i] = p.z();
+    }
+  }
+  for (std::size_t i = 0; i < count; ++i) {
+    const Real abx = px[1][i] - px[0][i], aby = py[1][i] - py[0][i], abz = pz[1][i] - pz[0][i];
+    const Real bcx = px[2][i] - px[1][i], bcy = py[2][i] - py[1][i], bcz = pz[2][i] - pz[1][i];
+    const Real cax = px[0][i] - px[2][i], cay = py[0][i] - py[2][i], caz = pz[0][i] - pz[2][i];
+    l2[0][i] = abx * abx + aby * aby + abz * abz;
+    l2[1][i] = bcx * bcx + bcy * bcy + bcz * bcz;
+    l2[2][i] = cax * cax + cay * cay + caz * caz;
+  }
+}
+
+}  // namespace meltlab::sim
