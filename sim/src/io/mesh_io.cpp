@@ -297,7 +297,7 @@ LoadedMesh load_mesh(const fs::path& file, const LoadOptions& options) {
   out.mesh = triangulate(out.polygons, name);
   TriMesh<double> tm = TriMesh<double>::from_indexed(out.mesh);
   const TopologyReport topo = check_topology(tm);
-  if (!topo.valid()) {
+  if (!topo.valid() && options.validate) {
     if (!options.repair) {
       const std::string what = topo.problems.empty() ? "invalid topology" : topo.problems.front().describe();
       std::string more;

@@ -23,6 +23,7 @@ PolygonMesh read_polygon_mesh(const std::filesystem::path& file);
 struct LoadOptions {
   double weld_tolerance = 0.0;  ///< merge vertices closer than this (mesh units); 0 = identical only
   bool repair = false;          ///< repair open/non-manifold/misoriented input with CGAL instead of refusing
+  bool validate = true;         ///< refuse invalid meshes; false returns them anyway (diagnostics)
 };
 
 struct LoadReport {
@@ -36,7 +37,7 @@ struct LoadReport {
 };
 
 struct LoadedMesh {
-  IndexedMesh mesh;     ///< triangulated, welded, validated (closed, manifold, oriented)
+  IndexedMesh mesh;     ///< triangulated, welded, validated (closed, manifold, oriented) unless !validate
   PolygonMesh polygons;  ///< welded polygons as in the file (for Tab. 2.3-style counts)
   LoadReport report;
 };

@@ -1,0 +1,17 @@
+#pragma once
+// Every subcommand registers itself on the app and returns the function that runs it.
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <string>
+
+namespace meltlab::cli {
+
+using Run = std::function<int()>;
+
+Run add_simulate(CLI::App& app, const std::string& command_line);
+Run add_mesh_info(CLI::App& app);
+Run add_dataset(CLI::App& app);
+
+}  // namespace meltlab::cli

@@ -1,0 +1,56 @@
+// meltlab: command-line entry point. Each subcommand lives in its own file and only parses
+// options and calls library functions.
+
+#include <meltlab/sim/error.h>
+#include <meltlab/version.h>
+
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <exception>
+#include <map>
+
+#include "cli_util.h"
+#include "commands.h"
+
+int main(int argc, char** argv) {
+  using namespace meltlab;
+  std::string command_line;
+  for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
+
+  CLI::App app{"meltlab: verification and validation of melting and sublimation visualization"};
+  app.set_version_flag("--version", fmt::format("meltlab {} ({})", kVersion, kGitRevision));
+  app.require_subcommand(1);
+  std::map<CLI::App*, cli::Run> runs;
+  auto add = [&](cli::Run run) { runs[app.get_subcommands({}).back()] = std::move(run); };
+  add(cli::add_simulate(app, command_line));
+  add(cli::add_mesh_info(app));
+  add(cli::add_dataset(app));
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "meltlab: %s\n", e.what());
+    return cli::kBadInput;
+  }
+  try {
+    for (auto& [sub, run] : runs)
+      if (sub->parsed()) return run();
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "meltlab: %s\n", e.what());
+    return cli::kBadInput;
+  } catch (const InvariantError& e) {
+    std::fprintf(stderr, "meltlab: internal error: %s\n", e.what());
+    return cli::kInternal;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "meltlab: %s\n", e.what());
+    return cli::kInternal;
+  }
+  return cli::kBadInput;
+}

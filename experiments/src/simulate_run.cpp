@@ -1,0 +1,354 @@
+#include <meltlab/datasets/catalog.h>
+#include <meltlab/experiments/simulate_run.h>
+#include <meltlab/sim/atomic_file.h>
+#include <meltlab/sim/error.h>
+#include <meltlab/sim/mesh_order.h>
+#include <meltlab/sim/quality.h>
+#include <meltlab/sim/topology.h>
+#include <meltlab/version.h>
+
+#include <fmt/format.h>
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <fstream>
+#include <numeric>
+#include <sstream>
+#include <thread>
+
+namespace meltlab::experiments {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+const char* name_of(sim::DeformMode m) {
+  switch (m) {
+    case sim::DeformMode::kCombined: return "combined";
+    case sim::DeformMode::kNormalOnly: return "normal";
+    case sim::DeformMode::kEdgeOnly: return "edge";
+  }
+  return "?";
+}
+
+std::string now_iso8601() {
+  const std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return buf;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const double pos = q * static_cast<double>(v.size() - 1);
+  const auto i = static_cast<std::size_t>(pos);
+  const double f = pos - static_cast<double>(i);
+  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
+}
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw InputError(what);
+}
+
+}  // namespace
+
+json hardware_json() {
+  json h;
+  std::ifstream cpu("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(cpu, line))
+    if (line.rfind("model name", 0) == 0) {
+      h["cpu"] = line.substr(line.find(':') + 2);
+      break;
+    }
+  h["hardware_threads"] = std::thread::hardware_concurrency();
+  h["tbb_default_concurrency"] = tbb::info::default_concurrency();
+  char host[256] = {0};
+  if (::gethostname(host, sizeof host - 1) == 0) h["host"] = host;
+  return h;
+}
+
+fs::path resolve_mesh_argument(const std::string& mesh) {
+  std::error_code ec;
+  if (fs::exists(mesh, ec)) return mesh;
+  const bool looks_like_path = mesh.find('/') != std::string::npos || mesh.find('.') != std::string::npos;
+  try {
+    return datasets::dataset_path(mesh);
+  } catch (const InputError& e) {
+    if (looks_like_path) throw InputError(fmt::format("{}: no such file", mesh));
+    throw InputError(fmt::format("{}: neither a mesh file nor a dataset ({}); see `meltlab dataset list`", mesh, e.what()));
+  }
+}
+
+std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o) {
+  auto p = std::make_unique<PreparedSimulation>();
+  p->opt = o;
+  require(o.cycles >= 0, fmt::format("--cycles: must be >= 0 (got {})", o.cycles));
+  require(o.snapshot_every >= 0, "--snapshot-every: must be >= 0");
+  require(o.stats_every >= 1, "--stats-every: must be >= 1");
+  require(o.check_every >= 0, "--check-every: must be >= 0");
+  require(o.intersect_every >= 0, "--check-intersections-every: must be >= 0");
+  require(o.threads >= 0, "--threads: must be >= 0");
+  require(sim::mesh_format_of("x." + o.snapshot_format) == o.snapshot_format &&
+              (o.snapshot_format == "ply" || o.snapshot_format == "off" || o.snapshot_format == "obj" ||
+               o.snapshot_format == "stl"),
+          fmt::format("--snapshot-format: '{}' is not one of ply, off, obj, stl", o.snapshot_format));
+  require(!o.out_dir.empty(), "--out: an output folder is required");
+  std::error_code ec;
+  if (fs::exists(o.out_dir, ec)) {
+    require(fs::is_directory(o.out_dir, ec), fmt::format("{}: exists and is not a folder", o.out_dir.string()));
+    require(o.overwrite || !fs::exists(o.out_dir / "run.json", ec),
+            fmt::format("{}: already holds a run (run.json); choose another --out or pass --overwrite", o.out_dir.string()));
+  }
+
+  p->mesh_path = resolve_mesh_argument(o.mesh);
+  p->loaded = sim::load_mesh(p->mesh_path, o.load);
+  p->mesh = o.morton_order ? sim::reorder_for_locality(p->loaded.mesh).mesh : p->loaded.mesh;
+  const auto tm = sim::TriMesh<double>::from_indexed(p->mesh);
+  const sim::QualityReport q = sim::mesh_quality(tm);
+  p->mean_edge_length = q.mean_edge_length;
+
+  // Coefficients: relative units scale with the input's mean edge length L0.
+  const double scale = o.relative_units ? q.mean_edge_length : 1.0;
+  auto checked = [](double x, const char* name) {
+    if (!std::isfinite(x) || x < 0) throw InputError(fmt::format("{}: must be a finite number >= 0 (got {})", name, x));
+    return x;
+  };
+  p->params.kg = o.kg;
+  p->params.kE = checked(o.kE, "--ke") * scale;
+  p->params.kN = checked(o.kN.value_or(o.kE / 100.0), "--kn") * scale;
+  p->params.kr = checked(o.kr, "--kr") * scale;
+  p->params.deform = o.deform;
+  p->params.tie = o.tie;
+  p->params.edge_sum = o.edge_sum;
+  p->params.merge = o.merge;
+  p->params.repair = o.repair_topology;
+  try {
+    p->params.validate();
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("--{}", e.what()));
+  }
+
+  sim::KlContext ctx;
+  ctx.bbox_min = q.bbox_min;
+  ctx.bbox_max = q.bbox_max;
+  p->kl = o.kl_file.empty() ? sim::make_constant_kl(1.0) : sim::load_kl_field(o.kl_file, ctx);
+
+  const auto& r = p->loaded.report;
+  p->mesh_json = {
+      {"argument", o.mesh},
+      {"file", p->mesh_path.string()},
+      {"file_vertices", r.file_vertices},
+      {"file_faces", r.file_faces},
+      {"welded_vertices", r.welded_vertices},
+      {"unreferenced_vertices", r.unreferenced_vertices},
+      {"degenerate_faces", r.degenerate_faces},
+      {"repairs", r.repairs},
+      {"vertices", p->mesh.V.size()},
+      {"triangles", p->mesh.F.size()},
+      {"mean_edge_length", q.mean_edge_length},
+      {"volume", q.volume},
+      {"area", q.area},
+      {"bbox_min", {q.bbox_min.x(), q.bbox_min.y(), q.bbox_min.z()}},
+      {"bbox_max", {q.bbox_max.x(), q.bbox_max.y(), q.bbox_max.z()}},
+      {"order", o.morton_order ? "morton" : "file"},
+  };
+  return p;
+}
+
+namespace {
+
+struct StatsWriter {
+  fs::path target, tmp;
+  std::ofstream out;
+  explicit StatsWriter(const fs::path& file) : target(file), tmp(temporary_path_for(file)) {
+    out.open(tmp, std::ios::trunc);
+    if (!out) throw InputError(fmt::format("{}: cannot open for writing", target.string()));
+    out << "cycle,vertices,triangles,components,euler,genus,volume,area,Qs,Qd,Qq,max_d,ms,"
+           "merged,glued,repair_splits,repair_collapses,deform_ms,collapse_ms,glued_ms,repair_ms\n";
+  }
+  template <class Real>
+  void row(std::int64_t cycle, const sim::TriMesh<Real>& m, const sim::CycleReport& r, double ms) {
+    const sim::TopologyReport topo = sim::check_topology(m, 1);
+    const sim::QualityReport q = sim::mesh_quality(m);
+    out << fmt::format("{},{},{},{},{},{},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{},{:.4g},{:.4g},{:.4g},{:.4g}\n",
+                       cycle, topo.counts.V, topo.counts.F, topo.counts.S, topo.counts.chi, topo.counts.G, q.volume, q.area,
+                       q.Qs, q.Qd, q.Qq, q.max_d, ms, r.merged_vertices, r.glued_triangles, r.repair_vertex_splits,
+                       r.repair_edge_collapses, r.deform_ms, r.collapse_ms, r.glued_ms, r.repair_ms);
+  }
+  void finish() {
+    out.flush();
+    if (!out) throw InputError(fmt::format("{}: write failed (disk full?)", target.string()));
+    out.close();
+    fs::rename(tmp, target);
+  }
+  ~StatsWriter() {
+    if (out.is_open()) {
+      out.close();
+      std::error_code ec;
+      fs::remove(tmp, ec);
+    }
+  }
+};
+
+template <class Real>
+SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const SimulateProgress&)>& progress,
+                         const std::atomic<bool>* stop) {
+  const SimulateOptions& o = p.opt;
+  fs::create_directories(o.out_dir / "snapshots");
+  const int threads = o.threads == 0 ? tbb::info::default_concurrency() : o.threads;
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+  const sim::Execution exec = threads == 1 ? sim::Execution::kSerial : sim::Execution::kParallel;
+
+  sim::MeltSimulator<Real> simulator(sim::TriMesh<Real>::from_indexed(p.mesh), p.params, p.kl, exec);
+  StatsWriter stats(o.out_dir / "stats.csv");
+  const int width = std::max(6, static_cast<int>(std::to_string(o.cycles).size()));
+  std::vector<std::string> snapshots;
+  auto snapshot = [&](std::int64_t cycle) {
+    const std::string name = fmt::format("cycle_{:0{}}.{}", cycle, width, o.snapshot_format);
+    sim::save_mesh(simulator.mesh().to_indexed(), o.out_dir / "snapshots" / name);
+    snapshots.push_back("snapshots/" + name);
+  };
+
+  SimulateResult result;
+  result.status = "completed";
+  std::vector<double> cycle_ms;
+  cycle_ms.reserve(static_cast<std::size_t>(std::min<std::int64_t>(o.cycles, 1 << 20)));
+  double sum_pass[4] = {0, 0, 0, 0};
+  std::int64_t checks = 0, intersect_checks = 0;
+  sim::CycleReport last;
+  stats.row(0, simulator.mesh(), last, 0.0);
+  snapshot(0);
+  bool last_row_written = true, last_snapshot_written = true;
+  using Clock = std::chrono::steady_clock;
+  const auto t_start = Clock::now();
+  auto t_progress = t_start;
+  std::int64_t c = 0;
+  try {
+    for (c = 1; c <= o.cycles; ++c) {
+      if (stop && stop->load()) {
+        result.status = "interrupted";
+        --c;
+        break;
+      }
+      const auto t0 = Clock::now();
+      last = simulator.step();
+      const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      cycle_ms.push_back(ms);
+      sum_pass[0] += last.deform_ms, sum_pass[1] += last.collapse_ms, sum_pass[2] += last.glued_ms,
+          sum_pass[3] += last.repair_ms;
+      const bool empty = last.live_triangles == 0;
+      last_row_written = last_snapshot_written = false;
+      if (c % o.stats_every == 0 || empty) {
+        stats.row(c, simulator.mesh(), last, ms);
+        last_row_written = true;
+      }
+      if (o.check_every > 0 && (c % o.check_every == 0 || empty)) {
+        ++checks;
+        const sim::TopologyReport topo = sim::check_topology(simulator.mesh());
+        if (!topo.valid())
+          throw InvariantError(fmt::format("cycle {}: invalid topology: {}", c,
+                                           topo.problems.empty() ? "Euler counts inconsistent" : topo.problems.front().describe()));
+      }
+      (void)intersect_checks;
+      if (o.snapshot_every > 0 && c % o.snapshot_every == 0) {
+        snapshot(c);
+        last_snapshot_written = true;
+      }
+      if (progress && (Clock::now() - t_progress > std::chrono::milliseconds(100))) {
+        t_progress = Clock::now();
+        progress({c, o.cycles, last.live_triangles,
+                  std::chrono::duration<double, std::milli>(t_progress - t_start).count() / static_cast<double>(c)});
+      }
+      if (empty) {
+        result.empty_at_cycle = c;
+        if (o.stop_when_empty) {
+          result.status = "melted";
+          break;
+        }
+      }
+    }
+    if (c > o.cycles) c = o.cycles;
+  } catch (const InvariantError& e) {
+    result.status = "failed";
+    result.error = e.what();
+  }
+  result.cycles_run = c;
+  if (!last_row_written && c > 0) stats.row(c, simulator.mesh(), last, cycle_ms.empty() ? 0.0 : cycle_ms.back());
+  if (!last_snapshot_written) snapshot(c);
+  stats.finish();
+  if (progress) progress({c, o.cycles, last.live_triangles, 0.0});
+  const double total_s = std::chrono::duration<double>(Clock::now() - t_start).count();
+
+  const auto n = static_cast<double>(std::max<std::size_t>(1, cycle_ms.size()));
+  json params = {
+      {"kg", p.params.kg},
+      {"kE", p.params.kE},
+      {"kN", p.params.kN},
+      {"kr", p.params.kr},
+      {"units", o.relative_units ? "relative to L0" : "absolute"},
+      {"L0_mean_edge_length", p.mean_edge_length},
+      {"as_given", {{"kg", o.kg}, {"kE", o.kE}, {"kN", o.kN.value_or(o.kE / 100.0)}, {"kr", o.kr}}},
+      {"deform", name_of(o.deform)},
+      {"sign_test_tie", o.tie == sim::TieRule::kLessEqual ? "<= (Alg. 1)" : "< (Eq. 3.6)"},
+      {"M_E_mode", o.edge_sum == sim::EdgeSumMode::kMean ? "mean" : "sum"},
+      {"merge_position_mode", o.merge == sim::MergeMode::kClusterMean ? "cluster_mean" : "sequential_pairwise"},
+      {"reindex_conflict_policy", "smallest target"},
+      {"edge_test_order", "ab, bc, ca; at most one edge per triangle per pass"},
+      {"zero_guard", "zero vectors contribute nothing"},
+      {"orphan_vertex_policy", "deleted"},
+      {"topology_repair", o.repair_topology},
+      {"kl", json::parse(p.kl->describe_json())},
+      {"kl_file", o.kl_file.string()},
+  };
+  json run = {
+      {"meltlab", {{"version", kVersion}, {"git_revision", kGitRevision}}},
+      {"command", "simulate"},
+      {"command_line", o.command_line},
+      {"started_utc", now_iso8601()},
+      {"status", result.status},
+      {"mesh", p.mesh_json},
+      {"parameters", params},
+      {"precision", std::is_same_v<Real, float> ? "float" : "double"},
+      {"threads", threads},
+      {"execution", exec == sim::Execution::kSerial ? "serial" : "parallel"},
+      {"cycles_requested", o.cycles},
+      {"cycles_run", c},
+      {"empty_at_cycle", result.empty_at_cycle},
+      {"final", {{"vertices", simulator.mesh().live_vertex_count()}, {"triangles", simulator.mesh().live_triangle_count()}}},
+      {"timing",
+       {{"total_s", total_s},
+        {"cycle_ms_mean", cycle_ms.empty() ? 0.0 : std::accumulate(cycle_ms.begin(), cycle_ms.end(), 0.0) / n},
+        {"cycle_ms_median", percentile(cycle_ms, 0.5)},
+        {"cycle_ms_p95", percentile(cycle_ms, 0.95)},
+        {"cycle_ms_max", cycle_ms.empty() ? 0.0 : *std::max_element(cycle_ms.begin(), cycle_ms.end())},
+        {"pass_ms_mean",
+         {{"deform", sum_pass[0] / n}, {"collapse", sum_pass[1] / n}, {"glued", sum_pass[2] / n}, {"repair", sum_pass[3] / n}}},
+        {"note", "cycle times exclude statistics, checks and snapshots"}}},
+      {"checks", {{"topology_every", o.check_every}, {"topology_checks", checks}, {"intersections_every", o.intersect_every}}},
+      {"outputs", {{"stats", "stats.csv"}, {"snapshots", snapshots}}},
+      {"stats_every", o.stats_every},
+      {"hardware", hardware_json()},
+  };
+  if (!result.error.empty()) run["error"] = result.error;
+  write_text_atomically(o.out_dir / "run.json", run.dump(2) + "\n");
+  result.run_json = std::move(run);
+  return result;
+}
+
+}  // namespace
+
+SimulateResult run_simulation(PreparedSimulation& prepared, const std::function<void(const SimulateProgress&)>& progress,
+                              const std::atomic<bool>* stop) {
+  if (prepared.opt.double_precision) return run_typed<double>(prepared, progress, stop);
+  return run_typed<float>(prepared, progress, stop);
+}
+
+}  // namespace meltlab::experiments
