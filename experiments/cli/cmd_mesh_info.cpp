@@ -1,6 +1,7 @@
 // meltlab mesh-info: validity and quality figures of a mesh as JSON (monograph §2.3–2.4).
 
 #include <meltlab/experiments/simulate_run.h>
+#include <meltlab/sim/cgal/self_intersection.h>
 #include <meltlab/sim/mesh_io.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/sim/topology.h>
@@ -28,6 +29,8 @@ Run add_mesh_info(CLI::App& app) {
   sub->add_option("mesh", *mesh, "Mesh file or dataset name")->required();
   sub->add_option("--weld-tol", options->weld_tolerance, "Merge vertices closer than this (mesh units)")->default_val(0.0);
   sub->add_flag("--repair", options->repair, "Report the mesh after CGAL repair");
+  auto intersections = std::make_shared<bool>(false);
+  sub->add_flag("--self-intersections", *intersections, "Also test for self-intersections with CGAL (exact predicates)");
   return [=]() {
     const auto path = experiments::resolve_mesh_argument(*mesh);
     sim::LoadOptions opt = *options;
@@ -74,8 +77,18 @@ Run add_mesh_info(CLI::App& app) {
           {"bbox_min", {q.bbox_min.x(), q.bbox_min.y(), q.bbox_min.z()}},
           {"bbox_max", {q.bbox_max.x(), q.bbox_max.y(), q.bbox_max.z()}}}},
     };
+    bool intersects = false;
+    if (*intersections) {
+      const sim::SelfIntersectionReport si = sim::self_intersections(tm, 1000);
+      intersects = si.intersects;
+      nlohmann::json sample = nlohmann::json::array();
+      for (std::size_t k = 0; k < std::min<std::size_t>(si.sample.size(), 10); ++k)
+        sample.push_back({si.sample[k].first, si.sample[k].second});
+      out["self_intersections"] = {{"intersects", si.intersects}, {"pairs", si.pairs}, {"first_pairs", sample},
+                                   {"note", "pairs capped at 1000; triangles are indices into the loaded mesh"}};
+    }
     std::printf("%s\n", out.dump(2).c_str());
-    return static_cast<int>(topo.valid() ? kOk : kInvalid);
+    return static_cast<int>(topo.valid() && !intersects ? kOk : kInvalid);
   };
 }
 

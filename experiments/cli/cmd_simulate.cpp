@@ -72,6 +72,9 @@ Run add_simulate(CLI::App& app, const std::string& command_line) {
   sub->add_option("--stats-every", o->stats_every, "Write a stats.csv row every K cycles")->default_val(1);
   sub->add_option("--check-every", o->check_every, "Full topology check every K cycles; the run fails if it breaks (0 = off)")
       ->default_val(0);
+  sub->add_option("--check-intersections-every", o->intersect_every,
+                  "CGAL self-intersection test every K cycles, recorded in run.json (0 = off)")
+      ->default_val(0);
   sub->add_flag("--keep-going", *keep_going, "Keep cycling after the mesh has melted away");
   sub->add_option("--weld-tol", o->load.weld_tolerance, "Merge input vertices closer than this (mesh units)")->default_val(0.0);
   sub->add_flag("--repair", o->load.repair, "Repair open/non-manifold input with CGAL instead of refusing it");

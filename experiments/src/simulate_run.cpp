@@ -1,6 +1,7 @@
 #include <meltlab/datasets/catalog.h>
 #include <meltlab/experiments/simulate_run.h>
 #include <meltlab/sim/atomic_file.h>
+#include <meltlab/sim/cgal/self_intersection.h>
 #include <meltlab/sim/error.h>
 #include <meltlab/sim/mesh_order.h>
 #include <meltlab/sim/quality.h>
@@ -222,7 +223,13 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
   std::vector<double> cycle_ms;
   cycle_ms.reserve(static_cast<std::size_t>(std::min<std::int64_t>(o.cycles, 1 << 20)));
   double sum_pass[4] = {0, 0, 0, 0};
-  std::int64_t checks = 0, intersect_checks = 0;
+  std::int64_t checks = 0, intersect_checks = 0, first_intersection = -1;
+  json intersections = json::array();
+  if (o.intersect_every > 0) {
+    const sim::SelfIntersectionReport si = sim::self_intersections(simulator.mesh(), 1000);
+    intersections.push_back({{"cycle", 0}, {"intersecting_pairs", si.pairs}, {"triangles", simulator.mesh().live_triangle_count()}});
+    if (si.intersects) first_intersection = 0;
+  }
   sim::CycleReport last;
   stats.row(0, simulator.mesh(), last, 0.0);
   snapshot(0);
@@ -257,7 +264,12 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
           throw InvariantError(fmt::format("cycle {}: invalid topology: {}", c,
                                            topo.problems.empty() ? "Euler counts inconsistent" : topo.problems.front().describe()));
       }
-      (void)intersect_checks;
+      if (o.intersect_every > 0 && (c % o.intersect_every == 0)) {
+        ++intersect_checks;
+        const sim::SelfIntersectionReport si = sim::self_intersections(simulator.mesh(), 1000);
+        intersections.push_back({{"cycle", c}, {"intersecting_pairs", si.pairs}, {"triangles", last.live_triangles}});
+        if (si.intersects && first_intersection < 0) first_intersection = c;
+      }
       if (o.snapshot_every > 0 && c % o.snapshot_every == 0) {
         snapshot(c);
         last_snapshot_written = true;
@@ -332,7 +344,13 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
         {"pass_ms_mean",
          {{"deform", sum_pass[0] / n}, {"collapse", sum_pass[1] / n}, {"glued", sum_pass[2] / n}, {"repair", sum_pass[3] / n}}},
         {"note", "cycle times exclude statistics, checks and snapshots"}}},
-      {"checks", {{"topology_every", o.check_every}, {"topology_checks", checks}, {"intersections_every", o.intersect_every}}},
+      {"checks",
+       {{"topology_every", o.check_every},
+        {"topology_checks", checks},
+        {"intersections_every", o.intersect_every},
+        {"intersection_checks", intersect_checks},
+        {"first_self_intersection_cycle", first_intersection},
+        {"intersections", intersections}}},
       {"outputs", {{"stats", "stats.csv"}, {"snapshots", snapshots}}},
       {"stats_every", o.stats_every},
       {"hardware", hardware_json()},

@@ -3,8 +3,10 @@
 // that make the surface non-manifold, which is exactly what we must report).
 
 #include <meltlab/sim/atomic_file.h>
+#include <meltlab/sim/cgal/repair.h>
 #include <meltlab/sim/error.h>
 #include <meltlab/sim/mesh_io.h>
+#include <meltlab/sim/quality.h>
 
 #include <OpenMesh/Core/IO/IOManager.hh>
 #include <OpenMesh/Core/IO/MeshIO.hh>
@@ -297,16 +299,23 @@ LoadedMesh load_mesh(const fs::path& file, const LoadOptions& options) {
   out.mesh = triangulate(out.polygons, name);
   TriMesh<double> tm = TriMesh<double>::from_indexed(out.mesh);
   const TopologyReport topo = check_topology(tm);
-  if (!topo.valid() && options.validate) {
-    if (!options.repair) {
-      const std::string what = topo.problems.empty() ? "invalid topology" : topo.problems.front().describe();
-      std::string more;
-      const std::int64_t others = topo.boundary_edges + topo.nonmanifold_edges + topo.nonmanifold_vertices +
-                                  topo.misoriented_edges + topo.low_valence_vertices - 1;
-      if (others > 0) more = fmt::format(" (and {} more problem(s))", others);
-      throw InputError(fmt::format("{}: {}{}; use --repair to fix it with CGAL", name, what, more));
+  std::string problem;
+  if (!topo.valid()) {
+    problem = topo.problems.empty() ? "invalid topology" : topo.problems.front().describe();
+    const std::int64_t others = topo.boundary_edges + topo.nonmanifold_edges + topo.nonmanifold_vertices +
+                                topo.misoriented_edges + topo.low_valence_vertices - 1;
+    if (others > 0) problem += fmt::format(" (and {} more problem(s))", others);
+  } else if (mesh_volume(tm) < 0.0) {
+    problem = fmt::format("inside-out: the faces are oriented inwards (volume {:.6g} < 0)", mesh_volume(tm));
+  }
+  if (!problem.empty()) {
+    if (options.repair) {
+      RepairResult repaired = repair_closed_solid(out.polygons, name);
+      out.mesh = std::move(repaired.mesh);
+      out.report.repairs = std::move(repaired.actions);
+    } else if (options.validate) {
+      throw InputError(fmt::format("{}: {}; use --repair to fix it with CGAL", name, problem));
     }
-    throw InputError(fmt::format("{}: repair is not available in this build", name));
   }
   return out;
 }
