@@ -151,7 +151,8 @@ class CapturedOpenMeshLog {
 struct OffHeader {
   bool ok = false;
   std::size_t vertices = 0, faces = 0;
-  std::string bad_vertex;  // "line L: ..." or empty
+  std::size_t faces_present = 0;  // face records actually in the file
+  std::string bad_vertex;  // "line L: ..." or empty (a bad vertex or face record)
 };
 OffHeader read_off_header(const fs::path& file) {
   OffHeader h;
@@ -203,6 +204,28 @@ OffHeader read_off_header(const fs::path& file) {
       }
     }
   }
+  // Face records: "n i0 ... i(n-1)" with n >= 3. OpenMesh repeats the last face when the file
+  // ends early, so the records present are counted here.
+  for (std::size_t f = 0; f < h.faces && h.bad_vertex.empty(); ++f) {
+    if (!next_content_line(line)) {
+      h.faces_present = f;
+      return h;
+    }
+    std::istringstream ls(line);
+    long long n = 0;
+    if (!(ls >> n) || n < 3) {
+      h.bad_vertex = fmt::format("line {}: face f{} does not start with a corner count >= 3", line_no, f);
+      break;
+    }
+    for (long long k = 0; k < n; ++k) {
+      long long idx = 0;
+      if (!(ls >> idx)) {
+        h.bad_vertex = fmt::format("line {}: face f{} lists fewer than {} corners", line_no, f, n);
+        break;
+      }
+    }
+  }
+  h.faces_present = h.faces;
   return h;
 }
 
@@ -268,6 +291,9 @@ PolygonMesh read_polygon_mesh(const fs::path& file) {
   PolygonMesh& m = importer.mesh;
   if (importer.bad_index_faces > 0)
     throw InputError(fmt::format("{}: {} face(s) use vertex indices out of range", name, importer.bad_index_faces));
+  if (off.ok && off.faces_present < off.faces)
+    throw InputError(fmt::format("{}: truncated OFF: header declares {} faces, the file holds {}", name, off.faces,
+                                 off.faces_present));
   if (off.ok && (m.V.size() != off.vertices || m.faces.size() != off.faces))
     throw InputError(fmt::format("{}: truncated or corrupt OFF: header declares {} vertices and {} faces, read {} and {}",
                                  name, off.vertices, off.faces, m.V.size(), m.faces.size()));
