@@ -59,6 +59,9 @@ Run add_simulate(CLI::App& app, const std::string& command_line) {
   sub->add_option("--merge", o->merge, "Merged position: cluster-mean (order-independent, GPU 5.4) or pairwise (CPU Alg. 2)")
       ->transform(CLI::CheckedTransformer(merge, CLI::ignore_case))
       ->default_str("cluster-mean");
+  sub->add_option("--remnant-check-every", o->remnant_check_every,
+                  "Every K cycles delete parts whose volume is <= 0 (inverted remnants; 0 = never)")
+      ->default_val(16);
   sub->add_flag("--no-repair", *no_repair, "Do not run the topology repair after Alg. 3 (the monograph's algorithms only)");
   sub->add_option("--precision", *precision, "Floating point type of the mesh")
       ->check(CLI::IsMember({"float", "double"}))

@@ -131,6 +131,7 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o)
   p->params.edge_sum = o.edge_sum;
   p->params.merge = o.merge;
   p->params.repair = o.repair_topology;
+  p->params.remnant_check_every = o.remnant_check_every;
   try {
     p->params.validate();
   } catch (const InputError& e) {
@@ -173,16 +174,16 @@ struct StatsWriter {
     out.open(tmp, std::ios::trunc);
     if (!out) throw InputError(fmt::format("{}: cannot open for writing", target.string()));
     out << "cycle,vertices,triangles,components,euler,genus,volume,area,Qs,Qd,Qq,max_d,ms,"
-           "merged,glued,repair_splits,repair_collapses,deform_ms,collapse_ms,glued_ms,repair_ms\n";
+           "merged,glued,repair_splits,repair_collapses,inverted_removed,deform_ms,collapse_ms,glued_ms,repair_ms\n";
   }
   template <class Real>
   void row(std::int64_t cycle, const sim::TriMesh<Real>& m, const sim::CycleReport& r, double ms) {
     const sim::TopologyReport topo = sim::check_topology(m, 1);
     const sim::QualityReport q = sim::mesh_quality(m);
-    out << fmt::format("{},{},{},{},{},{},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{},{:.4g},{:.4g},{:.4g},{:.4g}\n",
+    out << fmt::format("{},{},{},{},{},{},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{},{},{:.4g},{:.4g},{:.4g},{:.4g}\n",
                        cycle, topo.counts.V, topo.counts.F, topo.counts.S, topo.counts.chi, topo.counts.G, q.volume, q.area,
                        q.Qs, q.Qd, q.Qq, q.max_d, ms, r.merged_vertices, r.glued_triangles, r.repair_vertex_splits,
-                       r.repair_edge_collapses, r.deform_ms, r.collapse_ms, r.glued_ms, r.repair_ms);
+                       r.repair_edge_collapses, r.inverted_parts_removed, r.deform_ms, r.collapse_ms, r.glued_ms, r.repair_ms);
   }
   void finish() {
     out.flush();
@@ -223,6 +224,7 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
   std::vector<double> cycle_ms;
   cycle_ms.reserve(static_cast<std::size_t>(std::min<std::int64_t>(o.cycles, 1 << 20)));
   double sum_pass[4] = {0, 0, 0, 0};
+  std::int64_t inverted_removed = 0;
   std::int64_t checks = 0, intersect_checks = 0, first_intersection = -1;
   json intersections = json::array();
   if (o.intersect_every > 0) {
@@ -249,6 +251,7 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
       last = simulator.step();
       const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
       cycle_ms.push_back(ms);
+      inverted_removed += last.inverted_parts_removed;
       sum_pass[0] += last.deform_ms, sum_pass[1] += last.collapse_ms, sum_pass[2] += last.glued_ms,
           sum_pass[3] += last.repair_ms;
       const bool empty = last.live_triangles == 0;
@@ -317,6 +320,7 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
       {"zero_guard", "zero vectors contribute nothing"},
       {"orphan_vertex_policy", "deleted"},
       {"topology_repair", o.repair_topology},
+      {"remnant_check_every", p.params.remnant_check_every},
       {"kl", json::parse(p.kl->describe_json())},
       {"kl_file", o.kl_file.string()},
   };
@@ -335,6 +339,7 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
       {"cycles_run", c},
       {"empty_at_cycle", result.empty_at_cycle},
       {"final", {{"vertices", simulator.mesh().live_vertex_count()}, {"triangles", simulator.mesh().live_triangle_count()}}},
+      {"inverted_parts_removed", inverted_removed},
       {"timing",
        {{"total_s", total_s},
         {"cycle_ms_mean", cycle_ms.empty() ? 0.0 : std::accumulate(cycle_ms.begin(), cycle_ms.end(), 0.0) / n},

@@ -97,6 +97,22 @@ TEST(Repair, GluedPairMissedByTheCountTest) {
   EXPECT_EQ(topo.counts.F, 8);
 }
 
+// An inside-out part (volume < 0) is removed; a correct part next to it is kept intact.
+TEST(Remnants, InvertedPartIsRemoved) {
+  auto inverted = test::translated(test::octahedron(0.5), {4, 0, 0});
+  for (auto& t : inverted.F) std::swap(t[1], t[2]);
+  auto m = TriMesh<double>::from_indexed(test::disjoint_union(test::icosahedron(), inverted));
+  const auto before = m.position;
+  EXPECT_EQ(remove_inverted_parts(m), 1);
+  for (std::size_t v = 0; v < 12; ++v) EXPECT_TRUE(m.vertex_alive[v]);
+  for (std::size_t v = 12; v < 18; ++v) EXPECT_FALSE(m.vertex_alive[v]);
+  const auto topo = check_topology(m);
+  EXPECT_TRUE(topo.valid());
+  EXPECT_EQ(topo.counts.S, 1);
+  EXPECT_EQ(m.position, before);
+  EXPECT_EQ(remove_inverted_parts(m), 0) << "nothing left to remove";
+}
+
 TEST(Repair, ValidMeshIsLeftAlone) {
   auto m = TriMesh<double>::from_indexed(test::icosahedron());
   const auto before = m.triangle;

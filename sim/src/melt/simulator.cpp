@@ -22,6 +22,7 @@ void MeltParams::validate() const {
   finite_nonneg(kE, "kE");
   finite_nonneg(kN, "kN");
   finite_nonneg(kr, "kr");
+  if (remnant_check_every < 0) throw InputError("remnant_check_every: must be >= 0");
 }
 
 template <class Real>
@@ -75,6 +76,9 @@ CycleReport MeltSimulator<Real>::step() {
     r.repair_ms = ms_since(t);
   }
   ws.clear_dirty();
+  if (params_.remnant_check_every > 0 && (cycle_ + 1) % params_.remnant_check_every == 0) {
+    r.inverted_parts_removed = remove_inverted_parts_pass(mesh_, ws);
+  }
   r.live_vertices = static_cast<std::int64_t>(mesh_.live_vertex_count());
   r.live_triangles = static_cast<std::int64_t>(mesh_.live_triangle_count());
   ++cycle_;

@@ -122,5 +122,7 @@ template <class Real>
 void glued_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report);
 template <class Real>
 void repair_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report);
+template <class Real>
+std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws);
 
 }  // namespace meltlab::sim

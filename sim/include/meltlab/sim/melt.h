@@ -60,6 +60,11 @@ struct MeltParams {
   EdgeSumMode edge_sum = EdgeSumMode::kMean;
   MergeMode merge = MergeMode::kClusterMean;
   bool repair = true;  ///< run the harness's topology repair after Alg. 3
+  /// Every K cycles, delete connected parts whose signed volume is <= 0 (0 = never). A flat
+  /// remnant whose opposite sides pass through each other turns inside out; its outward
+  /// normals then point in, "inward" motion inflates it, and it would grow forever. Such a
+  /// part has melted through itself and is removed.
+  int remnant_check_every = 16;
 
   /// Throws InputError naming the parameter if a value is not finite or out of range.
   void validate() const;
@@ -75,12 +80,13 @@ struct CycleReport {
   std::int64_t repair_glued_pairs = 0;    ///< repair: glued pairs Alg. 3's count test missed
   std::int64_t repair_edge_collapses = 0; ///< repair: non-manifold edges collapsed
   std::int64_t repair_vertex_splits = 0;  ///< repair: extra vertices created by splitting pinches
+  std::int64_t inverted_parts_removed = 0;  ///< parts with volume <= 0 deleted (remnant check)
   std::int64_t live_vertices = 0;         ///< after the cycle
   std::int64_t live_triangles = 0;        ///< after the cycle
   /// Wall time of each pass, milliseconds: Alg. 1, Alg. 2, Alg. 3, repair.
   double deform_ms = 0, collapse_ms = 0, glued_ms = 0, repair_ms = 0;
   bool topology_changed() const {
-    return repair_vertex_splits > 0 || repair_edge_collapses > 0 || repair_glued_pairs > 0;
+    return repair_vertex_splits > 0 || repair_edge_collapses > 0 || repair_glued_pairs > 0 || inverted_parts_removed > 0;
   }
 };
 
@@ -143,6 +149,11 @@ CycleReport remove_glued_and_sort(TriMesh<Real>& m, Execution exec = Execution::
 /// Returns what it did. Throws InvariantError if it cannot converge (never observed; a bug).
 template <class Real>
 CycleReport repair_topology(TriMesh<Real>& m, const std::vector<Index>& vertices);
+
+/// Deletes every connected part of the live mesh whose signed volume is <= 0 (see
+/// MeltParams::remnant_check_every). Returns the number of parts removed. O(n).
+template <class Real>
+std::int64_t remove_inverted_parts(TriMesh<Real>& m);
 
 /// Rotates every live triangle min-index first (Alg. 3's sort step alone).
 template <class Real>

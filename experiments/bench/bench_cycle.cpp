@@ -1,0 +1,158 @@
+// Time per melt cycle against triangle count, serial and parallel, float and double — the
+// monograph's Tab. 5.1 (objects A/B/C: 192, 16000, 32000 triangles) extended to 100k and 1M
+// triangles and to a real scanned mesh — and the OpenMesh half-edge peer in the same run.
+//
+// Every benchmark melts its mesh for a warm-up (the UV spheres' pole regions collapse in the
+// first cycles), then times cycles from that state, restarting from it every
+// kCyclesPerRestart cycles so the triangle count stays within a few percent of its label.
+// Results: run with --benchmark_out=FILE --benchmark_out_format=json (scripts/bench does).
+
+#include <meltlab/datasets/catalog.h>
+#include <meltlab/datasets/procedural.h>
+#include <meltlab/sim/melt.h>
+#include <meltlab/sim/mesh_io.h>
+#include <meltlab/sim/mesh_order.h>
+#include <meltlab/sim/quality.h>
+
+#include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <map>
+#include <memory>
+#include <mutex>
+
+#include "openmesh_peer.h"
+
+namespace {
+
+using namespace meltlab;
+
+constexpr int kWarmupCycles = 20;
+constexpr int kCyclesPerRestart = 20;
+
+// The same coefficients everywhere: kE = 0.05 L0 per cycle, kN = kE/100, kr = 0.5 L0.
+sim::MeltParams bench_params(const sim::IndexedMesh& m) {
+  const double L0 = sim::mesh_quality(sim::TriMesh<double>::from_indexed(m)).mean_edge_length;
+  sim::MeltParams p;
+  p.kE = 0.05 * L0;
+  p.kN = p.kE / 100.0;
+  p.kr = 0.5 * L0;
+  return p;
+}
+
+const sim::IndexedMesh& input_mesh(int id) {
+  static std::mutex mu;
+  static std::map<int, sim::IndexedMesh> cache;
+  std::lock_guard<std::mutex> lock(mu);
+  auto it = cache.find(id);
+  if (it != cache.end()) return it->second;
+  sim::IndexedMesh m;
+  switch (id) {
+    case 0: m = datasets::benchmark_object('A'); break;
+    case 1: m = datasets::benchmark_object('B'); break;
+    case 2: m = datasets::benchmark_object('C'); break;
+    case 3: m = datasets::sphere_with_triangles(100000, 0.05); break;
+    case 4: m = datasets::sphere_with_triangles(1000000, 0.05); break;
+    case 5: m = sim::reorder_for_locality(sim::load_mesh(datasets::dataset_path("bunny00")).mesh).mesh; break;
+    default: break;
+  }
+  return cache.emplace(id, std::move(m)).first->second;
+}
+
+const char* mesh_label(int id) {
+  static const char* labels[] = {"A_192", "B_16k", "C_32k", "sphere_100k", "sphere_1M", "bunny_75k"};
+  return labels[id];
+}
+
+// The melted state after the warm-up, per mesh and precision.
+template <class Real>
+const sim::TriMesh<Real>& warm_state(int id) {
+  static std::mutex mu;
+  static std::map<int, sim::TriMesh<Real>> cache;
+  std::lock_guard<std::mutex> lock(mu);
+  auto it = cache.find(id);
+  if (it != cache.end()) return it->second;
+  const sim::IndexedMesh& m = input_mesh(id);
+  sim::MeltSimulator<Real> s(sim::TriMesh<Real>::from_indexed(m), bench_params(m), sim::make_constant_kl(1.0));
+  for (int c = 0; c < kWarmupCycles; ++c) s.step();
+  return cache.emplace(id, s.mesh()).first->second;
+}
+
+template <class Real>
+void BM_MeltCycle(benchmark::State& state) {
+  const int id = static_cast<int>(state.range(0));
+  const bool parallel = state.range(1) != 0;
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                              parallel ? static_cast<std::size_t>(tbb::info::default_concurrency()) : 1);
+  const sim::MeltParams p = bench_params(input_mesh(id));
+  const sim::TriMesh<Real>& start = warm_state<Real>(id);
+  const auto exec = parallel ? sim::Execution::kParallel : sim::Execution::kSerial;
+  auto sim = std::make_unique<sim::MeltSimulator<Real>>(start, p, sim::make_constant_kl(1.0), exec);
+  int since_restart = 0;
+  double triangles = 0;
+  for (auto _ : state) {
+    if (since_restart == kCyclesPerRestart) {
+      state.PauseTiming();
+      sim = std::make_unique<sim::MeltSimulator<Real>>(start, p, sim::make_constant_kl(1.0), exec);
+      since_restart = 0;
+      state.ResumeTiming();
+    }
+    const sim::CycleReport r = sim->step();
+    benchmark::DoNotOptimize(r);
+    triangles += static_cast<double>(r.live_triangles);
+    ++since_restart;
+  }
+  state.counters["triangles"] = benchmark::Counter(triangles, benchmark::Counter::kAvgIterations);
+  state.counters["threads"] = parallel ? tbb::info::default_concurrency() : 1;
+  state.SetLabel(std::string(mesh_label(id)) + (parallel ? " parallel " : " serial ") +
+                 (std::is_same_v<Real, float> ? "float" : "double"));
+}
+
+// The same cycle on OpenMesh's half-edge mesh with its own collapse operations (serial).
+template <class Real>
+void BM_OpenMeshPeer(benchmark::State& state) {
+  const int id = static_cast<int>(state.range(0));
+  const sim::IndexedMesh start = warm_state<Real>(id).to_indexed();
+  const sim::MeltParams p = bench_params(input_mesh(id));
+  auto peer = std::make_unique<bench::OpenMeshMeltPeerT<Real>>(start, p);
+  int since_restart = 0;
+  double triangles = 0;
+  for (auto _ : state) {
+    if (since_restart == kCyclesPerRestart) {
+      state.PauseTiming();
+      peer = std::make_unique<bench::OpenMeshMeltPeerT<Real>>(start, p);
+      since_restart = 0;
+      state.ResumeTiming();
+    }
+    const sim::CycleReport r = peer->step();
+    benchmark::DoNotOptimize(r);
+    triangles += static_cast<double>(r.live_triangles);
+    ++since_restart;
+  }
+  state.counters["triangles"] = benchmark::Counter(triangles, benchmark::Counter::kAvgIterations);
+  state.SetLabel(std::string(mesh_label(id)) + " openmesh-peer serial " + (std::is_same_v<Real, float> ? "float" : "double"));
+}
+
+void meshes_and_modes(benchmark::internal::Benchmark* b) {
+  for (int id : {0, 1, 2, 5, 3, 4})
+    for (int parallel : {0, 1}) b->Args({id, parallel});
+  b->ArgNames({"mesh", "parallel"});
+  b->Unit(benchmark::kMillisecond);
+  b->MinTime(0.5);
+}
+void peer_meshes(benchmark::internal::Benchmark* b) {
+  for (int id : {0, 1, 2, 5, 3}) b->Args({id});
+  b->ArgNames({"mesh"});
+  b->Unit(benchmark::kMillisecond);
+  b->MinTime(0.5);
+}
+
+}  // namespace
+
+BENCHMARK(BM_MeltCycle<float>)->Apply(meshes_and_modes);
+BENCHMARK(BM_MeltCycle<double>)->Apply(meshes_and_modes);
+BENCHMARK(BM_OpenMeshPeer<float>)->Apply(peer_meshes);
+BENCHMARK(BM_OpenMeshPeer<double>)->Apply(peer_meshes);
+
+BENCHMARK_MAIN();

@@ -1,0 +1,80 @@
+// Removal of inverted parts (harness safety net, see MeltParams::remnant_check_every).
+// Connected parts come from a union-find over the live triangles; each part's signed
+// volume is the divergence-theorem sum of its triangles, accumulated in double. A closed
+// part with correct (outward) orientation has positive volume; <= 0 means it is inside out
+// or flat, i.e. it has melted through itself.
+
+#include "workspace.h"
+
+#include <numeric>
+
+namespace meltlab::sim {
+
+namespace {
+Index find_root(std::vector<Index>& parent, Index x) {
+  while (parent[static_cast<std::size_t>(x)] != x) {
+    Index& p = parent[static_cast<std::size_t>(x)];
+    p = parent[static_cast<std::size_t>(p)];
+    x = p;
+  }
+  return x;
+}
+}  // namespace
+
+template <class Real>
+std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws) {
+  const std::size_t nv = m.vertex_slots(), nt = m.triangle_slots();
+  std::vector<Index>& parent = ws.root;  // free between cycles
+  if (parent.size() < nv) parent.resize(nv);
+  std::iota(parent.begin(), parent.begin() + static_cast<std::ptrdiff_t>(nv), 0);
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (!m.triangle_alive[t]) continue;
+    const Triangle& tri = m.triangle[t];
+    for (int k = 1; k < 3; ++k) {
+      Index a = find_root(parent, tri[0]), b = find_root(parent, tri[static_cast<std::size_t>(k)]);
+      if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+    }
+  }
+  std::vector<double> six_volume(nv, 0.0);
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (!m.triangle_alive[t]) continue;
+    const Triangle& tri = m.triangle[t];
+    const Vec3<double> a = m.position[static_cast<std::size_t>(tri[0])].template cast<double>();
+    const Vec3<double> b = m.position[static_cast<std::size_t>(tri[1])].template cast<double>();
+    const Vec3<double> c = m.position[static_cast<std::size_t>(tri[2])].template cast<double>();
+    six_volume[static_cast<std::size_t>(find_root(parent, tri[0]))] += a.dot(b.cross(c));
+  }
+  std::int64_t removed = 0;
+  std::vector<std::uint8_t> doomed(nv, 0);
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (!m.vertex_alive[v] || find_root(parent, static_cast<Index>(v)) != static_cast<Index>(v)) continue;
+    if (ws.adj.built() && ws.adj.of(static_cast<Index>(v)).empty()) continue;
+    if (six_volume[v] <= 0.0) {
+      doomed[v] = 1;
+      ++removed;
+    }
+  }
+  if (removed == 0) return 0;
+  for (std::size_t t = 0; t < nt; ++t)
+    if (m.triangle_alive[t] && doomed[static_cast<std::size_t>(find_root(parent, m.triangle[t][0]))]) m.triangle_alive[t] = 0;
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (!m.vertex_alive[v] || !doomed[static_cast<std::size_t>(find_root(parent, static_cast<Index>(v)))]) continue;
+    m.vertex_alive[v] = 0;
+    m.triangle_count[v] = 0;
+    if (ws.adj.built()) ws.adj.assign(static_cast<Index>(v), {});
+  }
+  return removed;
+}
+
+template <class Real>
+std::int64_t remove_inverted_parts(TriMesh<Real>& m) {
+  MeltWorkspace ws;
+  return remove_inverted_parts_pass(m, ws);
+}
+
+template std::int64_t remove_inverted_parts_pass(TriMesh<float>&, MeltWorkspace&);
+template std::int64_t remove_inverted_parts_pass(TriMesh<double>&, MeltWorkspace&);
+template std::int64_t remove_inverted_parts(TriMesh<float>&);
+template std::int64_t remove_inverted_parts(TriMesh<double>&);
+
+}  // namespace meltlab::sim
