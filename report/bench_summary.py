@@ -1,0 +1,79 @@
+#!/usr/bin/python3
+"""Summarise meltlab_bench_cycle's JSON: median ms per cycle for every mesh, mode and
+precision, the speed-up of the parallel cycle and the ratio to the OpenMesh peer measured
+in the same run; writes bench_cycle.png (time per cycle against triangles) beside the JSON.
+
+Usage: report/bench_summary.py bench_cycle.json
+"""
+import json
+import re
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+MONOGRAPH_MS = {"A_192": ("<1", "4"), "B_16k": ("5.8", "4.6"), "C_32k": ("20", "6")}  # Tab. 5.1 CPU, GPU
+
+
+def main(argv):
+    if len(argv) != 2:
+        print(__doc__, file=sys.stderr)
+        return 2
+    path = Path(argv[1])
+    doc = json.loads(path.read_text())
+    rows = {}
+    for b in doc["benchmarks"]:
+        if b.get("aggregate_name", "median") != "median":
+            continue
+        label = b.get("label", "")
+        m = re.match(r"(\S+) (\S+) (\S+) ?(\S+)?", label)
+        if not m:
+            continue
+        mesh = m.group(1)
+        mode = m.group(2) if m.group(2) != "openmesh-peer" else "openmesh"
+        prec = m.group(4) if mode == "openmesh" else m.group(3)
+        ms = b["real_time"] if b.get("time_unit") == "ms" else b["real_time"] / 1e6
+        rows[(mesh, mode, prec)] = (ms, b.get("triangles", 0.0))
+    meshes = []
+    for (mesh, _, _) in rows:
+        if mesh not in meshes:
+            meshes.append(mesh)
+    ctx = doc.get("context", {})
+    print(f"machine: {ctx.get('num_cpus')} CPUs at {ctx.get('mhz_per_cpu')} MHz; median ms per cycle")
+    hdr = f"{'mesh':<12}{'prec':<7}{'triangles':>10}{'serial':>9}{'parallel':>9}{'speed-up':>9}{'OpenMesh':>10}{'peer/ours':>10}{'  monograph CPU/GPU (2009)'}"
+    print(hdr)
+    print("-" * len(hdr))
+    for mesh in meshes:
+        for prec in ("float", "double"):
+            s = rows.get((mesh, "serial", prec))
+            p = rows.get((mesh, "parallel", prec))
+            o = rows.get((mesh, "openmesh", prec))
+            if not s:
+                continue
+            mono = MONOGRAPH_MS.get(mesh, ("", ""))
+            print(f"{mesh:<12}{prec:<7}{s[1]:>10.0f}{s[0]:>9.3f}"
+                  f"{(p[0] if p else float('nan')):>9.3f}{(s[0] / p[0] if p else float('nan')):>9.2f}"
+                  f"{(o[0] if o else float('nan')):>10.3f}{(o[0] / s[0] if o else float('nan')):>10.2f}"
+                  f"  {mono[0]:>5} / {mono[1]}")
+    fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
+    for mode, style in (("serial", "o-"), ("parallel", "s-"), ("openmesh", "^--")):
+        for prec in ("float", "double"):
+            pts = sorted((v[1], v[0]) for (mesh, md, pr), v in rows.items() if md == mode and pr == prec)
+            if pts:
+                ax.loglog([t for t, _ in pts], [ms for _, ms in pts], style, label=f"{mode} {prec}",
+                          alpha=1.0 if prec == "float" else 0.6)
+    ax.set_xlabel("live triangles")
+    ax.set_ylabel("time per cycle, ms (median)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    out = path.with_suffix(".png")
+    fig.savefig(out, dpi=110)
+    print(f"figure: {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
