@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <limits>
 #include <numbers>
+#include <map>
 #include <unordered_map>
 #include <vector>
 
@@ -315,6 +316,55 @@ IndexedMesh uv_sphere(int segments, int rings, double radius) {
     p.offset.push_back(0.0);
   }
   return revolved_surface(p);
+}
+
+IndexedMesh geodesic_sphere(int frequency, double radius) {
+  detail::require_at_least("geodesic_sphere", "frequency", frequency, 1);
+  if (frequency > 2000) throw InputError(fmt::format("geodesic_sphere: frequency must be at most 2000, got {}", frequency));
+  detail::require_positive_length("geodesic_sphere", "radius", radius);
+  const IndexedMesh ico = icosphere(0, 1.0);  // outward-oriented icosahedron
+  const auto f = static_cast<std::int64_t>(frequency);
+  IndexedMesh out;
+  // A grid point is the barycentric combination (a, b, c)/f of a face's corners. Points on a
+  // shared edge or corner get the same key from both faces: the nonzero (corner, weight)
+  // pairs, sorted by corner index.
+  std::map<std::vector<std::int64_t>, Index> index_of;
+  auto vertex = [&](const Triangle& face, std::int64_t a, std::int64_t b, std::int64_t c) {
+    std::vector<std::pair<std::int64_t, std::int64_t>> parts;
+    const std::int64_t w[3] = {a, b, c};
+    for (int k = 0; k < 3; ++k)
+      if (w[k] > 0) parts.push_back({face[static_cast<std::size_t>(k)], w[k]});
+    std::sort(parts.begin(), parts.end());
+    std::vector<std::int64_t> key;
+    for (const auto& [corner, weight] : parts) {
+      key.push_back(corner);
+      key.push_back(weight);
+    }
+    auto [it, inserted] = index_of.try_emplace(key, static_cast<Index>(out.V.size()));
+    if (inserted) {
+      Vec3<double> p = Vec3<double>::Zero();
+      for (const auto& [corner, weight] : parts)
+        p += static_cast<double>(weight) * ico.V[static_cast<std::size_t>(corner)];
+      out.V.push_back(radius * p.normalized());
+    }
+    return it->second;
+  };
+  for (const auto& face : ico.F) {
+    // Rows i = 0..f from corner 0; point (i, j) = ((f-i), (i-j), j) / f.
+    for (std::int64_t i = 0; i < f; ++i) {
+      for (std::int64_t j = 0; j <= i; ++j) {
+        const Index p00 = vertex(face, f - i, i - j, j);
+        const Index p10 = vertex(face, f - i - 1, i + 1 - j, j);
+        const Index p11 = vertex(face, f - i - 1, i - j, j + 1);
+        out.F.push_back({p00, p10, p11});
+        if (j < i) {
+          const Index p01 = vertex(face, f - i, i - j - 1, j + 1);
+          out.F.push_back({p00, p11, p01});
+        }
+      }
+    }
+  }
+  return out;
 }
 
 IndexedMesh icosphere(int subdivisions, double radius) {

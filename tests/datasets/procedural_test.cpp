@@ -4,6 +4,7 @@
 #include <meltlab/datasets/mesh_transforms.h>
 #include <meltlab/datasets/procedural.h>
 #include <meltlab/sim/error.h>
+#include <meltlab/sim/quality.h>
 #include <meltlab/sim/topology.h>
 
 #include <gtest/gtest.h>
@@ -379,5 +380,31 @@ TEST(MeshTransforms, TriangulatedWithHolesRefusesBadFaces) {
   EXPECT_THROW(triangulated_with_holes(flat), InputError);
 }
 
+}  // namespace
+}  // namespace meltlab::datasets
+
+namespace meltlab::datasets {
+namespace {
+TEST(GeodesicSphere, CountsOrientationAndUniformity) {
+  for (int f : {1, 2, 7, 40}) {
+    const auto m = geodesic_sphere(f, 2.0);
+    EXPECT_EQ(m.F.size(), static_cast<std::size_t>(20 * f * f));
+    EXPECT_EQ(m.V.size(), static_cast<std::size_t>(10 * f * f + 2));
+    const auto topo = sim::check_topology(sim::TriMesh<double>::from_indexed(m));
+    EXPECT_TRUE(topo.valid());
+    EXPECT_EQ(topo.counts.G, 0);
+    const auto q = sim::mesh_quality(sim::TriMesh<double>::from_indexed(m));
+    EXPECT_GT(q.volume, 0.0) << "outward";
+    // Inscribed in the sphere: below 4/3 pi r^3, and converging to it (f = 40: -0.03%).
+    EXPECT_LT(q.volume, 4.0 / 3.0 * M_PI * 8.0);
+    if (f == 40) {
+      EXPECT_NEAR(q.volume / (4.0 / 3.0 * M_PI * 8.0), 1.0, 1e-3);
+    }
+    if (f >= 7) {
+      EXPECT_GT(q.min_q, 0.8) << "nearly equilateral everywhere";
+    }
+  }
+  EXPECT_THROW(geodesic_sphere(0), InputError);
+}
 }  // namespace
 }  // namespace meltlab::datasets

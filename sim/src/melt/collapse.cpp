@@ -15,7 +15,6 @@
 // indices changed). Every vertex whose triangles changed is marked dirty for Alg. 3 and the
 // repair.
 
-#include "triangle_kernels.h"
 #include "workspace.h"
 
 #include <meltlab/sim/error.h>
@@ -23,6 +22,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 namespace meltlab::sim {
 
@@ -59,43 +60,48 @@ void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec,
   for (std::size_t v = 0; v < nv; ++v) target[v] = static_cast<Index>(v);
 
   // ---- mark ----
+  // Triangles whose edge key shows they cannot have an edge below kr yet are skipped (see
+  // MeltWorkspace::edge_key); the others are tested exactly and their key refreshed.
+  if (ws.edge_key.size() != nt) ws.edge_key.assign(nt, -std::numeric_limits<double>::infinity());
+  ws.shrink_bound += 2.0 * ws.cycle_move_bound;
+  ws.cycle_move_bound = 0.0;
+  // Safety margin: the exact test compares squared lengths in Real (relative error ~4 eps).
+  const double skip_above = (kr + ws.shrink_bound) * (1.0 + 64.0 * static_cast<double>(std::numeric_limits<Real>::epsilon()));
   const bool parallel = exec == Execution::kParallel;
   std::atomic<bool> any_mark{false};
-  const std::size_t blocks = (nt + kTriangleBlock - 1) / kTriangleBlock;
-  auto mark_blocks = [&](std::size_t blk_begin, std::size_t blk_end) {
+  auto mark_range = [&](std::size_t begin, std::size_t end) {
     bool local_mark = false;
-    Real l2[3][kTriangleBlock];
-    for (std::size_t blk = blk_begin; blk < blk_end; ++blk) {
-      const std::size_t first = blk * kTriangleBlock;
-      const std::size_t count = std::min(kTriangleBlock, nt - first);
-      triangle_block_edge_lengths2(m, first, count, l2);
-      for (std::size_t i = 0; i < count; ++i) {
-        const std::size_t t = first + i;
-        if (!(l2[0][i] < kr2 || l2[1][i] < kr2 || l2[2][i] < kr2) || !m.triangle_alive[t]) continue;
-        const Triangle& tri = m.triangle[t];
-        Index from, to;
-        if (l2[0][i] < kr2) {
-          from = tri[1], to = tri[0];
-        } else if (l2[1][i] < kr2) {
-          from = std::max(tri[1], tri[2]), to = std::min(tri[1], tri[2]);
-        } else {
-          from = tri[2], to = tri[0];
-        }
-        local_mark = true;
-        Index& slot = target[static_cast<std::size_t>(from)];
-        if (parallel)
-          atomic_min(slot, to);
-        else if (to < slot)
-          slot = to;
+    for (std::size_t t = begin; t < end; ++t) {
+      if (ws.edge_key[t] > skip_above || !m.triangle_alive[t]) continue;
+      const Triangle& tri = m.triangle[t];
+      const Vec3<Real>& pa = m.position[static_cast<std::size_t>(tri[0])];
+      const Vec3<Real>& pb = m.position[static_cast<std::size_t>(tri[1])];
+      const Vec3<Real>& pc = m.position[static_cast<std::size_t>(tri[2])];
+      const Vec3<Real> ab = pb - pa, bc = pc - pb, ca = pa - pc;
+      const Real l2[3] = {ab.x() * ab.x() + ab.y() * ab.y() + ab.z() * ab.z(),
+                          bc.x() * bc.x() + bc.y() * bc.y() + bc.z() * bc.z(),
+                          ca.x() * ca.x() + ca.y() * ca.y() + ca.z() * ca.z()};
+      ws.edge_key[t] = std::sqrt(static_cast<double>(std::min({l2[0], l2[1], l2[2]}))) + ws.shrink_bound;
+      Index from, to;
+      if (l2[0] < kr2) {
+        from = tri[1], to = tri[0];
+      } else if (l2[1] < kr2) {
+        from = std::max(tri[1], tri[2]), to = std::min(tri[1], tri[2]);
+      } else if (l2[2] < kr2) {
+        from = tri[2], to = tri[0];
+      } else {
+        continue;
       }
+      local_mark = true;
+      Index& slot = target[static_cast<std::size_t>(from)];
+      if (parallel)
+        atomic_min(slot, to);
+      else if (to < slot)
+        slot = to;
     }
     if (local_mark) any_mark.store(true, std::memory_order_relaxed);
   };
-  if (parallel && nt >= 2 * kParallelGrain)
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, kParallelGrain / kTriangleBlock),
-                      [&](const tbb::blocked_range<std::size_t>& r) { mark_blocks(r.begin(), r.end()); });
-  else
-    mark_blocks(0, blocks);
+  for_range(exec, nt, mark_range);
   if (!any_mark.load()) return;
 
   // ---- flatten chains, list merged vertices ----
@@ -153,6 +159,7 @@ void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec,
     }
   }
   report.degenerate_triangles += degenerate;
+  constexpr double kRetest = -std::numeric_limits<double>::infinity();
 
   // ---- update the triangle lists: roots take their members' triangles ----
   for (Index k : ws.merged) {
@@ -167,6 +174,10 @@ void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec,
     ws.adj.assign(k, {});
   }
   for (Index v : ws.dirty_list) refresh_list(ws, m, v);
+  // Re-pointed triangles and every triangle of a moved root are tested exactly next cycle.
+  for (Index t : affected) ws.edge_key[static_cast<std::size_t>(t)] = kRetest;
+  for (Index r : ws.touched_roots)
+    for (Index t : ws.adj.of(r)) ws.edge_key[static_cast<std::size_t>(t)] = kRetest;
 }
 
 template <class Real>

@@ -92,10 +92,19 @@ void accumulate_parallel(TriMesh<Real>& m, Execution exec, const VertexTriangles
   });
 }
 
+// Moves every vertex; returns a bound on how far any vertex moved: the largest |move| plus
+// the rounding of P + move (half an ulp of the largest coordinate per component).
 template <class Real, class ScaleAt>
-void move_vertices(TriMesh<Real>& m, const MeltParams& p, Execution exec, const ScaleAt& scale_at) {
+double move_vertices(TriMesh<Real>& m, const MeltParams& p, Execution exec, const ScaleAt& scale_at) {
   const Real kE = static_cast<Real>(p.kE), kN = static_cast<Real>(p.kN);
+  std::atomic<double> max_move{0.0}, max_coord{0.0};
+  auto atomic_max = [](std::atomic<double>& a, double x) {
+    double cur = a.load(std::memory_order_relaxed);
+    while (x > cur && !a.compare_exchange_weak(cur, x, std::memory_order_relaxed)) {
+    }
+  };
   for_range(exec, m.vertex_slots(), [&](std::size_t begin, std::size_t end) {
+    Real local_move = 0, local_coord = 0;
     for (std::size_t v = begin; v < end; ++v) {
       if (!m.vertex_alive[v]) continue;
       const Index count = m.triangle_count[v];
@@ -127,8 +136,15 @@ void move_vertices(TriMesh<Real>& m, const MeltParams& p, Execution exec, const 
       }
       m.displacement[v] = move;
       m.position[v] += move;
+      local_move = std::max(local_move, move.cwiseAbs().maxCoeff());
+      local_coord = std::max(local_coord, m.position[v].cwiseAbs().maxCoeff());
     }
+    atomic_max(max_move, static_cast<double>(local_move));
+    atomic_max(max_coord, static_cast<double>(local_coord));
   });
+  // |move| <= sqrt(3) * max component; rounding of each component <= eps * |coordinate|.
+  constexpr double kSqrt3 = 1.7320508075688772;
+  return kSqrt3 * (max_move.load() + static_cast<double>(std::numeric_limits<Real>::epsilon()) * max_coord.load());
 }
 
 }  // namespace
@@ -143,9 +159,9 @@ void deform_pass(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execu
   // A constant kl costs nothing per vertex: s = kg·kl is folded into one number.
   if (kl.is_constant()) {
     const auto s = static_cast<Real>(p.kg * kl.value(Vec3<double>::Zero()));
-    move_vertices(m, p, exec, [s](std::size_t) { return s; });
+    ws.cycle_move_bound = move_vertices(m, p, exec, [s](std::size_t) { return s; });
   } else {
-    move_vertices(m, p, exec, [&](std::size_t v) {
+    ws.cycle_move_bound = move_vertices(m, p, exec, [&](std::size_t v) {
       return static_cast<Real>(p.kg * kl.value(m.position[v].template cast<double>()));
     });
   }

@@ -269,6 +269,7 @@ void repair_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report) {
     Repairer<Real> repairer(m, ws, report);
     repairer.run(bad);
     prepare_workspace(ws, m);
+    invalidate_edge_keys(ws);  // rare: vertices moved and triangles changed
   }
   for (Index v : ws.dirty_list)
     if (m.vertex_alive[static_cast<std::size_t>(v)])

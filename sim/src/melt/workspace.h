@@ -12,6 +12,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace meltlab::sim {
@@ -34,6 +35,16 @@ struct MeltWorkspace {
   // so a vertex's gather touches one cache line per triangle.
   std::vector<TriangleTerms<float>> terms_f;
   std::vector<TriangleTerms<double>> terms_d;
+
+
+  // Conservative skip of the short-edge test. An edge shrinks per cycle by at most twice the
+  // largest vertex move (plus rounding of the position update). `edge_key[t]` is t's shortest
+  // edge at its last exact test plus `shrink_bound` at that time; while edge_key[t] - the
+  // current shrink_bound stays above kr (with a safety margin), t cannot have a short edge
+  // and is not tested. Triangles a merge or the repair changes get -inf (test next cycle).
+  std::vector<double> edge_key;
+  double shrink_bound = 0.0;   ///< sum over cycles of 2 * (largest vertex move + rounding)
+  double cycle_move_bound = 0.0;  ///< this cycle's largest vertex move + rounding, mesh units
 
   std::vector<Index> root;        ///< flattened merge target of every vertex
   std::vector<Index> merged;      ///< vertices merged this cycle (ascending)
@@ -62,6 +73,11 @@ struct MeltWorkspace {
     dirty_list.clear();
   }
 };
+
+/// Forgets every triangle's edge key: all are tested exactly in the next short-edge sweep.
+inline void invalidate_edge_keys(MeltWorkspace& ws) {
+  std::fill(ws.edge_key.begin(), ws.edge_key.end(), -std::numeric_limits<double>::infinity());
+}
 
 /// Runs body(begin, end) over [0, n) serially or as TBB tasks. The body must not depend on
 /// how the range is split (every element's result is computed by the same code).
