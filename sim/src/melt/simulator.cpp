@@ -23,6 +23,8 @@ void MeltParams::validate() const {
   finite_nonneg(kN, "kN");
   finite_nonneg(kr, "kr");
   if (remnant_check_every < 0) throw InputError("remnant_check_every: must be >= 0");
+  if (!(compact_below >= 0.0 && compact_below <= 1.0))
+    throw InputError(fmt::format("compact_below: must lie in [0, 1] (got {})", compact_below));
 }
 
 template <class Real>
@@ -81,6 +83,11 @@ CycleReport MeltSimulator<Real>::step() {
   }
   r.live_vertices = static_cast<std::int64_t>(mesh_.live_vertex_count());
   r.live_triangles = static_cast<std::int64_t>(mesh_.live_triangle_count());
+  if (params_.compact_below > 0.0 && mesh_.triangle_slots() > 0 &&
+      static_cast<double>(r.live_triangles) < params_.compact_below * static_cast<double>(mesh_.triangle_slots())) {
+    compact_workspace(mesh_, ws);
+    r.compacted = true;
+  }
   ++cycle_;
   return r;
 }

@@ -140,5 +140,9 @@ template <class Real>
 void repair_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report);
 template <class Real>
 std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws);
+/// Compacts the mesh (compact_mesh) and brings the workspace along: triangle lists rebuilt,
+/// edge keys moved with their triangles, per-vertex scratch resized.
+template <class Real>
+void compact_workspace(TriMesh<Real>& m, MeltWorkspace& ws);
 
 }  // namespace meltlab::sim

@@ -65,6 +65,11 @@ struct MeltParams {
   /// normals then point in, "inward" motion inflates it, and it would grow forever. Such a
   /// part has melted through itself and is removed.
   int remnant_check_every = 16;
+  /// Compact the arrays (dead slots dropped, relative order of indices kept) when fewer than
+  /// this fraction of the triangle slots is live; 0 = never, as in the monograph (§3.5: flags
+  /// only, fixed length). Keeping the order keeps every "smaller index wins" decision of
+  /// Alg. 2 the same, so the melt is identical; only indices shift and sweeps get shorter.
+  double compact_below = 0.5;
 
   /// Throws InputError naming the parameter if a value is not finite or out of range.
   void validate() const;
@@ -85,6 +90,7 @@ struct CycleReport {
   std::int64_t live_triangles = 0;        ///< after the cycle
   /// Wall time of each pass, milliseconds: Alg. 1, Alg. 2, Alg. 3, repair.
   double deform_ms = 0, collapse_ms = 0, glued_ms = 0, repair_ms = 0;
+  bool compacted = false;  ///< the arrays were compacted at the end of this cycle
   bool topology_changed() const {
     return repair_vertex_splits > 0 || repair_edge_collapses > 0 || repair_glued_pairs > 0 || inverted_parts_removed > 0;
   }
@@ -154,6 +160,12 @@ CycleReport repair_topology(TriMesh<Real>& m, const std::vector<Index>& vertices
 /// MeltParams::remnant_check_every). Returns the number of parts removed. O(n).
 template <class Real>
 std::int64_t remove_inverted_parts(TriMesh<Real>& m);
+
+/// Drops dead slots from every array, keeping the relative order of the live vertices and
+/// triangles (so Alg. 2's index comparisons are unchanged). Returns, for every old vertex
+/// slot, its new index (-1 if dead).
+template <class Real>
+std::vector<Index> compact_mesh(TriMesh<Real>& m);
 
 /// Rotates every live triangle min-index first (Alg. 3's sort step alone).
 template <class Real>
