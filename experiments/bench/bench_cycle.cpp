@@ -33,15 +33,8 @@ using namespace meltlab;
 constexpr int kWarmupCycles = 20;
 constexpr int kCyclesPerRestart = 20;
 
-// The same coefficients everywhere: kE = 0.05 L0 per cycle, kN = kE/100, kr = 0.5 L0.
-sim::MeltParams bench_params(const sim::IndexedMesh& m) {
-  const double L0 = sim::mesh_quality(sim::TriMesh<double>::from_indexed(m)).mean_edge_length;
-  sim::MeltParams p;
-  p.kE = 0.05 * L0;
-  p.kN = p.kE / 100.0;
-  p.kr = 0.5 * L0;
-  return p;
-}
+// The same coefficients everywhere (the CLI defaults): kE = 0.05 L0 per cycle, kN = kE/100, kr = 0.5 L0.
+sim::MeltParams bench_params(const sim::IndexedMesh& m) { return sim::relative_melt_params(m); }
 
 const sim::IndexedMesh& input_mesh(int id) {
   static std::mutex mu;

@@ -62,6 +62,9 @@ Run add_simulate(CLI::App& app, const std::string& command_line) {
   sub->add_option("--remnant-check-every", o->remnant_check_every,
                   "Every K cycles delete parts whose volume is <= 0 (inverted remnants; 0 = never)")
       ->default_val(16);
+  sub->add_option("--compact-below", o->compact_below,
+                  "Compact the arrays when fewer than this fraction of triangle slots is live (0 = never, as the monograph)")
+      ->default_val(0.5);
   sub->add_flag("--no-repair", *no_repair, "Do not run the topology repair after Alg. 3 (the monograph's algorithms only)");
   sub->add_option("--precision", *precision, "Floating point type of the mesh")
       ->check(CLI::IsMember({"float", "double"}))

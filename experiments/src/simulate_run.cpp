@@ -132,6 +132,7 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o)
   p->params.merge = o.merge;
   p->params.repair = o.repair_topology;
   p->params.remnant_check_every = o.remnant_check_every;
+  p->params.compact_below = o.compact_below;
   try {
     p->params.validate();
   } catch (const InputError& e) {
@@ -321,6 +322,9 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
       {"orphan_vertex_policy", "deleted"},
       {"topology_repair", o.repair_topology},
       {"remnant_check_every", p.params.remnant_check_every},
+      {"compact_below", p.params.compact_below},
+      {"initial_sort", "rotate min-index first before cycle 1"},
+      {"glued_detection", "vertex count 2 (Alg. 3) + link test in the repair"},
       {"kl", json::parse(p.kl->describe_json())},
       {"kl_file", o.kl_file.string()},
   };

@@ -17,13 +17,7 @@ namespace meltlab::sim {
 namespace {
 
 MeltParams relative_params(const IndexedMesh& m, double ke_rel, double kr_rel, double kg = 1.0) {
-  const double L0 = mesh_quality(TriMesh<double>::from_indexed(m)).mean_edge_length;
-  MeltParams p;
-  p.kg = kg;
-  p.kE = ke_rel * L0;
-  p.kN = p.kE / 100.0;
-  p.kr = kr_rel * L0;
-  return p;
+  return relative_melt_params(m, ke_rel, kr_rel, kg);
 }
 
 template <class Real>

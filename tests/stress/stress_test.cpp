@@ -47,14 +47,7 @@ sim::IndexedMesh load_dataset(const datasets::DatasetEntry& e) {
   return sim::reorder_for_locality(sim::load_mesh(datasets::dataset_path(e.name), opt).mesh).mesh;
 }
 
-sim::MeltParams default_params(const sim::IndexedMesh& m) {
-  const double L0 = sim::mesh_quality(sim::TriMesh<double>::from_indexed(m)).mean_edge_length;
-  sim::MeltParams p;
-  p.kE = 0.05 * L0;
-  p.kN = p.kE / 100.0;
-  p.kr = 0.5 * L0;
-  return p;
-}
+sim::MeltParams default_params(const sim::IndexedMesh& m) { return sim::relative_melt_params(m); }
 
 std::vector<datasets::DatasetEntry> stress_meshes() {
   std::vector<datasets::DatasetEntry> out;

@@ -3,6 +3,7 @@
 #include "workspace.h"
 
 #include <meltlab/sim/error.h>
+#include <meltlab/sim/quality.h>
 
 #include <fmt/format.h>
 
@@ -27,6 +28,16 @@ void MeltParams::validate() const {
     throw InputError(fmt::format("compact_below: must lie in [0, 1] (got {})", compact_below));
 }
 
+MeltParams relative_melt_params(const IndexedMesh& mesh, double ke_rel, double kr_rel, double kg) {
+  const double L0 = mesh_quality(TriMesh<double>::from_indexed(mesh)).mean_edge_length;
+  MeltParams p;
+  p.kg = kg;
+  p.kE = ke_rel * L0;
+  p.kN = p.kE / 100.0;
+  p.kr = kr_rel * L0;
+  return p;
+}
+
 template <class Real>
 MeltSimulator<Real>::MeltSimulator(TriMesh<Real> mesh, MeltParams params, KlFieldPtr kl, Execution exec)
     : mesh_(std::move(mesh)), params_(params), kl_(std::move(kl)), exec_(exec), ws_(std::make_unique<MeltWorkspace>()) {
@@ -39,6 +50,16 @@ MeltSimulator<Real>::MeltSimulator(TriMesh<Real> mesh, MeltParams params, KlFiel
 
 template <class Real>
 MeltSimulator<Real>::~MeltSimulator() = default;
+MeltParams relative_melt_params(const IndexedMesh& mesh, double ke_rel, double kr_rel, double kg) {
+  const double L0 = mesh_quality(TriMesh<double>::from_indexed(mesh)).mean_edge_length;
+  MeltParams p;
+  p.kg = kg;
+  p.kE = ke_rel * L0;
+  p.kN = p.kE / 100.0;
+  p.kr = kr_rel * L0;
+  return p;
+}
+
 template <class Real>
 MeltSimulator<Real>::MeltSimulator(MeltSimulator&&) noexcept = default;
 template <class Real>

@@ -75,6 +75,11 @@ struct MeltParams {
   void validate() const;
 };
 
+/// Coefficients relative to a mesh's size, as the CLI's default `--units relative` uses
+/// them: kE = ke_rel·L0 and kr = kr_rel·L0 with L0 the mean edge length, kN = kE/100 (the
+/// monograph's kE ≈ 100 kN). The defaults are the CLI's defaults.
+MeltParams relative_melt_params(const IndexedMesh& mesh, double ke_rel = 0.05, double kr_rel = 0.5, double kg = 1.0);
+
 /// What one cycle did.
 struct CycleReport {
   std::int64_t merged_vertices = 0;       ///< Alg. 2: vertices merged into another
