@@ -50,16 +50,6 @@ MeltSimulator<Real>::MeltSimulator(TriMesh<Real> mesh, MeltParams params, KlFiel
 
 template <class Real>
 MeltSimulator<Real>::~MeltSimulator() = default;
-MeltParams relative_melt_params(const IndexedMesh& mesh, double ke_rel, double kr_rel, double kg) {
-  const double L0 = mesh_quality(TriMesh<double>::from_indexed(mesh)).mean_edge_length;
-  MeltParams p;
-  p.kg = kg;
-  p.kE = ke_rel * L0;
-  p.kN = p.kE / 100.0;
-  p.kr = kr_rel * L0;
-  return p;
-}
-
 template <class Real>
 MeltSimulator<Real>::MeltSimulator(MeltSimulator&&) noexcept = default;
 template <class Real>
