@@ -113,6 +113,27 @@ TEST(Remnants, InvertedPartIsRemoved) {
   EXPECT_EQ(remove_inverted_parts(m), 0) << "nothing left to remove";
 }
 
+// Compaction drops dead slots, keeps the live mesh and the relative order of indices (so
+// every triangle stays min-index first and Alg. 2's comparisons are unchanged).
+TEST(Compact, KeepsLiveMeshAndIndexOrder) {
+  auto m = TriMesh<double>::from_indexed(test::disjoint_union(test::octahedron(), test::translated(test::icosahedron(), {5, 0, 0})));
+  for (std::size_t t = 0; t < 8; ++t) m.triangle_alive[t] = 0;  // the octahedron melted away
+  for (std::size_t v = 0; v < 6; ++v) m.vertex_alive[v] = 0;
+  const IndexedMesh before = m.to_indexed();
+  const auto new_index = compact_mesh(m);
+  EXPECT_EQ(m.vertex_slots(), 12u);
+  EXPECT_EQ(m.triangle_slots(), 20u);
+  EXPECT_EQ(new_index[0], -1);
+  EXPECT_EQ(new_index[6], 0);
+  EXPECT_EQ(new_index[17], 11);
+  const IndexedMesh after = m.to_indexed();
+  EXPECT_EQ(after.V, before.V);
+  EXPECT_EQ(after.F, before.F);
+  for (const auto& t : m.triangle) EXPECT_EQ(t, rotate_min_first(t));
+  for (std::size_t v = 0; v < m.vertex_slots(); ++v) EXPECT_EQ(m.reindex[v], static_cast<Index>(v));
+  EXPECT_TRUE(check_topology(m).valid());
+}
+
 TEST(Repair, ValidMeshIsLeftAlone) {
   auto m = TriMesh<double>::from_indexed(test::icosahedron());
   const auto before = m.triangle;
