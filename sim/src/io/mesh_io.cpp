@@ -18,6 +18,7 @@
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <mutex>
 #include <sstream>
 
 namespace meltlab::sim {
@@ -108,33 +109,33 @@ class SoupImporter final : public OpenMesh::IO::BaseImporter {
   std::size_t n_edges() const override { return 0; }
 };
 
-// OpenMesh reports parse problems on its own log streams; capture them so our one-line
-// error can say what the reader saw, and so nothing is printed behind the user's back.
+// OpenMesh reports parse problems on its own log streams (omerr -> std::cerr, omlog ->
+// std::clog, omout -> std::cout). They are redirected once, for the whole process, into a
+// buffer that each read or write clears and inspects, so our one-line error can say what
+// the reader saw and nothing is printed behind the user's back. (Connecting and
+// disconnecting per call would leak: OpenMesh's multiplexer does not free its targets.)
 class CapturedOpenMeshLog {
  public:
-  // OpenMesh connects omerr to std::cerr, omlog to std::clog and omout to std::cout.
   CapturedOpenMeshLog() {
-    omerr().disconnect(std::cerr);
-    omerr().connect(err_);
-    omlog().disconnect(std::clog);
-    omlog().connect(log_);
-    omout().disconnect(std::cout);
-    omout().connect(log_);
-  }
-  ~CapturedOpenMeshLog() {
-    omerr().disconnect(err_);
-    omerr().connect(std::cerr);
-    omlog().disconnect(log_);
-    omlog().connect(std::clog);
-    omout().disconnect(log_);
-    omout().connect(std::cout);
+    static std::mutex mu;
+    static std::ostringstream* buffer = [] {
+      auto* b = new std::ostringstream;  // lives as long as OpenMesh's streams
+      omerr().disconnect(std::cerr);
+      omlog().disconnect(std::clog);
+      omout().disconnect(std::cout);
+      omerr().connect(*b);
+      omlog().connect(*b);
+      omout().connect(*b);
+      return b;
+    }();
+    lock_ = std::unique_lock<std::mutex>(mu);
+    buffer_ = buffer;
+    buffer_->str({});
   }
   CapturedOpenMeshLog(const CapturedOpenMeshLog&) = delete;
   CapturedOpenMeshLog& operator=(const CapturedOpenMeshLog&) = delete;
   std::string first_error_line() const {
-    std::string s = err_.str();
-    if (s.empty()) s = log_.str();
-    std::istringstream in(s);
+    std::istringstream in(buffer_->str());
     std::string line;
     while (std::getline(in, line))
       if (line.find_first_not_of(" \t\r") != std::string::npos) return line;
@@ -142,7 +143,8 @@ class CapturedOpenMeshLog {
   }
 
  private:
-  std::ostringstream err_, log_;
+  std::unique_lock<std::mutex> lock_;
+  std::ostringstream* buffer_ = nullptr;
 };
 
 // An ASCII OFF file as declared by its header: the counts, and the first vertex line whose
