@@ -205,6 +205,7 @@ template <class Real>
 SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const SimulateProgress&)>& progress,
                          const std::atomic<bool>* stop) {
   const SimulateOptions& o = p.opt;
+  const std::string started = now_iso8601();
   fs::create_directories(o.out_dir / "snapshots");
   const int threads = o.threads == 0 ? tbb::info::default_concurrency() : o.threads;
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
@@ -332,7 +333,8 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
       {"meltlab", {{"version", kVersion}, {"git_revision", kGitRevision}}},
       {"command", "simulate"},
       {"command_line", o.command_line},
-      {"started_utc", now_iso8601()},
+      {"started_utc", started},
+      {"finished_utc", now_iso8601()},
       {"status", result.status},
       {"mesh", p.mesh_json},
       {"parameters", params},
