@@ -1,0 +1,73 @@
+#pragma once
+// Cameras that map object/world points (mesh units) to pixels.
+//
+// Pixel convention (OpenCV's): u grows to the right, v grows downwards, and integer
+// coordinates are pixel CENTRES: pixel (i, j) is the square [i - 0.5, i + 0.5) x
+// [j - 0.5, j + 0.5). Images are width x height, row-major, row 0 at the top.
+//
+// World frame: the melt meshes stand on the ground plane z = 0 with z up (the molds'
+// convention); the monograph's camera looks straight down from above (§9.2).
+
+#include <meltlab/sim/mesh.h>
+
+#include <Eigen/Geometry>
+
+#include <array>
+#include <string>
+#include <variant>
+
+namespace YAML {
+class Node;
+}
+
+namespace meltlab::render {
+
+using Vec2d = Eigen::Vector2d;
+using Vec3d = Eigen::Vector3d;
+
+/// Orthographic view straight down the -z axis: world x -> +u, world y -> -v (so the image
+/// looks like the scene seen from above with +y "up" in the picture).
+///   u = (x - centre_x) * pixels_per_unit + (width - 1) / 2
+///   v = -(y - centre_y) * pixels_per_unit + (height - 1) / 2
+struct OrthographicTopDown {
+  int width = 2048, height = 1536;  ///< the monograph's Coolpix 995 resolution
+  double pixels_per_unit = 10000.0;  ///< 10 px/mm for meshes in metres
+  Vec2d centre = Vec2d::Zero();     ///< world (x, y) at the image centre, mesh units
+
+  /// pixels_per_mm with meshes in metres (mesh unit = 1 m): pixels_per_unit = 1000 * px/mm.
+  static OrthographicTopDown from_pixels_per_mm(int width, int height, double pixels_per_mm, const Vec2d& centre_m);
+};
+
+/// OpenCV's pinhole model with Brown–Conrady distortion (cv::projectPoints conventions):
+/// camera frame x right, y down, z forward (looking along +z_camera).
+struct Pinhole {
+  int width = 2048, height = 1536;
+  double fx = 2000, fy = 2000, cx = 1023.5, cy = 767.5;  ///< pixels
+  std::array<double, 5> distortion{0, 0, 0, 0, 0};      ///< k1 k2 p1 p2 k3
+  Eigen::Isometry3d camera_from_world = Eigen::Isometry3d::Identity();
+
+  bool distorted() const;
+  /// A camera at `eye` looking at `target` with the image "up" direction closest to `up`.
+  static Pinhole look_at(int width, int height, double fx, const Vec3d& eye, const Vec3d& target,
+                         const Vec3d& up = Vec3d(0, 1, 0));
+};
+
+using Camera = std::variant<OrthographicTopDown, Pinhole>;
+
+int camera_width(const Camera& c);
+int camera_height(const Camera& c);
+
+/// Projects a world point to pixel coordinates (with distortion for a Pinhole). The bool is
+/// false for a point behind a pinhole camera (z_camera <= 0).
+std::pair<Vec2d, bool> project(const Camera& c, const Vec3d& p_world);
+
+/// Reads a camera from YAML (unknown keys are errors; `source` names the file):
+///   {type: orthographic, width: 2048, height: 1536, pixels_per_mm: 10, centre_m: [0, 0]}
+///   {type: orthographic, width: W, height: H, pixels_per_unit: 1e4, centre: [x, y]}
+///   {type: pinhole, width: W, height: H, fx: .., fy: .., cx: .., cy: .., distortion: [k1,k2,p1,p2,k3],
+///    eye: [x,y,z], target: [x,y,z], up: [x,y,z]}       (or camera_from_world: 4x4 row-major list)
+Camera parse_camera(const YAML::Node& node, const std::string& source);
+/// The camera as YAML/JSON text (round-trips through parse_camera).
+std::string describe_camera_json(const Camera& c);
+
+}  // namespace meltlab::render
