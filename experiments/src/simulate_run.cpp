@@ -60,6 +60,98 @@ void require(bool ok, const std::string& what) {
 
 }  // namespace
 
+std::string file_hash(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(fmt::format("{}: cannot open for reading", file.string()));
+  std::uint64_t h = 1469598103934665603ULL;
+  char buf[1 << 16];
+  while (in) {
+    in.read(buf, sizeof buf);
+    for (std::streamsize i = 0; i < in.gcount(); ++i) {
+      h ^= static_cast<unsigned char>(buf[i]);
+      h *= 1099511628211ULL;
+    }
+  }
+  return fmt::format("{:016x}", h);
+}
+
+namespace {
+template <class E>
+std::string enum_name(E e, const std::vector<std::pair<E, const char*>>& names) {
+  for (const auto& [v, n] : names)
+    if (v == e) return n;
+  return "?";
+}
+template <class E>
+E enum_value(const json& j, const char* key, const std::vector<std::pair<E, const char*>>& names, const std::string& source) {
+  const std::string s = j.at(key).get<std::string>();
+  for (const auto& [v, n] : names)
+    if (s == n) return v;
+  throw InputError(fmt::format("{}: options.{}: unknown value '{}'", source, key, s));
+}
+const std::vector<std::pair<sim::DeformMode, const char*>> kDeformNames = {
+    {sim::DeformMode::kCombined, "combined"}, {sim::DeformMode::kNormalOnly, "normal"}, {sim::DeformMode::kEdgeOnly, "edge"}};
+const std::vector<std::pair<sim::TieRule, const char*>> kTieNames = {{sim::TieRule::kLessEqual, "le"},
+                                                                    {sim::TieRule::kStrict, "strict"}};
+const std::vector<std::pair<sim::EdgeSumMode, const char*>> kEdgeSumNames = {{sim::EdgeSumMode::kMean, "mean"},
+                                                                            {sim::EdgeSumMode::kSum, "sum"}};
+const std::vector<std::pair<sim::MergeMode, const char*>> kMergeNames = {
+    {sim::MergeMode::kClusterMean, "cluster-mean"}, {sim::MergeMode::kSequentialPairwise, "pairwise"}};
+}  // namespace
+
+json options_to_json(const SimulateOptions& o) {
+  json j = {{"mesh", o.mesh},
+            {"cycles", o.cycles},
+            {"stop_when_empty", o.stop_when_empty},
+            {"kg", o.kg},
+            {"kE", o.kE},
+            {"kr", o.kr},
+            {"relative_units", o.relative_units},
+            {"deform", enum_name(o.deform, kDeformNames)},
+            {"tie", enum_name(o.tie, kTieNames)},
+            {"edge_sum", enum_name(o.edge_sum, kEdgeSumNames)},
+            {"merge", enum_name(o.merge, kMergeNames)},
+            {"repair_topology", o.repair_topology},
+            {"remnant_check_every", o.remnant_check_every},
+            {"compact_below", o.compact_below},
+            {"kl_file", o.kl_file.string()},
+            {"double_precision", o.double_precision},
+            {"morton_order", o.morton_order},
+            {"weld_tolerance", o.load.weld_tolerance},
+            {"repair_input", o.load.repair}};
+  if (o.kN) j["kN"] = *o.kN;
+  return j;
+}
+
+SimulateOptions options_from_json(const json& j, const std::string& source) {
+  SimulateOptions o;
+  try {
+    o.mesh = j.at("mesh").get<std::string>();
+    o.cycles = j.at("cycles").get<std::int64_t>();
+    o.stop_when_empty = j.at("stop_when_empty").get<bool>();
+    o.kg = j.at("kg").get<double>();
+    o.kE = j.at("kE").get<double>();
+    if (j.contains("kN")) o.kN = j.at("kN").get<double>();
+    o.kr = j.at("kr").get<double>();
+    o.relative_units = j.at("relative_units").get<bool>();
+    o.deform = enum_value(j, "deform", kDeformNames, source);
+    o.tie = enum_value(j, "tie", kTieNames, source);
+    o.edge_sum = enum_value(j, "edge_sum", kEdgeSumNames, source);
+    o.merge = enum_value(j, "merge", kMergeNames, source);
+    o.repair_topology = j.at("repair_topology").get<bool>();
+    o.remnant_check_every = j.at("remnant_check_every").get<int>();
+    o.compact_below = j.at("compact_below").get<double>();
+    o.kl_file = j.at("kl_file").get<std::string>();
+    o.double_precision = j.at("double_precision").get<bool>();
+    o.morton_order = j.at("morton_order").get<bool>();
+    o.load.weld_tolerance = j.at("weld_tolerance").get<double>();
+    o.load.repair = j.at("repair_input").get<bool>();
+  } catch (const json::exception& e) {
+    throw InputError(fmt::format("{}: run options incomplete or malformed: {}", source, e.what()));
+  }
+  return o;
+}
+
 json hardware_json() {
   json h;
   std::ifstream cpu("/proc/cpuinfo");
@@ -88,7 +180,7 @@ fs::path resolve_mesh_argument(const std::string& mesh) {
   }
 }
 
-std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o) {
+std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o, bool check_output) {
   auto p = std::make_unique<PreparedSimulation>();
   p->opt = o;
   require(o.cycles >= 0, fmt::format("--cycles: must be >= 0 (got {})", o.cycles));
@@ -101,15 +193,16 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o)
               (o.snapshot_format == "ply" || o.snapshot_format == "off" || o.snapshot_format == "obj" ||
                o.snapshot_format == "stl"),
           fmt::format("--snapshot-format: '{}' is not one of ply, off, obj, stl", o.snapshot_format));
-  require(!o.out_dir.empty(), "--out: an output folder is required");
+  require(!check_output || !o.out_dir.empty(), "--out: an output folder is required");
   std::error_code ec;
-  if (fs::exists(o.out_dir, ec)) {
+  if (check_output && fs::exists(o.out_dir, ec)) {
     require(fs::is_directory(o.out_dir, ec), fmt::format("{}: exists and is not a folder", o.out_dir.string()));
     require(o.overwrite || !fs::exists(o.out_dir / "run.json", ec),
             fmt::format("{}: already holds a run (run.json); choose another --out or pass --overwrite", o.out_dir.string()));
   }
 
-  p->mesh_path = resolve_mesh_argument(o.mesh);
+  p->mesh_path = fs::absolute(resolve_mesh_argument(o.mesh));
+  if (!o.kl_file.empty()) p->opt.kl_file = fs::absolute(o.kl_file);
   p->loaded = sim::load_mesh(p->mesh_path, o.load);
   p->mesh = o.morton_order ? sim::reorder_for_locality(p->loaded.mesh).mesh : p->loaded.mesh;
   const auto tm = sim::TriMesh<double>::from_indexed(p->mesh);
@@ -142,12 +235,13 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o)
   sim::KlContext ctx;
   ctx.bbox_min = q.bbox_min;
   ctx.bbox_max = q.bbox_max;
-  p->kl = o.kl_file.empty() ? sim::make_constant_kl(1.0) : sim::load_kl_field(o.kl_file, ctx);
+  p->kl = o.kl_file.empty() ? sim::make_constant_kl(1.0) : sim::load_kl_field(p->opt.kl_file, ctx);
 
   const auto& r = p->loaded.report;
   p->mesh_json = {
       {"argument", o.mesh},
       {"file", p->mesh_path.string()},
+      {"file_hash", file_hash(p->mesh_path)},
       {"file_vertices", r.file_vertices},
       {"file_faces", r.file_faces},
       {"welded_vertices", r.welded_vertices},
@@ -327,12 +421,14 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
       {"initial_sort", "rotate min-index first before cycle 1"},
       {"glued_detection", "vertex count 2 (Alg. 3) + link test in the repair"},
       {"kl", json::parse(p.kl->describe_json())},
-      {"kl_file", o.kl_file.string()},
+      {"kl_file", p.opt.kl_file.string()},
+      {"kl_file_hash", p.opt.kl_file.empty() ? std::string() : file_hash(p.opt.kl_file)},
   };
   json run = {
       {"meltlab", {{"version", kVersion}, {"git_revision", kGitRevision}}},
       {"command", "simulate"},
       {"command_line", o.command_line},
+      {"options", options_to_json(p.opt)},
       {"started_utc", started},
       {"finished_utc", now_iso8601()},
       {"status", result.status},

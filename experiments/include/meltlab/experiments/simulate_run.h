@@ -78,8 +78,35 @@ struct PreparedSimulation {
 };
 
 /// Validates everything (mesh, kl file, numbers, output folder) and throws InputError on
-/// the first problem, before anything is written.
-std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& options);
+/// the first problem, before anything is written. `check_output` = false skips the output
+/// folder checks (for replaying a finished run).
+std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& options, bool check_output = true);
+
+/// The options as JSON (recorded in run.json as "options") and back. Paths are absolute.
+nlohmann::json options_to_json(const SimulateOptions& options);
+SimulateOptions options_from_json(const nlohmann::json& j, const std::string& source);
+
+/// FNV-1a 64-bit hash of a file's bytes, as 16 hex digits (recorded to detect a changed input).
+std::string file_hash(const std::filesystem::path& file);
+
+/// Replays a finished `meltlab simulate` run: rebuilds its simulation from run.json (the
+/// cycle is deterministic for any thread count) and steps it forward on request. Refuses a
+/// run whose input mesh or kl file changed since (content hash).
+class RunReplay {
+ public:
+  explicit RunReplay(const std::filesystem::path& run_dir);
+  ~RunReplay();
+  /// The mesh after `cycle` cycles (cycles must not decrease between calls).
+  const sim::TriMesh<double>& mesh_at(std::int64_t cycle);
+  std::int64_t cycles_run() const { return cycles_run_; }
+  const nlohmann::json& run_json() const { return run_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  nlohmann::json run_;
+  std::int64_t cycles_run_ = 0;
+};
 
 /// Runs a prepared simulation. `progress` is called about ten times a second; `stop` is
 /// polled every cycle (set it from a signal handler to interrupt: status "interrupted").

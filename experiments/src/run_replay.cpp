@@ -1,0 +1,85 @@
+// Replaying a finished simulate run (for compare and fit): the melt cycle is deterministic
+// for any thread count, so rebuilding the simulation from run.json's options reproduces the
+// run's meshes bit for bit.
+
+#include <meltlab/experiments/simulate_run.h>
+#include <meltlab/sim/error.h>
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <variant>
+
+namespace meltlab::experiments {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct RunReplay::Impl {
+  std::unique_ptr<PreparedSimulation> prepared;
+  std::variant<std::monostate, sim::MeltSimulator<float>, sim::MeltSimulator<double>> simulator;
+  sim::TriMesh<double> current;
+  std::int64_t cycle = 0;
+  bool current_valid = false;
+};
+
+RunReplay::RunReplay(const fs::path& run_dir) : impl_(std::make_unique<Impl>()) {
+  const fs::path file = run_dir / "run.json";
+  const std::string name = file.string();
+  std::ifstream in(file);
+  if (!in) throw InputError(fmt::format("{}: no such file (is {} a simulate run folder?)", name, run_dir.string()));
+  try {
+    run_ = json::parse(in);
+  } catch (const json::exception& e) {
+    throw InputError(fmt::format("{}: invalid JSON: {}", name, e.what()));
+  }
+  if (!run_.contains("options") || !run_.contains("mesh"))
+    throw InputError(fmt::format("{}: not a meltlab simulate run (no options/mesh record)", name));
+  SimulateOptions o = options_from_json(run_["options"], name);
+  const std::string mesh_file = run_["mesh"].value("file", "");
+  o.mesh = mesh_file;
+  std::error_code ec;
+  if (!fs::exists(mesh_file, ec)) throw InputError(fmt::format("{}: the run's mesh {} no longer exists", name, mesh_file));
+  if (file_hash(mesh_file) != run_["mesh"].value("file_hash", ""))
+    throw InputError(fmt::format("{}: the run's mesh {} has changed since the run", name, mesh_file));
+  if (!o.kl_file.empty() && file_hash(o.kl_file) != run_["parameters"].value("kl_file_hash", ""))
+    throw InputError(fmt::format("{}: the run's kl file {} has changed since the run", name, o.kl_file.string()));
+  cycles_run_ = run_.value("cycles_run", std::int64_t{0});
+  impl_->prepared = prepare_simulation(o, /*check_output=*/false);
+  const auto& p = *impl_->prepared;
+  if (o.double_precision)
+    impl_->simulator.emplace<sim::MeltSimulator<double>>(sim::TriMesh<double>::from_indexed(p.mesh), p.params, p.kl,
+                                                         sim::Execution::kParallel);
+  else
+    impl_->simulator.emplace<sim::MeltSimulator<float>>(sim::TriMesh<float>::from_indexed(p.mesh), p.params, p.kl,
+                                                        sim::Execution::kParallel);
+}
+
+RunReplay::~RunReplay() = default;
+
+const sim::TriMesh<double>& RunReplay::mesh_at(std::int64_t cycle) {
+  if (cycle < impl_->cycle)
+    throw std::logic_error(fmt::format("RunReplay: cycle {} requested after cycle {}", cycle, impl_->cycle));
+  std::visit(
+      [&](auto& s) {
+        using S = std::decay_t<decltype(s)>;
+        if constexpr (!std::is_same_v<S, std::monostate>) {
+          while (impl_->cycle < cycle) {
+            s.step();
+            ++impl_->cycle;
+            impl_->current_valid = false;
+          }
+          if (!impl_->current_valid) {
+            if constexpr (std::is_same_v<S, sim::MeltSimulator<double>>)
+              impl_->current = s.mesh();
+            else
+              impl_->current = s.mesh().template cast<double>();
+            impl_->current_valid = true;
+          }
+        }
+      },
+      impl_->simulator);
+  return impl_->current;
+}
+
+}  // namespace meltlab::experiments
