@@ -1,0 +1,283 @@
+// Cameras: orthographic top-down and OpenCV pinhole, their projection, YAML parsing and
+// JSON description (see camera.h).
+
+#include <meltlab/render/camera.h>
+#include <meltlab/sim/error.h>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <set>
+
+namespace meltlab::render {
+
+OrthographicTopDown OrthographicTopDown::from_pixels_per_mm(int width, int height, double pixels_per_mm,
+                                                            const Vec2d& centre_m) {
+  OrthographicTopDown c;
+  c.width = width;
+  c.height = height;
+  c.pixels_per_unit = 1000.0 * pixels_per_mm;
+  c.centre = centre_m;
+  return c;
+}
+
+bool Pinhole::distorted() const {
+  for (double d : distortion)
+    if (d != 0.0) return true;
+  return false;
+}
+
+Pinhole Pinhole::look_at(int width, int height, double fx, const Vec3d& eye, const Vec3d& target, const Vec3d& up) {
+  const Vec3d forward = target - eye;
+  if (!eye.allFinite() || !target.allFinite() || !up.allFinite() || forward.norm() == 0.0)
+    throw InputError("Pinhole::look_at: eye and target must be finite and distinct");
+  const Vec3d z = forward.normalized();
+  // Image "up" is -y_camera: take the component of `up` orthogonal to the view direction. If
+  // `up` is (nearly) parallel to it, fall back to the world axis least aligned with the view.
+  Vec3d u = up - up.dot(z) * z;
+  if (u.norm() <= 1e-9 * std::max(1.0, up.norm())) {
+    Eigen::Index axis = 0;
+    z.cwiseAbs().minCoeff(&axis);
+    const Vec3d a = Vec3d::Unit(axis);
+    u = a - a.dot(z) * z;
+  }
+  const Vec3d y = -u.normalized();
+  const Vec3d x = y.cross(z);  // right-handed: x × y = z
+  Pinhole p;
+  p.width = width;
+  p.height = height;
+  p.fx = fx;
+  p.fy = fx;
+  p.cx = 0.5 * (width - 1);
+  p.cy = 0.5 * (height - 1);
+  Eigen::Matrix3d R;
+  R.row(0) = x.transpose();
+  R.row(1) = y.transpose();
+  R.row(2) = z.transpose();
+  p.camera_from_world = Eigen::Isometry3d::Identity();
+  p.camera_from_world.linear() = R;
+  p.camera_from_world.translation() = -R * eye;
+  return p;
+}
+
+int camera_width(const Camera& c) {
+  return std::visit([](const auto& cam) { return cam.width; }, c);
+}
+int camera_height(const Camera& c) {
+  return std::visit([](const auto& cam) { return cam.height; }, c);
+}
+
+std::pair<Vec2d, bool> project(const Camera& c, const Vec3d& p_world) {
+  if (const auto* o = std::get_if<OrthographicTopDown>(&c)) {
+    const double u = (p_world.x() - o->centre.x()) * o->pixels_per_unit + 0.5 * (o->width - 1);
+    const double v = -(p_world.y() - o->centre.y()) * o->pixels_per_unit + 0.5 * (o->height - 1);
+    return {Vec2d(u, v), true};
+  }
+  const auto& p = std::get<Pinhole>(c);
+  const Vec3d q = p.camera_from_world * p_world;
+  if (!(q.z() > 0.0)) return {Vec2d(std::nan(""), std::nan("")), false};
+  const double x = q.x() / q.z(), y = q.y() / q.z();
+  const double k1 = p.distortion[0], k2 = p.distortion[1], p1 = p.distortion[2], p2 = p.distortion[3],
+               k3 = p.distortion[4];
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  const double xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+  const double yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
+  return {Vec2d(p.fx * xd + p.cx, p.fy * yd + p.cy), true};
+}
+
+// ---- YAML -----------------------------------------------------------------------------
+
+namespace {
+
+std::string where_of(const std::string& source, const YAML::Node& n) {
+  const YAML::Mark mark = n.Mark();
+  if (mark.line >= 0) return fmt::format("{}:{}: camera", source, mark.line + 1);
+  return fmt::format("{}: camera", source);
+}
+
+double read_number(const YAML::Node& n, const std::string& at, const std::string& key) {
+  double x = 0;
+  try {
+    x = n.as<double>();
+  } catch (const YAML::Exception&) {
+    throw InputError(fmt::format("{}: '{}' must be a number (got '{}')", at, key, n.IsScalar() ? n.Scalar() : "?"));
+  }
+  if (!std::isfinite(x)) throw InputError(fmt::format("{}: '{}' must be a finite number", at, key));
+  return x;
+}
+
+std::vector<double> read_list(const YAML::Node& n, const std::string& at, const std::string& key) {
+  if (!n.IsSequence()) throw InputError(fmt::format("{}: '{}' must be a list of numbers", at, key));
+  std::vector<double> v;
+  for (const auto& e : n) {
+    if (e.IsSequence()) {  // nested (a 4x4 matrix as 4 rows)
+      for (const auto& f : e) v.push_back(read_number(f, at, key));
+    } else {
+      v.push_back(read_number(e, at, key));
+    }
+  }
+  return v;
+}
+
+class Keys {
+ public:
+  Keys(const YAML::Node& n, std::string at, const std::set<std::string>& allowed) : n_(n), at_(std::move(at)) {
+    for (auto it = n.begin(); it != n.end(); ++it) {
+      const std::string k = it->first.as<std::string>();
+      if (!allowed.count(k)) {
+        std::string list;
+        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        throw InputError(fmt::format("{}: unknown key '{}' (allowed: {})", at_, k, list));
+      }
+    }
+  }
+  bool has(const std::string& k) const { return static_cast<bool>(n_[k]); }
+  void require(const std::string& k) const {
+    if (!has(k)) throw InputError(fmt::format("{}: missing key '{}'", at_, k));
+  }
+  double number(const std::string& k) const {
+    require(k);
+    return read_number(n_[k], at_, k);
+  }
+  double positive(const std::string& k) const {
+    const double x = number(k);
+    if (!(x > 0.0)) throw InputError(fmt::format("{}: '{}' must be > 0 (got {})", at_, k, x));
+    return x;
+  }
+  int size(const std::string& k) const {
+    require(k);
+    int v = 0;
+    try {
+      v = n_[k].as<int>();
+    } catch (const YAML::Exception&) {
+      throw InputError(fmt::format("{}: '{}' must be an integer (got '{}')", at_, k,
+                                   n_[k].IsScalar() ? n_[k].Scalar() : "?"));
+    }
+    if (v < 1 || v > 65536) throw InputError(fmt::format("{}: '{}' must be in [1, 65536] (got {})", at_, k, v));
+    return v;
+  }
+  std::vector<double> list(const std::string& k, std::size_t n_min, std::size_t n_max) const {
+    require(k);
+    auto v = read_list(n_[k], at_, k);
+    if (v.size() < n_min || v.size() > n_max) {
+      if (n_min == n_max) throw InputError(fmt::format("{}: '{}' must have {} numbers (got {})", at_, k, n_min, v.size()));
+      throw InputError(fmt::format("{}: '{}' must have {} to {} numbers (got {})", at_, k, n_min, n_max, v.size()));
+    }
+    return v;
+  }
+  Vec3d vec3(const std::string& k) const {
+    const auto v = list(k, 3, 3);
+    return {v[0], v[1], v[2]};
+  }
+  Vec2d vec2(const std::string& k) const {
+    const auto v = list(k, 2, 2);
+    return {v[0], v[1]};
+  }
+  std::string text(const std::string& k) const {
+    require(k);
+    if (!n_[k].IsScalar()) throw InputError(fmt::format("{}: '{}' must be a string", at_, k));
+    return n_[k].Scalar();
+  }
+  const std::string& at() const { return at_; }
+
+ private:
+  const YAML::Node n_;
+  std::string at_;
+};
+
+Camera parse_orthographic(const YAML::Node& node, const std::string& at) {
+  const Keys keys(node, at, {"type", "width", "height", "pixels_per_mm", "pixels_per_unit", "centre_m", "centre"});
+  OrthographicTopDown c;
+  c.width = keys.size("width");
+  c.height = keys.size("height");
+  if (keys.has("pixels_per_mm") == keys.has("pixels_per_unit"))
+    throw InputError(fmt::format("{}: give exactly one of 'pixels_per_mm' and 'pixels_per_unit'", at));
+  if (keys.has("centre_m") && keys.has("centre"))
+    throw InputError(fmt::format("{}: give at most one of 'centre_m' and 'centre'", at));
+  c.pixels_per_unit = keys.has("pixels_per_mm") ? 1000.0 * keys.positive("pixels_per_mm") : keys.positive("pixels_per_unit");
+  if (keys.has("centre_m")) c.centre = keys.vec2("centre_m");
+  if (keys.has("centre")) c.centre = keys.vec2("centre");
+  return c;
+}
+
+Camera parse_pinhole(const YAML::Node& node, const std::string& at) {
+  const Keys keys(node, at,
+                  {"type", "width", "height", "fx", "fy", "cx", "cy", "distortion", "eye", "target", "up",
+                   "camera_from_world"});
+  const int width = keys.size("width");
+  const int height = keys.size("height");
+  const double fx = keys.positive("fx");
+  Pinhole p;
+  const bool has_pose = keys.has("eye") || keys.has("target") || keys.has("up");
+  if (keys.has("camera_from_world")) {
+    if (has_pose) throw InputError(fmt::format("{}: give either 'camera_from_world' or 'eye'/'target'/'up', not both", at));
+    const auto m = keys.list("camera_from_world", 16, 16);
+    Eigen::Matrix4d M;
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) M(r, c) = m[static_cast<std::size_t>(4 * r + c)];
+    const Eigen::Matrix3d R = M.topLeftCorner<3, 3>();
+    // Tolerance: a rotation written with ~10 significant digits is orthonormal to ~1e-9.
+    const double ortho_err = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+    if (ortho_err > 1e-6 || R.determinant() <= 0.0 || M(3, 0) != 0.0 || M(3, 1) != 0.0 || M(3, 2) != 0.0 ||
+        M(3, 3) != 1.0)
+      throw InputError(fmt::format(
+          "{}: 'camera_from_world' must be a rigid transform (rotation + translation, last row 0 0 0 1)", at));
+    p.camera_from_world.matrix() = M;
+    p.width = width;
+    p.height = height;
+    p.fx = p.fy = fx;
+    p.cx = 0.5 * (width - 1);
+    p.cy = 0.5 * (height - 1);
+  } else {
+    if (!keys.has("eye")) throw InputError(fmt::format("{}: missing key 'eye' (or 'camera_from_world')", at));
+    const Vec3d eye = keys.vec3("eye");
+    const Vec3d target = keys.vec3("target");
+    const Vec3d up = keys.has("up") ? keys.vec3("up") : Vec3d(0, 1, 0);
+    if (eye == target) throw InputError(fmt::format("{}: 'eye' and 'target' coincide", at));
+    p = Pinhole::look_at(width, height, fx, eye, target, up);
+  }
+  if (keys.has("fy")) p.fy = keys.positive("fy");
+  if (keys.has("cx")) p.cx = keys.number("cx");
+  if (keys.has("cy")) p.cy = keys.number("cy");
+  if (keys.has("distortion")) {
+    const auto d = keys.list("distortion", 4, 5);  // OpenCV accepts k1 k2 p1 p2 [k3]
+    for (std::size_t i = 0; i < 5; ++i) p.distortion[i] = i < d.size() ? d[i] : 0.0;
+  }
+  return p;
+}
+
+}  // namespace
+
+Camera parse_camera(const YAML::Node& node, const std::string& source) {
+  const std::string at = where_of(source, node);
+  if (!node.IsMap()) throw InputError(fmt::format("{}: must be a mapping with a 'type' key", at));
+  if (!node["type"]) throw InputError(fmt::format("{}: missing key 'type' (orthographic or pinhole)", at));
+  const YAML::Node t = node["type"];
+  const std::string type = t.IsScalar() ? t.Scalar() : std::string("?");
+  if (type == "orthographic") return parse_orthographic(node, at);
+  if (type == "pinhole") return parse_pinhole(node, at);
+  throw InputError(fmt::format("{}: 'type' must be orthographic or pinhole (got '{}')", at, type));
+}
+
+std::string describe_camera_json(const Camera& c) {
+  // fmt's "{}" prints the shortest decimal that reads back to the same double, so the text
+  // round-trips exactly through parse_camera.
+  if (const auto* o = std::get_if<OrthographicTopDown>(&c)) {
+    return fmt::format(R"({{"type": "orthographic", "width": {}, "height": {}, "pixels_per_unit": {}, "centre": [{}, {}]}})",
+                       o->width, o->height, o->pixels_per_unit, o->centre.x(), o->centre.y());
+  }
+  const auto& p = std::get<Pinhole>(c);
+  const Eigen::Matrix4d M = p.camera_from_world.matrix();
+  std::string rows;
+  for (int r = 0; r < 4; ++r)
+    rows += fmt::format("{}[{}, {}, {}, {}]", r ? ", " : "", M(r, 0), M(r, 1), M(r, 2), M(r, 3));
+  return fmt::format(
+      R"({{"type": "pinhole", "width": {}, "height": {}, "fx": {}, "fy": {}, "cx": {}, "cy": {}, )"
+      R"("distortion": [{}, {}, {}, {}, {}], "camera_from_world": [{}]}})",
+      p.width, p.height, p.fx, p.fy, p.cx, p.cy, p.distortion[0], p.distortion[1], p.distortion[2], p.distortion[3],
+      p.distortion[4], rows);
+}
+
+}  // namespace meltlab::render
