@@ -49,6 +49,12 @@ struct SegmentationSettings {
   bool largest_component = true;    ///< keep only the largest connected component
   double min_component_px = 50;     ///< with largest_component = false: drop smaller ones
   bool fill_holes = false;          ///< false keeps holes (the monograph's contours may have them)
+  /// The object must stand out: if the mean channel value (|difference| for kBackground) of
+  /// the segmented pixels exceeds that of the rest of the ROI by less than this (8-bit
+  /// levels), the photo shows no object and the mask is empty. Otsu always splits an image
+  /// in two, even bare textured ground after the ice has gone; this refuses such splits.
+  /// Bright ice on the dark ground differs by 100+ levels, ground texture by ~10-20. 0 = off.
+  double min_contrast = 40;
 };
 
 struct Frame {
@@ -89,6 +95,7 @@ struct Segmentation {
   Region region;         ///< sub-pixel polygons (with holes) in pixel coordinates
   double area_px = 0;    ///< pixel count of mask
   double threshold_used = 0;  ///< the threshold actually applied (e.g. Otsu's), 8-bit scale
+  double contrast = 0;        ///< mean inside minus mean outside (see min_contrast), 8-bit scale
 };
 
 /// Segments one photo: channel, blur, threshold, morphology, component selection, holes.
