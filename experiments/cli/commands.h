@@ -13,5 +13,7 @@ using Run = std::function<int()>;
 Run add_simulate(CLI::App& app, const std::string& command_line);
 Run add_mesh_info(CLI::App& app);
 Run add_dataset(CLI::App& app);
+Run add_compare(CLI::App& app, const std::string& command_line);
+Run add_synth_sequence(CLI::App& app);
 
 }  // namespace meltlab::cli

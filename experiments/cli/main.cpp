@@ -26,6 +26,8 @@ int main(int argc, char** argv) {
   add(cli::add_simulate(app, command_line));
   add(cli::add_mesh_info(app));
   add(cli::add_dataset(app));
+  add(cli::add_compare(app, command_line));
+  add(cli::add_synth_sequence(app));
 
   try {
     app.parse(argc, argv);

@@ -45,6 +45,15 @@ RunReplay::RunReplay(const fs::path& run_dir) : impl_(std::make_unique<Impl>()) 
   if (!o.kl_file.empty() && file_hash(o.kl_file) != run_["parameters"].value("kl_file_hash", ""))
     throw InputError(fmt::format("{}: the run's kl file {} has changed since the run", name, o.kl_file.string()));
   cycles_run_ = run_.value("cycles_run", std::int64_t{0});
+  start(o);
+}
+
+RunReplay::RunReplay(const SimulateOptions& options) : impl_(std::make_unique<Impl>()) {
+  cycles_run_ = -1;
+  start(options);
+}
+
+void RunReplay::start(const SimulateOptions& o) {
   impl_->prepared = prepare_simulation(o, /*check_output=*/false);
   const auto& p = *impl_->prepared;
   if (o.double_precision)
@@ -54,6 +63,8 @@ RunReplay::RunReplay(const fs::path& run_dir) : impl_(std::make_unique<Impl>()) 
     impl_->simulator.emplace<sim::MeltSimulator<float>>(sim::TriMesh<float>::from_indexed(p.mesh), p.params, p.kl,
                                                         sim::Execution::kParallel);
 }
+
+const PreparedSimulation& RunReplay::prepared() const { return *impl_->prepared; }
 
 RunReplay::~RunReplay() = default;
 

@@ -95,13 +95,20 @@ std::string file_hash(const std::filesystem::path& file);
 class RunReplay {
  public:
   explicit RunReplay(const std::filesystem::path& run_dir);
+  /// A run that was never written: the simulation `options` describe (out_dir ignored).
+  explicit RunReplay(const SimulateOptions& options);
   ~RunReplay();
   /// The mesh after `cycle` cycles (cycles must not decrease between calls).
   const sim::TriMesh<double>& mesh_at(std::int64_t cycle);
+  /// Cycles the recorded run made (-1 for a run built from options).
   std::int64_t cycles_run() const { return cycles_run_; }
+  /// run.json of the recorded run (null for a run built from options).
   const nlohmann::json& run_json() const { return run_; }
+  const PreparedSimulation& prepared() const;
 
  private:
+  void start(const SimulateOptions& options);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
   nlohmann::json run_;
