@@ -197,7 +197,7 @@ void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::funct
   std::ostringstream manifest;
   manifest << "# Made by meltlab synth-sequence (the empirical model: inverse-crime data). Truth: truth/truth.json\n"
            << "meltlab_observations: 1\n"
-           << "object: " << json(fs::path(simulation.prepared().mesh_path).stem().string()).dump() << "\n"
+           << "object: " << json(fs::path(o.simulation.mesh).stem().string()).dump() << "\n"
            << "interval_s: " << fmt::format("{}", o.interval_s) << "\n"
            << "camera: " << json::parse(render::describe_camera_json(camera)).dump() << "\n"
            << "ground_truth: truth/truth.json\n"
