@@ -15,5 +15,6 @@ Run add_mesh_info(CLI::App& app);
 Run add_dataset(CLI::App& app);
 Run add_compare(CLI::App& app, const std::string& command_line);
 Run add_synth_sequence(CLI::App& app);
+Run add_fit(CLI::App& app, const std::string& command_line);
 
 }  // namespace meltlab::cli

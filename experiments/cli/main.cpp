@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   add(cli::add_dataset(app));
   add(cli::add_compare(app, command_line));
   add(cli::add_synth_sequence(app));
+  add(cli::add_fit(app, command_line));
 
   try {
     app.parse(argc, argv);

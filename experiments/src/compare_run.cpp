@@ -18,15 +18,6 @@ using nlohmann::json;
 
 namespace {
 
-class ReplaySequence final : public verify::MeshSequence {
- public:
-  explicit ReplaySequence(RunReplay& replay) : replay_(replay) {}
-  const sim::TriMesh<double>& mesh_at(std::int64_t cycle) override { return replay_.mesh_at(cycle); }
-
- private:
-  RunReplay& replay_;
-};
-
 const char* registration_name(verify::RegistrationMode m) {
   switch (m) {
     case verify::RegistrationMode::kNone: return "none";
@@ -58,6 +49,41 @@ void require(bool ok, const std::string& message) {
 }
 
 }  // namespace
+
+verify::CompareResult compare_and_write(const verify::ObservationSequence& obs, verify::MeshSequence& meshes,
+                                        const verify::CompareOptions& options, const fs::path& out_dir, int overlay_every,
+                                        const std::function<void(const CompareRunProgress&)>& progress,
+                                        std::vector<double>* frame_ms) {
+  fs::create_directories(out_dir);
+  if (overlay_every > 0) fs::create_directories(out_dir / "overlays");
+  CompareRunProgress prog;
+  prog.total = static_cast<int>(obs.frames.size());
+  int compared = 0;
+  auto t_frame = std::chrono::steady_clock::now();
+  verify::CompareResult result = verify::compare_sequence(
+      obs, meshes, options, [&](const verify::FrameResult& r, const verify::FrameImages& images) {
+        const auto now = std::chrono::steady_clock::now();
+        if (frame_ms) frame_ms->push_back(std::chrono::duration<double, std::milli>(now - t_frame).count());
+        t_frame = now;
+        ++prog.done;
+        if (r.status == "ok") {
+          prog.last_P = r.pixels.P;
+          if (overlay_every > 0 && compared % overlay_every == 0)
+            verify::write_image(out_dir / "overlays" / fmt::format("frame_{:04d}.png", r.frame + 1),
+                                verify::overlay_image(images.photo_mask, images.render_mask));
+          ++compared;
+        } else {
+          ++prog.skipped;
+        }
+        if (progress) progress(prog);
+      });
+  verify::write_per_frame_csv(out_dir / "per_frame.csv", result.frames);
+  verify::write_image(out_dir / "p_curve.png",
+                      verify::p_curve_image(result.frames, fmt::format("{}: P per photo", obs.object.empty()
+                                                                                              ? obs.manifest.stem().string()
+                                                                                              : obs.object)));
+  return result;
+}
 
 json summarize_frames(const std::vector<verify::FrameResult>& frames) {
   json s;
@@ -129,40 +155,9 @@ CompareRunResult run_compare(const CompareRunOptions& o, const std::function<voi
   // Every frame must map to a cycle before anything is written (a missing time is an error).
   for (const auto& f : obs.frames) (void)copt.mapping.cycle_of(f, obs.manifest.string());
 
-  fs::create_directories(o.out_dir);
-  if (o.overlay_every > 0) fs::create_directories(o.out_dir / "overlays");
-
-  ReplaySequence meshes(replay);
-  CompareRunProgress prog;
-  prog.total = static_cast<int>(obs.frames.size());
-  int compared = 0;
-  std::vector<double> frame_ms;
-  auto t_frame = std::chrono::steady_clock::now();
   CompareRunResult out;
-  out.compare = verify::compare_sequence(
-      obs, meshes, copt, [&](const verify::FrameResult& r, const verify::FrameImages& images) {
-        const auto now = std::chrono::steady_clock::now();
-        frame_ms.push_back(std::chrono::duration<double, std::milli>(now - t_frame).count());
-        t_frame = now;
-        ++prog.done;
-        if (r.status == "ok") {
-          prog.last_P = r.pixels.P;
-          if (o.overlay_every > 0 && compared % o.overlay_every == 0)
-            verify::write_image(o.out_dir / "overlays" / fmt::format("frame_{:04d}.png", r.frame + 1),
-                                verify::overlay_image(images.photo_mask, images.render_mask));
-          ++compared;
-        } else {
-          ++prog.skipped;
-        }
-        if (progress) progress(prog);
-      });
-
-  verify::write_per_frame_csv(o.out_dir / "per_frame.csv", out.compare.frames);
-  verify::write_image(o.out_dir / "p_curve.png",
-                      verify::p_curve_image(out.compare.frames, fmt::format("{}: P per photo", obs.object.empty()
-                                                                                                    ? obs.manifest.stem().string()
-                                                                                                    : obs.object)));
-
+  std::vector<double> frame_ms;
+  out.compare = compare_and_write(obs, replay, copt, o.out_dir, o.overlay_every, progress, &frame_ms);
   out.summary = summarize_frames(out.compare.frames);
   json j;
   j["meltlab_version"] = kVersion;

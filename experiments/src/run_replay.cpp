@@ -16,7 +16,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 struct RunReplay::Impl {
-  std::unique_ptr<PreparedSimulation> prepared;
+  std::shared_ptr<const PreparedSimulation> prepared;
   std::variant<std::monostate, sim::MeltSimulator<float>, sim::MeltSimulator<double>> simulator;
   sim::TriMesh<double> current;
   std::int64_t cycle = 0;
@@ -53,14 +53,26 @@ RunReplay::RunReplay(const SimulateOptions& options) : impl_(std::make_unique<Im
   start(options);
 }
 
+RunReplay::RunReplay(std::shared_ptr<const PreparedSimulation> prepared, const sim::MeltParams& params,
+                     sim::KlFieldPtr kl)
+    : impl_(std::make_unique<Impl>()) {
+  cycles_run_ = -1;
+  impl_->prepared = std::move(prepared);
+  start_simulator(params, std::move(kl));
+}
+
 void RunReplay::start(const SimulateOptions& o) {
   impl_->prepared = prepare_simulation(o, /*check_output=*/false);
+  start_simulator(impl_->prepared->params, impl_->prepared->kl);
+}
+
+void RunReplay::start_simulator(const sim::MeltParams& params, sim::KlFieldPtr kl) {
   const auto& p = *impl_->prepared;
-  if (o.double_precision)
-    impl_->simulator.emplace<sim::MeltSimulator<double>>(sim::TriMesh<double>::from_indexed(p.mesh), p.params, p.kl,
+  if (p.opt.double_precision)
+    impl_->simulator.emplace<sim::MeltSimulator<double>>(sim::TriMesh<double>::from_indexed(p.mesh), params, std::move(kl),
                                                          sim::Execution::kParallel);
   else
-    impl_->simulator.emplace<sim::MeltSimulator<float>>(sim::TriMesh<float>::from_indexed(p.mesh), p.params, p.kl,
+    impl_->simulator.emplace<sim::MeltSimulator<float>>(sim::TriMesh<float>::from_indexed(p.mesh), params, std::move(kl),
                                                         sim::Execution::kParallel);
 }
 

@@ -45,6 +45,13 @@ struct CompareRunResult {
 /// Runs the comparison and writes DIR. Throws InputError on bad input (before writing).
 CompareRunResult run_compare(const CompareRunOptions& options, const std::function<void(const CompareRunProgress&)>& progress);
 
+/// Compares and writes per_frame.csv, overlays/ (every K-th compared frame) and
+/// p_curve.png into `out_dir` (created). `frame_ms` (optional) receives the time per frame.
+verify::CompareResult compare_and_write(const verify::ObservationSequence& observations, verify::MeshSequence& meshes,
+                                        const verify::CompareOptions& options, const std::filesystem::path& out_dir,
+                                        int overlay_every, const std::function<void(const CompareRunProgress&)>& progress,
+                                        std::vector<double>* frame_ms = nullptr);
+
 /// Summary statistics of per-frame results (over frames with status ok): count, P of the
 /// first and last compared frames, max, mean, the frame of the max, and the fraction of
 /// frames with P <= 0.2 (the monograph's acceptance level).

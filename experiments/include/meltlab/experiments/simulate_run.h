@@ -7,6 +7,7 @@
 
 #include <meltlab/sim/melt.h>
 #include <meltlab/sim/mesh_io.h>
+#include <meltlab/verify/compare.h>
 
 #include <nlohmann/json.hpp>
 
@@ -92,14 +93,16 @@ std::string file_hash(const std::filesystem::path& file);
 /// Replays a finished `meltlab simulate` run: rebuilds its simulation from run.json (the
 /// cycle is deterministic for any thread count) and steps it forward on request. Refuses a
 /// run whose input mesh or kl file changed since (content hash).
-class RunReplay {
+class RunReplay final : public verify::MeshSequence {
  public:
   explicit RunReplay(const std::filesystem::path& run_dir);
   /// A run that was never written: the simulation `options` describe (out_dir ignored).
   explicit RunReplay(const SimulateOptions& options);
-  ~RunReplay();
+  /// A prepared simulation run with other coefficients (for fitting kg and kl).
+  RunReplay(std::shared_ptr<const PreparedSimulation> prepared, const sim::MeltParams& params, sim::KlFieldPtr kl);
+  ~RunReplay() override;
   /// The mesh after `cycle` cycles (cycles must not decrease between calls).
-  const sim::TriMesh<double>& mesh_at(std::int64_t cycle);
+  const sim::TriMesh<double>& mesh_at(std::int64_t cycle) override;
   /// Cycles the recorded run made (-1 for a run built from options).
   std::int64_t cycles_run() const { return cycles_run_; }
   /// run.json of the recorded run (null for a run built from options).
@@ -108,6 +111,7 @@ class RunReplay {
 
  private:
   void start(const SimulateOptions& options);
+  void start_simulator(const sim::MeltParams& params, sim::KlFieldPtr kl);
 
   struct Impl;
   std::unique_ptr<Impl> impl_;

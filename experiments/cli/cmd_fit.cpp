@@ -1,0 +1,130 @@
+// meltlab fit: the model's coefficients from observations (Ceres).
+
+#include <meltlab/experiments/fit_run.h>
+#include <meltlab/sim/error.h>
+
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <sstream>
+
+#include "cli_util.h"
+#include "commands.h"
+
+namespace meltlab::cli {
+
+namespace {
+
+double parse_number(const std::string& text, const std::string& option) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(v)) throw InputError(fmt::format("{}: '{}' is not a number", option, text));
+  return v;
+}
+
+/// "a=1,b=2" -> {a: 1, b: 2}
+std::map<std::string, double> parse_assignments(const std::vector<std::string>& items, const std::string& option) {
+  std::map<std::string, double> out;
+  for (const std::string& list : items) {
+    std::stringstream in(list);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+      const auto eq = item.find('=');
+      if (eq == std::string::npos || eq == 0) throw InputError(fmt::format("{}: expected name=value, got '{}'", option, item));
+      out[item.substr(0, eq)] = parse_number(item.substr(eq + 1), option);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+Run add_fit(CLI::App& app, const std::string& command_line) {
+  auto* sub = app.add_subcommand("fit", "Fit kg, kl parameters, time scale and registration to an observation sequence (Ceres)");
+  auto o = std::make_shared<experiments::FitRunOptions>();
+  auto precision = std::make_shared<std::string>("double");
+  auto units = std::make_shared<std::string>("relative");
+  auto fit = std::make_shared<std::string>("kg,reg");
+  auto fix = std::make_shared<std::vector<std::string>>();
+  auto initial = std::make_shared<std::vector<std::string>>();
+  auto bounds = std::make_shared<std::vector<std::string>>();
+  auto no_scan = std::make_shared<bool>(false);
+  o->command_line = command_line;
+  o->simulation.kg = 0.5;
+  auto& s = o->simulation;
+  sub->add_option("--mesh", s.mesh, "Mesh file or dataset name (the object at the first photo)")->required();
+  sub->add_option("--observations", o->observations, "Observation manifest (.yaml/.yml/.json)")->required();
+  sub->add_option("--out", o->out_dir, "Output folder (fit.json, comparison/)")->required();
+  sub->add_option("--fit", *fit,
+                  "Parameters to fit, comma separated: kg, cycles_per_photo, reg (= reg.tx_px,reg.ty_px,reg.angle_deg,"
+                  "reg.scale), kl.<path in the --kl YAML, e.g. kl.of.0.strength>")
+      ->default_val("kg,reg");
+  sub->add_option("--fix", *fix, "Fixed values: name=value[,name=value...]");
+  sub->add_option("--initial", *initial, "Starting values: name=value[,...]");
+  sub->add_option("--bound", *bounds, "Bounds: name=lower:upper (repeatable)");
+  sub->add_option("--kg", s.kg, "Starting kg")->default_val(0.5);
+  sub->add_option("--ke", s.kE, "kE (x L0 with --units relative)")->default_val(0.05);
+  sub->add_option("--kr", s.kr, "kr (x L0 with --units relative)")->default_val(0.5);
+  sub->add_option("--units", *units, "relative or absolute coefficients")
+      ->check(CLI::IsMember({"relative", "absolute"}))
+      ->default_val("relative");
+  sub->add_option("--kl", s.kl_file, "YAML file with the local coefficient field (its numbers can be fitted)");
+  sub->add_option("--precision", *precision, "Floating point type of the mesh")
+      ->check(CLI::IsMember({"float", "double"}))
+      ->default_val("double");
+  sub->add_option("--cycles-per-photo", o->cycles_per_photo, "Cycles between photos (start value when fitted)")->default_val(7.0);
+  sub->add_option("--first-cycle", o->first_cycle, "Cycle shown by the first photo")->default_val(0);
+  sub->add_option("--holdout", o->holdout, "Fraction of the last photos kept out of the fit and predicted")->default_val(0.0);
+  sub->add_option("--volume-weight", o->volume_weight,
+                  "Also fit the manifest's mass/volume series with this weight (relative volume error x weight ~ px)")
+      ->default_val(0.0);
+  sub->add_option("--samples", o->fit_options.photo_samples, "Contour points per photo")->default_val(48);
+  sub->add_option("--supersample", o->fit_options.supersample, "k x k samples per pixel of the rendered coverage")->default_val(4);
+  sub->add_option("--max-iterations", o->fit_options.max_iterations, "Ceres iterations")->default_val(40);
+  sub->add_flag("--no-scan", *no_scan, "Skip the coarse scan of kg");
+  sub->add_option("--overlay-every", o->overlay_every, "Overlay of every K-th photo of the fitted run (0 = none)")->default_val(10);
+  sub->add_flag("--overwrite", o->overwrite, "Allow --out to hold a previous fit");
+
+  return [=]() {
+    o->simulation.double_precision = *precision == "double";
+    o->simulation.relative_units = *units == "relative";
+    o->fit.clear();
+    std::stringstream in(*fit);
+    std::string item;
+    while (std::getline(in, item, ','))
+      if (!item.empty()) o->fit.push_back(item);
+    o->fix = parse_assignments(*fix, "--fix");
+    o->initial = parse_assignments(*initial, "--initial");
+    for (const std::string& b : *bounds) {
+      const auto eq = b.find('='), colon = b.find(':', eq == std::string::npos ? 0 : eq);
+      if (eq == std::string::npos || colon == std::string::npos)
+        throw InputError(fmt::format("--bound: expected name=lower:upper, got '{}'", b));
+      o->bounds[b.substr(0, eq)] = {parse_number(b.substr(eq + 1, colon - eq - 1), "--bound"),
+                                    parse_number(b.substr(colon + 1), "--bound")};
+    }
+    if (!*no_scan) o->fit_options.kg_scan = {0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0};
+    const bool tty = ProgressLine().active();
+    const auto j = experiments::run_fit(*o, [&](const std::string& line) {
+      if (tty || line.rfind("iteration", 0) != 0) std::fprintf(stderr, "meltlab: fit: %s\n", line.c_str());
+    });
+    std::string values;
+    for (const auto& [name, e] : j["estimates"].items()) {
+      if (e["fixed"].get<bool>()) continue;
+      values += fmt::format(" {}={:.6g}", name, e["value"].get<double>());
+      if (!e["standard_error"].is_null()) values += fmt::format("±{:.2g}", e["standard_error"].get<double>());
+    }
+    std::fprintf(stderr, "meltlab: fit %s after %d iterations, %d simulations, %.1f s:%s; P mean %.4f; wrote %s\n",
+                 j["converged"].get<bool>() ? "converged" : "stopped", j["iterations"].get<int>(),
+                 j["simulations"].get<int>(), j["time_s"].get<double>(), values.c_str(),
+                 j["comparison"]["P_mean"].is_null() ? 0.0 : j["comparison"]["P_mean"].get<double>(),
+                 o->out_dir.string().c_str());
+    return static_cast<int>(kOk);
+  };
+}
+
+}  // namespace meltlab::cli

@@ -1,0 +1,310 @@
+#include <meltlab/experiments/compare_run.h>
+#include <meltlab/experiments/fit_run.h>
+#include <meltlab/sim/atomic_file.h>
+#include <meltlab/sim/error.h>
+#include <meltlab/sim/kl_field.h>
+#include <meltlab/sim/quality.h>
+#include <meltlab/version.h>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+
+namespace meltlab::experiments {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kIceDensity = 917.0;  // kg/m³ near 0 °C (CRC Handbook), for mass series
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, sep)) out.push_back(item);
+  return out;
+}
+
+/// The YAML node at a dotted path below the document ("kl.of.0.strength"); sequences are
+/// indexed by number. Throws InputError naming the path.
+YAML::Node node_at(const YAML::Node& doc, const std::string& path, const std::string& source) {
+  YAML::Node n = doc;
+  for (const std::string& key : split(path, '.')) {
+    if (n.IsMap()) {
+      if (!n[key]) throw InputError(fmt::format("{}: {}: no key '{}'", source, path, key));
+      n.reset(n[key]);
+    } else if (n.IsSequence()) {
+      std::size_t i = 0;
+      try {
+        i = std::stoul(key);
+      } catch (const std::exception&) {
+        throw InputError(fmt::format("{}: {}: '{}' is not an index of a list", source, path, key));
+      }
+      if (i >= n.size()) throw InputError(fmt::format("{}: {}: index {} beyond the list's {} items", source, path, i, n.size()));
+      n.reset(n[i]);
+    } else {
+      throw InputError(fmt::format("{}: {}: '{}' is below a plain value", source, path, key));
+    }
+  }
+  return n;
+}
+
+double number_at(const YAML::Node& doc, const std::string& path, const std::string& source) {
+  const YAML::Node n = node_at(doc, path, source);
+  try {
+    if (!n.IsScalar()) throw YAML::Exception(YAML::Mark(), "");
+    return n.as<double>();
+  } catch (const YAML::Exception&) {
+    throw InputError(fmt::format("{}: {}: not a number (only numbers can be fitted)", source, path));
+  }
+}
+
+class EmpiricalModel final : public verify::FitModel {
+ public:
+  EmpiricalModel(std::shared_ptr<const PreparedSimulation> p, YAML::Node kl_doc)
+      : p_(std::move(p)), kl_doc_(std::move(kl_doc)) {}
+
+  std::unique_ptr<verify::MeshSequence> start(const std::map<std::string, double>& values) override {
+    sim::MeltParams params = p_->params;
+    sim::KlFieldPtr kl = p_->kl;
+    bool kl_changed = false;
+    YAML::Node doc = kl_doc_ ? YAML::Clone(kl_doc_) : YAML::Node();
+    for (const auto& [name, v] : values) {
+      if (name == "kg") {
+        params.kg = v;
+      } else if (name.rfind("kl.", 0) == 0) {
+        YAML::Node leaf = node_at(doc, name, p_->opt.kl_file.string());
+        leaf = v;
+        kl_changed = true;
+      }
+    }
+    params.validate();
+    if (kl_changed) {
+      sim::KlContext ctx;
+      const auto q = sim::mesh_quality(sim::TriMesh<double>::from_indexed(p_->mesh));
+      ctx.bbox_min = q.bbox_min;
+      ctx.bbox_max = q.bbox_max;
+      ctx.base_dir = p_->opt.kl_file.parent_path();
+      kl = sim::parse_kl_field(doc["kl"], p_->opt.kl_file.string(), ctx);
+    }
+    return std::make_unique<RunReplay>(p_, params, kl);
+  }
+
+ private:
+  std::shared_ptr<const PreparedSimulation> p_;
+  YAML::Node kl_doc_;
+};
+
+void require(bool ok, const std::string& message) {
+  if (!ok) throw InputError(message);
+}
+
+}  // namespace
+
+std::vector<verify::FitParameter> fit_parameters(const FitRunOptions& o, double kg_initial,
+                                                 const std::map<std::string, double>& kl_values) {
+  // Name -> (initial, lower, upper, scale). Scales are the size of a change that moves the
+  // contours by about a pixel or more (the central-difference step is a fraction of it).
+  std::map<std::string, std::array<double, 4>> known{
+      {"kg", {kg_initial, 0.01, 1.0, 0.05}},
+      {"cycles_per_photo", {o.cycles_per_photo, 0.25, 1000.0, 0.5}},
+      {"reg.tx_px", {0, -500, 500, 1.0}},
+      {"reg.ty_px", {0, -500, 500, 1.0}},
+      {"reg.angle_deg", {0, -45, 45, 0.2}},
+      {"reg.scale", {1, 0.7, 1.4, 0.004}},
+  };
+  for (const auto& [name, v] : kl_values)
+    known[name] = {v, v >= 0 ? 0.0 : -kInf, kInf, std::max(std::abs(v) * 0.05, 1e-4)};
+
+  std::set<std::string> free;
+  for (const std::string& f : o.fit) {
+    if (f == "reg") {
+      free.insert({"reg.tx_px", "reg.ty_px", "reg.angle_deg", "reg.scale"});
+    } else {
+      require(known.count(f) > 0, fmt::format("--fit: unknown parameter '{}' (kg, cycles_per_photo, reg, reg.tx_px, reg.ty_px, "
+                                              "reg.angle_deg, reg.scale, kl.<path in the --kl file>)", f));
+      free.insert(f);
+    }
+  }
+  for (const auto& [name, v] : o.fix) {
+    require(known.count(name) > 0, fmt::format("--fix: unknown parameter '{}'", name));
+    free.erase(name);
+  }
+  std::vector<verify::FitParameter> out;
+  for (const auto& [name, v] : known) {
+    verify::FitParameter p;
+    p.name = name;
+    p.initial = v[0];
+    p.lower = v[1];
+    p.upper = v[2];
+    p.scale = v[3];
+    if (auto it = o.initial.find(name); it != o.initial.end()) p.initial = it->second;
+    if (auto it = o.fix.find(name); it != o.fix.end()) p.initial = it->second;
+    if (auto it = o.bounds.find(name); it != o.bounds.end()) {
+      p.lower = it->second.first;
+      p.upper = it->second.second;
+      require(p.lower < p.upper, fmt::format("--bound {}: lower {} must be below upper {}", name, p.lower, p.upper));
+    }
+    p.fixed = free.count(name) == 0;
+    require(std::isfinite(p.initial) && p.lower <= p.initial && p.initial <= p.upper,
+            fmt::format("{} = {} lies outside its bounds [{}, {}]", name, p.initial, p.lower, p.upper));
+    out.push_back(p);
+  }
+  for (const auto& [name, v] : o.initial) require(known.count(name) > 0, fmt::format("--initial: unknown parameter '{}'", name));
+  for (const auto& [name, v] : o.bounds) require(known.count(name) > 0, fmt::format("--bound: unknown parameter '{}'", name));
+  return out;
+}
+
+json run_fit(const FitRunOptions& o, const std::function<void(const std::string&)>& log) {
+  require(!o.out_dir.empty(), "--out: an output folder is required");
+  require(o.holdout >= 0 && o.holdout < 1, fmt::format("--holdout: must be in [0, 1) (got {})", o.holdout));
+  require(o.volume_weight >= 0 && std::isfinite(o.volume_weight), "--volume-weight: must be >= 0");
+  require(std::isfinite(o.first_cycle) && o.first_cycle >= 0, "--first-cycle: must be >= 0");
+  std::error_code ec;
+  if (fs::exists(o.out_dir, ec)) {
+    require(fs::is_directory(o.out_dir, ec), fmt::format("{}: exists and is not a folder", o.out_dir.string()));
+    require(o.overwrite || !fs::exists(o.out_dir / "fit.json", ec),
+            fmt::format("{}: already holds a fit (fit.json); choose another --out or pass --overwrite", o.out_dir.string()));
+  }
+  const verify::ObservationSequence obs = verify::load_observations(o.observations);
+  std::shared_ptr<const PreparedSimulation> prepared = prepare_simulation(o.simulation, /*check_output=*/false);
+
+  // kl parameters named on the command line, read from the kl file.
+  YAML::Node kl_doc;
+  std::map<std::string, double> kl_values;
+  std::vector<std::string> names = o.fit;
+  for (const auto& m : {o.fix, o.initial}) for (const auto& [k, v] : m) names.push_back(k);
+  for (const auto& [k, v] : o.bounds) names.push_back(k);
+  for (const std::string& name : names) {
+    if (name.rfind("kl.", 0) != 0) continue;
+    require(!o.simulation.kl_file.empty(), fmt::format("{}: fitting a kl parameter needs --kl FILE", name));
+    if (!kl_doc) kl_doc = YAML::LoadFile(prepared->opt.kl_file.string());
+    kl_values[name] = number_at(kl_doc, name, o.simulation.kl_file.string());
+  }
+  const std::vector<verify::FitParameter> params = fit_parameters(o, o.simulation.kg, kl_values);
+
+  // Frames: all, minus the held-out tail.
+  const int n_frames = static_cast<int>(obs.frames.size());
+  const int n_fit = std::max(1, static_cast<int>(std::floor(n_frames * (1.0 - o.holdout))));
+  verify::FitOptions fo = o.fit_options;
+  fo.first_cycle = o.first_cycle;
+  fo.frames.clear();
+  for (int k = 0; k < n_fit; ++k) fo.frames.push_back(k);
+  fo.log = log;
+
+  std::optional<verify::VolumeSeries> volume;
+  if (o.volume_weight > 0) {
+    require(obs.mass_series.has_value(), fmt::format("{}: --volume-weight needs a mass_series in the manifest", obs.manifest.string()));
+    const verify::TimeSeries ts = verify::read_time_series(*obs.mass_series);
+    verify::VolumeSeries vs;
+    const double held_out_time = obs.interval_s ? *obs.interval_s * n_fit : kInf;
+    for (std::size_t i = 0; i < ts.time_s.size(); ++i) {
+      if (ts.time_s[i] >= held_out_time) break;
+      double v = ts.value[i];
+      if (ts.quantity == "mass_g") v = v / 1000.0 / kIceDensity;
+      else if (ts.quantity == "mass_kg") v = v / kIceDensity;
+      else if (ts.quantity == "volume_cm3") v = v * 1e-6;
+      vs.time_s.push_back(ts.time_s[i]);
+      vs.volume_m3.push_back(v);
+    }
+    require(!vs.time_s.empty() && vs.volume_m3.front() > 0,
+            fmt::format("{}: no usable volume sample in the fitted time range", obs.mass_series->string()));
+    volume = vs;
+    fo.volume_weight = o.volume_weight;
+  }
+
+  EmpiricalModel model(prepared, kl_doc);
+  const verify::FitResult fit = verify::fit_sequence(obs, model, params, fo, volume);
+
+  // The fitted run against every frame (held-out frames included).
+  std::map<std::string, double> model_values;
+  for (const auto& e : fit.estimates)
+    if (e.name == "kg" || e.name.rfind("kl.", 0) == 0) model_values[e.name] = e.value;
+  auto meshes = model.start(model_values);
+  verify::CompareOptions copt;
+  copt.mapping.cycles_per_photo = fit.cycles_per_photo();
+  copt.mapping.first_cycle = o.first_cycle;
+  copt.registration = verify::RegistrationMode::kGiven;
+  copt.given_registration = fit.registration();
+  if (log) log("comparing the fitted run with every photo");
+  const verify::CompareResult cmp = compare_and_write(obs, *meshes, copt, o.out_dir / "comparison", o.overlay_every, {});
+
+  json j;
+  j["meltlab_version"] = kVersion;
+  j["git_revision"] = kGitRevision;
+  j["command_line"] = o.command_line;
+  j["observations"] = {{"manifest", fs::absolute(obs.manifest).string()}, {"manifest_hash", file_hash(obs.manifest)},
+                       {"frames", n_frames}, {"object", obs.object}};
+  j["simulation"] = options_to_json(o.simulation);
+  json est = json::object();
+  for (const auto& e : fit.estimates) {
+    est[e.name] = {{"value", e.value}, {"initial", e.initial}, {"fixed", e.fixed}, {"at_bound", e.at_bound},
+                   {"standard_error", e.standard_error ? json(*e.standard_error) : json(nullptr)}};
+  }
+  j["estimates"] = est;
+  j["free"] = fit.free_names;
+  j["correlation"] = fit.correlation;
+  j["cost"] = {{"initial", fit.initial_cost}, {"final", fit.final_cost}, {"residual_sigma_px", fit.residual_sigma_px}};
+  j["iterations"] = fit.iterations;
+  j["simulations"] = fit.simulations;
+  j["time_s"] = fit.time_s;
+  j["converged"] = fit.converged;
+  j["message"] = fit.message;
+  json scan = json::array();
+  for (const auto& [kg, c] : fit.kg_scan) scan.push_back({{"kg", kg}, {"cost", c}});
+  j["kg_scan"] = scan;
+  j["frames_used"] = fit.frames_used.size();
+  j["frames_refused"] = fit.frames_refused;
+  j["frame_rms_px"] = fit.frame_rms_px;
+  j["registration"] = {{"pivot_px", {fit.pivot_px.x(), fit.pivot_px.y()}},
+                       {"scale", fit.registration().scale},
+                       {"angle_deg", fit.registration().angle_rad * 180.0 / 3.14159265358979323846},
+                       {"tx_px", fit.registration().translation.x()},
+                       {"ty_px", fit.registration().translation.y()}};
+  // P on the fitted and the held-out frames.
+  auto p_stats = [&](int from, int to) {
+    double sum = 0, mx = 0;
+    int n = 0;
+    for (const auto& f : cmp.frames) {
+      if (f.status != "ok" || f.frame < from || f.frame >= to) continue;
+      sum += f.pixels.P;
+      mx = std::max(mx, f.pixels.P);
+      ++n;
+    }
+    return json{{"frames", n}, {"P_mean", n ? json(sum / n) : json(nullptr)}, {"P_max", n ? json(mx) : json(nullptr)}};
+  };
+  j["P_fitted_frames"] = p_stats(0, n_fit);
+  j["P_held_out_frames"] = p_stats(n_fit, n_frames);
+  j["holdout"] = o.holdout;
+  j["comparison"] = summarize_frames(cmp.frames);
+  // The truth, when the sequence was made by synth-sequence (inverse-crime data).
+  if (obs.ground_truth) {
+    try {
+      std::ifstream in(*obs.ground_truth);
+      const json truth = json::parse(in);
+      json t;
+      if (truth.contains("simulation") && truth["simulation"].contains("kg")) t["kg"] = truth["simulation"]["kg"];
+      if (truth.contains("cycles_per_photo")) t["cycles_per_photo"] = truth["cycles_per_photo"];
+      if (truth.contains("misalignment")) t["misalignment"] = truth["misalignment"];
+      if (t.contains("kg") && est.contains("kg"))
+        t["kg_relative_error"] = (est["kg"]["value"].get<double>() - t["kg"].get<double>()) / t["kg"].get<double>();
+      j["truth"] = t;
+    } catch (const std::exception& e) {
+      j["truth"] = {{"error", e.what()}};
+    }
+  }
+  j["hardware"] = hardware_json();
+  fs::create_directories(o.out_dir);
+  write_text_atomically(o.out_dir / "fit.json", j.dump(2) + "\n");
+  return j;
+}
+
+}  // namespace meltlab::experiments
