@@ -1,4 +1,5 @@
 #include <meltlab/experiments/manufacture.h>
+#include <meltlab/experiments/sequence_manifest.h>
 #include <meltlab/experiments/simulate_run.h>
 #include <meltlab/sim/atomic_file.h>
 #include <meltlab/sim/error.h>
@@ -88,7 +89,8 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
   sim::save_mesh(mesh, o.out_dir / "truth" / "initial_mesh.ply");
 
   const verify::SegmentationSettings defaults;
-  std::ostringstream mass_csv, manifest_frames;
+  std::ostringstream mass_csv;
+  std::vector<std::string> images;
   mass_csv << "time_s,mass_g\n";
   json frames = json::array();
   const double mass0_g = solver.ice_mass_kg() * 1000.0;
@@ -120,7 +122,7 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
                       {"segmented_area_px", seg.area_px},
                       {"segmentation_P", p}});
     mass_csv << fmt::format("{},{:.6f}\n", t, mass_g);
-    manifest_frames << fmt::format("  - {{image: frames/{}}}\n", name);
+    images.push_back("frames/" + name);
     if (o.mesh_every > 0 && k % o.mesh_every == 0 && true_area > 0) {
       const sim::IndexedMesh surface = sim::physics::isosurface(ice);
       if (!surface.F.empty()) sim::save_mesh(surface, o.out_dir / "truth" / "meshes" / fmt::format("frame_{:04d}.ply", k + 1));
@@ -157,17 +159,15 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
   truth["frames"] = frames;
   write_text_atomically(o.out_dir / "truth" / "truth.json", truth.dump(2) + "\n");
 
-  std::ostringstream manifest;
-  manifest << "# Made by meltlab manufacture (physically based reference melt). Truth: truth/truth.json\n"
-           << "meltlab_observations: 1\n"
-           << "object: " << json(fs::path(o.mesh).stem().string()).dump() << "\n"
-           << "interval_s: " << fmt::format("{}", o.interval_s) << "\n"
-           << "camera: " << json::parse(render::describe_camera_json(camera)).dump() << "\n"
-           << "ground_truth: truth/truth.json\n"
-           << "mass_series: mass.csv\n"
-           << "frames:\n"
-           << manifest_frames.str();
-  write_text_atomically(o.out_dir / "manifest.yaml", manifest.str());
+  SequenceManifest manifest;
+  manifest.comment = "Made by meltlab manufacture (physically based reference melt). Truth: truth/truth.json";
+  manifest.object = fs::path(o.mesh).stem().string();
+  manifest.interval_s = o.interval_s;
+  manifest.camera = camera;
+  manifest.ground_truth = "truth/truth.json";
+  manifest.mass_series = "mass.csv";
+  manifest.images = images;
+  write_sequence_manifest(o.out_dir, manifest);
 }
 
 }  // namespace meltlab::experiments

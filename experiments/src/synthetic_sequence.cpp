@@ -1,3 +1,4 @@
+#include <meltlab/experiments/sequence_manifest.h>
 #include <meltlab/experiments/synthetic_sequence.h>
 #include <meltlab/render/silhouette.h>
 #include <meltlab/sim/atomic_file.h>
@@ -124,7 +125,7 @@ void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::funct
   json frames = json::array();
   std::ostringstream volume_csv;
   volume_csv << "time_s,volume_m3\n";
-  std::ostringstream manifest_frames;
+  std::vector<std::string> images;
   cv::Mat coverage, photo_cov, image(size, CV_32FC3), noise(size, CV_32FC3), out8;
   for (int k = 0; k < o.photos; ++k) {
     const auto cycle = static_cast<std::int64_t>(std::llround(k * o.cycles_per_photo));
@@ -168,7 +169,7 @@ void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::funct
                       {"volume", volume},
                       {"triangles", mesh.live_triangle_count()}});
     volume_csv << fmt::format("{},{:.10g}\n", time_s, volume);
-    manifest_frames << fmt::format("  - {{image: frames/{}}}\n", name);
+    images.push_back("frames/" + name);
     if (progress) progress({k + 1, o.photos});
   }
 
@@ -194,17 +195,15 @@ void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::funct
   truth["frames"] = frames;
   write_text_atomically(o.out_dir / "truth" / "truth.json", truth.dump(2) + "\n");
 
-  std::ostringstream manifest;
-  manifest << "# Made by meltlab synth-sequence (the empirical model: inverse-crime data). Truth: truth/truth.json\n"
-           << "meltlab_observations: 1\n"
-           << "object: " << json(fs::path(o.simulation.mesh).stem().string()).dump() << "\n"
-           << "interval_s: " << fmt::format("{}", o.interval_s) << "\n"
-           << "camera: " << json::parse(render::describe_camera_json(camera)).dump() << "\n"
-           << "ground_truth: truth/truth.json\n"
-           << "mass_series: volume.csv\n"
-           << "frames:\n"
-           << manifest_frames.str();
-  write_text_atomically(o.out_dir / "manifest.yaml", manifest.str());
+  SequenceManifest manifest;
+  manifest.comment = "Made by meltlab synth-sequence (the empirical model: inverse-crime data). Truth: truth/truth.json";
+  manifest.object = fs::path(o.simulation.mesh).stem().string();
+  manifest.interval_s = o.interval_s;
+  manifest.camera = camera;
+  manifest.ground_truth = "truth/truth.json";
+  manifest.mass_series = "volume.csv";
+  manifest.images = images;
+  write_sequence_manifest(o.out_dir, manifest);
 }
 
 }  // namespace meltlab::experiments

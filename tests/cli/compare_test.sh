@@ -1,24 +1,7 @@
 #!/usr/bin/env bash
 # End-to-end tests of `meltlab synth-sequence` and `meltlab compare`.
 # Usage: compare_test.sh <meltlab binary> <case>
-set -uo pipefail
-M=$1
-CASE=$2
-W=$(mktemp -d)
-trap 'rm -rf "$W"' EXIT
-cd "$W"
-
-fail() { echo "FAIL [$CASE]: $*" >&2; exit 1; }
-run_ok() { "$@" >out.txt 2>err.txt || fail "exit $?: $* / stderr: $(cat err.txt)"; }
-expect_exit() {
-  local want=$1; shift
-  "$@" >out.txt 2>err.txt
-  local got=$?
-  [ "$got" -eq "$want" ] || fail "exit $got, want $want: $* / stderr: $(cat err.txt)"
-}
-expect_err() { grep -qF -- "$1" err.txt || fail "stderr lacks '$1': $(cat err.txt)"; }
-expect_one_line_err() { [ "$(wc -l < err.txt)" -eq 1 ] || fail "expected a one-line error, got: $(cat err.txt)"; }
-py() { python3 - "$@" || fail "python check failed"; }
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh" "$@"
 
 # A small sequence of the airplane mold (10.7k triangles): 12 photos, 20 cycles apart,
 # 640x480 so the suite stays fast. The simulate run uses the same coefficients.

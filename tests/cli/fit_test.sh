@@ -1,24 +1,7 @@
 #!/usr/bin/env bash
 # End-to-end tests of `meltlab fit` on inverse-crime sequences (made by the empirical model
 # with known coefficients). Usage: fit_test.sh <meltlab binary> <case>
-set -uo pipefail
-M=$1
-CASE=$2
-W=$(mktemp -d)
-trap 'rm -rf "$W"' EXIT
-cd "$W"
-
-fail() { echo "FAIL [$CASE]: $*" >&2; exit 1; }
-run_ok() { "$@" >out.txt 2>err.txt || fail "exit $?: $* / stderr: $(cat err.txt)"; }
-expect_exit() {
-  local want=$1; shift
-  "$@" >out.txt 2>err.txt
-  local got=$?
-  [ "$got" -eq "$want" ] || fail "exit $got, want $want: $* / stderr: $(cat err.txt)"
-}
-expect_err() { grep -qF -- "$1" err.txt || fail "stderr lacks '$1': $(cat err.txt)"; }
-expect_one_line_err() { [ "$(wc -l < err.txt)" -eq 1 ] || fail "expected a one-line error, got: $(cat err.txt)"; }
-py() { python3 - "$@" || fail "python check failed: $(cat err.txt | tail -5)"; }
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh" "$@"
 
 # The airplane mold melted with kg = 0.8, photographed every 40 cycles (16 photos, 640x480,
 # noise, blur, JPEG) through a camera shifted by (5, -3) px and turned by 0.8 degrees.

@@ -1,23 +1,7 @@
 #!/usr/bin/env bash
 # End-to-end tests of `meltlab manufacture` (physically based sequences).
 # Usage: manufacture_test.sh <meltlab binary> <case>
-set -uo pipefail
-M=$1
-CASE=$2
-W=$(mktemp -d)
-trap 'rm -rf "$W"' EXIT
-cd "$W"
-
-fail() { echo "FAIL [$CASE]: $*" >&2; exit 1; }
-run_ok() { "$@" >out.txt 2>err.txt || fail "exit $?: $* / stderr: $(cat err.txt)"; }
-expect_exit() {
-  local want=$1; shift
-  "$@" >out.txt 2>err.txt
-  local got=$?
-  [ "$got" -eq "$want" ] || fail "exit $got, want $want: $* / stderr: $(cat err.txt)"
-}
-expect_err() { grep -qF -- "$1" err.txt || fail "stderr lacks '$1': $(cat err.txt)"; }
-expect_one_line_err() { [ "$(wc -l < err.txt)" -eq 1 ] || fail "expected a one-line error, got: $(cat err.txt)"; }
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh" "$@"
 
 # A coarse, short version of the default set: 6 photos 15 minutes apart, 4 mm voxels.
 small() { run_ok "$M" manufacture --mesh giraffe --photos 6 --interval-s 900 --voxel-mm 4 --width 320 --height 240 "$@"; }

@@ -1,0 +1,26 @@
+#pragma once
+// Writing the manifest of a generated observation sequence (synth-sequence, manufacture) in
+// the format verify::load_observations reads (verify/observations.h).
+
+#include <meltlab/render/camera.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace meltlab::experiments {
+
+struct SequenceManifest {
+  std::string comment;                ///< first line, after "# "
+  std::string object;
+  double interval_s = 40;
+  render::Camera camera;
+  std::string ground_truth;           ///< relative path
+  std::string mass_series;            ///< relative path
+  std::vector<std::string> images;    ///< relative paths
+};
+
+/// Writes DIR/manifest.yaml atomically (the marker of a complete sequence: write it last).
+void write_sequence_manifest(const std::filesystem::path& dir, const SequenceManifest& m);
+
+}  // namespace meltlab::experiments
