@@ -67,7 +67,7 @@ BENCHMARK(BM_IcePhoto)
     ->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
 // The production case: a 250 g giraffe mold block (153 x 184 x 30.5 mm) voxelized at h = arg mm
-// (2 → 81 x 97 x 16 cells with the margin), seen from 0.7 m above, slightly oblique, at
+// (2 → 81 x 96 x 18 cells with the margin), seen from 0.7 m above, slightly oblique, at
 // 1024x768 (the block fills ~60% of the image height); default options (step h/2, grid shadows).
 const sim::physics::IceFraction& giraffe(int h_mm_x10) {
   static std::array<sim::physics::IceFraction, 3> cache;

@@ -2,6 +2,7 @@
 #include <meltlab/experiments/sequence_manifest.h>
 #include <meltlab/experiments/simulate_run.h>
 #include <meltlab/sim/atomic_file.h>
+#include <meltlab/render/silhouette.h>
 #include <meltlab/sim/error.h>
 #include <meltlab/sim/mesh_io.h>
 #include <meltlab/sim/physics/isosurface.h>
@@ -89,6 +90,14 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
   sim::save_mesh(mesh, o.out_dir / "truth" / "initial_mesh.ply");
 
   const verify::SegmentationSettings defaults;
+  // The static ground (no ice), and renderers of the surface's coverage and true outline.
+  sim::physics::IceFraction no_ice = fraction0;
+  std::fill(no_ice.value.begin(), no_ice.value.end(), 0.0F);
+  render::IcePhotoOptions ground_options = o.photo;
+  ground_options.ground_seed = o.seed;
+  const cv::Mat ground_radiance = render::render_ice_radiance(no_ice, camera, ground_options);
+  render::SilhouetteRenderer coverage_renderer(camera, render::SilhouetteOptions{4, false});
+  render::SilhouetteRenderer truth_renderer(camera, render::SilhouetteOptions{1, false});
   std::ostringstream mass_csv;
   std::vector<std::string> images;
   mass_csv << "time_s,mass_g\n";
@@ -101,8 +110,29 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
     render::IcePhotoOptions po = o.photo;
     po.seed = o.seed * 1000003u + static_cast<std::uint64_t>(k);
     po.ground_seed = o.seed;
-    const cv::Mat photo = render::render_ice_photo(ice, camera, po);
-    const cv::Mat truth = render::ice_true_mask(ice, camera);
+    // The ice surface is the ½ level of the solid fraction. Rays that graze a wall run
+    // through the interpolated fraction below ½ for the whole height of the block and would
+    // scatter visibly outside it, so the outline is taken from the surface mesh itself: the
+    // volume rendering (thin ice lets the ground through) inside its anti-aliased coverage,
+    // the bare ground outside. (The ice's cast shadow outside its outline is not rendered.)
+    const sim::IndexedMesh surface = sim::physics::isosurface(ice);
+    const auto surface_mesh = sim::TriMesh<double>::from_indexed(surface);
+    cv::Mat coverage, truth;
+    if (surface.F.empty()) {
+      coverage = cv::Mat::zeros(o.height, o.width, CV_32FC1);
+      truth = cv::Mat::zeros(o.height, o.width, CV_8UC1);
+    } else {
+      coverage_renderer.render(surface_mesh, coverage);
+      truth_renderer.render(surface_mesh, truth);
+    }
+    cv::Mat radiance = render::render_ice_radiance(ice, camera, po);
+    for (int y = 0; y < radiance.rows; ++y) {
+      auto* r = radiance.ptr<cv::Vec3f>(y);
+      const auto* g = ground_radiance.ptr<cv::Vec3f>(y);
+      const float* c = coverage.ptr<float>(y);
+      for (int x = 0; x < radiance.cols; ++x) r[x] = c[x] * r[x] + (1.0F - c[x]) * g[x];
+    }
+    const cv::Mat photo = render::develop_photo(radiance, po);
     const std::string name = fmt::format("frame_{:04d}.jpg", k + 1);
     render::write_jpeg(o.out_dir / "frames" / name, photo, o.jpeg_quality);
     verify::write_image(o.out_dir / "truth" / "masks" / fmt::format("frame_{:04d}.png", k + 1), truth);
@@ -123,10 +153,8 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
                       {"segmentation_P", p}});
     mass_csv << fmt::format("{},{:.6f}\n", t, mass_g);
     images.push_back("frames/" + name);
-    if (o.mesh_every > 0 && k % o.mesh_every == 0 && true_area > 0) {
-      const sim::IndexedMesh surface = sim::physics::isosurface(ice);
-      if (!surface.F.empty()) sim::save_mesh(surface, o.out_dir / "truth" / "meshes" / fmt::format("frame_{:04d}.ply", k + 1));
-    }
+    if (o.mesh_every > 0 && k % o.mesh_every == 0 && !surface.F.empty())
+      sim::save_mesh(surface, o.out_dir / "truth" / "meshes" / fmt::format("frame_{:04d}.ply", k + 1));
     if (progress) progress({k + 1, o.photos, t, mass_g});
   }
 

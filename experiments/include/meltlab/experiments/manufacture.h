@@ -11,7 +11,8 @@
 //   DIR/mass.csv                    time_s, mass_g of the ice (the weighing experiment)
 //   DIR/truth/truth.json            parameters, per frame: time, mass, volume, true outline
 //                                   area, and the P of the default segmentation against it
-//   DIR/truth/masks/frame_NNNN.png  true outlines (rays that meet ice of fraction >= 1/2)
+//   DIR/truth/masks/frame_NNNN.png  true outlines: silhouette of the ice surface (the ½ level
+//                                   of the solid fraction, marching tetrahedra)
 //   DIR/truth/initial_mesh.ply      the scaled mesh at t = 0 (path B's "plaster cast")
 //   DIR/truth/meshes/frame_NNNN.ply ice surface (marching tetrahedra) every K-th photo
 // The manifest is written last.

@@ -24,6 +24,12 @@
 // per-render light-transmittance grid at the cell centres (Shadow::kGrid, default; built by one
 // sweep layer by layer away from the lamp, Simpson's rule per layer, O(cells)). Ground shadows
 // are always marched (one ray per pixel).
+// Acceleration (skip_empty_space, default on) changes no sample position or value: the marches
+// leave out only samples where the trilinear f is exactly 0 (blocks of 4³ cells with no non-zero
+// cell within one cell of them are crossed in one step; cells with no non-zero neighbour are not
+// interpolated), and the zenith ground shadow is the bilinear interpolant of per-column sums
+// (the same sum up to rounding). Images equal those without it to float rounding (in practice
+// bit for bit).
 //
 // Image chain (render_ice_photo): linear radiance (k x k stratified samples per pixel, averaged)
 // → × exposure → Gaussian lens blur (sigma px) → gamma encoding (v = clamp(x)^(1/gamma)) →
@@ -75,6 +81,16 @@ struct IcePhotoOptions {
   Shadow shadow = Shadow::kGrid;   ///< kNone: T_lamp = T_zenith = 1 everywhere
   double min_transmittance = 1e-5; ///< a ray stops once its transmittance falls below this
   bool parallel = true;            ///< rows in parallel (TBB); the result is identical either way
+  /// Skip blocks of the grid where the ice fraction is 0 (and its trilinear interpolant too) a
+  /// block at a time; the samples taken and their values are unchanged, so is the result.
+  bool skip_empty_space = true;
+  /// The ice body's surface is the ½ level of the solid fraction (as in the solver and the
+  /// true outline); partially filled cells are not a dilute fog. Before rendering, cell
+  /// values are remapped to clamp((f - ½) / w + ½, 0, 1), so extinction rises from 0 to σ
+  /// within ±w/2 of the interface. 0 renders the fraction as is (a dilute medium, the
+  /// integrator's analytic tests). Without it the visible outline of a coarse grid lies
+  /// ~1 cell outside the true one (P ≈ 0.2 at 4 mm voxels).
+  double interface_width = 0.1;
 };
 
 /// Normalised Henyey–Greenstein phase function [4.14]: (1/4π)(1 - g²)/(1 + g² - 2g cosθ)^{3/2}.
