@@ -125,7 +125,8 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
       coverage_renderer.render(surface_mesh, coverage);
       truth_renderer.render(surface_mesh, truth);
     }
-    cv::Mat radiance = render::render_ice_radiance(ice, camera, po);
+    const cv::Mat covered = coverage > 0.0F;
+    cv::Mat radiance = render::render_ice_radiance(ice, camera, po, covered);
     for (int y = 0; y < radiance.rows; ++y) {
       auto* r = radiance.ptr<cv::Vec3f>(y);
       const auto* g = ground_radiance.ptr<cv::Vec3f>(y);

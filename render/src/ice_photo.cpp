@@ -622,7 +622,8 @@ double ground_texture(double x_m, double y_m, double scale_m, std::uint64_t seed
   return ground_texture_impl(x_m, y_m, scale_m, seed, cache);
 }
 
-cv::Mat render_ice_radiance(const IceFraction& ice_in, const Camera& camera, const IcePhotoOptions& options) {
+cv::Mat render_ice_radiance(const IceFraction& ice_in, const Camera& camera, const IcePhotoOptions& options,
+                            const cv::Mat& only) {
   if (!(options.interface_width >= 0.0) || !std::isfinite(options.interface_width))
     throw InputError(fmt::format("ice photo: interface_width must be a finite number >= 0 (got {})", options.interface_width));
   IceFraction sharpened;
@@ -636,11 +637,15 @@ cv::Mat render_ice_radiance(const IceFraction& ice_in, const Camera& camera, con
   const int W = camera_width(camera), H = camera_height(camera);
   const RayGen gen(camera, top_of_scene(ice, options.ground_z_m));
   const int k = options.supersample;
+  if (!only.empty() && (only.type() != CV_8UC1 || only.cols != W || only.rows != H))
+    throw InputError("render_ice_radiance: the pixel selection must be CV_8UC1 of the image size");
   cv::Mat out(H, W, CV_32FC3, cv::Scalar::all(0));
   for_rows(H, options.parallel, [&](int v) {
     auto* row = out.ptr<cv::Vec3f>(v);
+    const std::uint8_t* sel = only.empty() ? nullptr : only.ptr<std::uint8_t>(v);
     TextureCache texture;
     for (int u = 0; u < W; ++u) {
+      if (sel && !sel[u]) continue;
       std::array<double, 3> acc{0, 0, 0};
       for (int t = 0; t < k; ++t)
         for (int s = 0; s < k; ++s) {

@@ -100,8 +100,10 @@ double henyey_greenstein(double cos_theta, double g);
 double ground_texture(double x_m, double y_m, double scale_m, std::uint64_t seed);
 
 /// Linear radiance image, CV_32FC3 (BGR), before exposure, blur, noise and quantisation.
+/// `only` (optional CV_8UC1 of the image size): pixels where it is 0 are not traced (left 0),
+/// e.g. outside the ice's outline when the caller composites the bare ground there.
 cv::Mat render_ice_radiance(const sim::physics::IceFraction& ice, const Camera& camera,
-                            const IcePhotoOptions& options = {});
+                            const IcePhotoOptions& options = {}, const cv::Mat& only = cv::Mat());
 
 /// The sensor chain applied to a linear radiance image (see the header comment): CV_8UC3 BGR.
 cv::Mat develop_photo(const cv::Mat& radiance, const IcePhotoOptions& options = {});
