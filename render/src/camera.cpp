@@ -280,4 +280,31 @@ std::string describe_camera_json(const Camera& c) {
       p.distortion[4], rows);
 }
 
+bool undistort_normalized(const std::array<double, 5>& d, double xd, double yd, double& x_out, double& y_out) {
+  const double k1 = d[0], k2 = d[1], p1 = d[2], p2 = d[3], k3 = d[4];
+  double x = xd, y = yd;
+  for (int it = 0; it < 50; ++it) {
+    const double r2 = x * x + y * y;
+    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+    const double dradial = k1 + r2 * (2.0 * k2 + r2 * 3.0 * k3);
+    const double fx = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) - xd;
+    const double fy = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y - yd;
+    const double j11 = radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x;
+    const double j12 = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y;
+    const double j22 = radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x;
+    const double det = j11 * j22 - j12 * j12;  // the Jacobian is symmetric
+    if (!(det > 0.0) || !(radial > 0.0)) return false;
+    // Converged: residual below 1e-13 in normalized units (~1e-10 px for f ~ 1000 px).
+    if (std::abs(fx) + std::abs(fy) < 1e-13) {
+      x_out = x;
+      y_out = y;
+      return true;
+    }
+    x -= (j22 * fx - j12 * fy) / det;
+    y -= (j11 * fy - j12 * fx) / det;
+    if (!std::isfinite(x) || !std::isfinite(y)) return false;
+  }
+  return false;
+}
+
 }  // namespace meltlab::render

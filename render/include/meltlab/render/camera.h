@@ -61,6 +61,10 @@ int camera_height(const Camera& c);
 /// false for a point behind a pinhole camera (z_camera <= 0).
 std::pair<Vec2d, bool> project(const Camera& c, const Vec3d& p_world);
 
+/// Ideal normalized coordinates (x, y) whose OpenCV distortion (k1 k2 p1 p2 k3) is (xd, yd),
+/// by Newton's method from (xd, yd). False if it does not converge to a regular solution.
+bool undistort_normalized(const std::array<double, 5>& distortion, double xd, double yd, double& x_out, double& y_out);
+
 /// Reads a camera from YAML (unknown keys are errors; `source` names the file):
 ///   {type: orthographic, width: 2048, height: 1536, pixels_per_mm: 10, centre_m: [0, 0]}
 ///   {type: orthographic, width: W, height: H, pixels_per_unit: 1e4, centre: [x, y]}
