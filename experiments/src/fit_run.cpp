@@ -186,7 +186,8 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
   for (const std::string& name : names) {
     if (name.rfind("kl.", 0) != 0) continue;
     require(!o.simulation.kl_file.empty(), fmt::format("{}: fitting a kl parameter needs --kl FILE", name));
-    if (!kl_doc) kl_doc = YAML::LoadFile(prepared->opt.kl_file.string());
+    // (A default YAML::Node is a defined null node, so `!kl_doc` would never be true.)
+    if (kl_doc.IsNull()) kl_doc = YAML::LoadFile(prepared->opt.kl_file.string());
     kl_values[name] = number_at(kl_doc, name, o.simulation.kl_file.string());
   }
   const std::vector<verify::FitParameter> params = fit_parameters(o, o.simulation.kg, kl_values);

@@ -3,6 +3,7 @@
 set -uo pipefail
 M=$1
 CASE=$2
+ASSETS=$(cd "$(dirname "${BASH_SOURCE[0]}")/../assets" && pwd)   # tests/assets (small committed inputs)
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 cd "$W"
