@@ -40,6 +40,10 @@ Run add_render(CLI::App& app, const std::string& command_line) {
   sub->add_option("--deposit-blend", *blend, "overwrite (draw into the uncleared mask) or add")
       ->check(CLI::IsMember({"overwrite", "add"}))
       ->default_val("overwrite");
+  auto up = std::make_shared<std::string>("z");
+  sub->add_option("--up", *up, "The mesh's up axis; rotated (cyclically) to +z before melting")
+      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->default_val("z");
   sub->add_flag("--keep-position", *no_place, "Do not move the mesh so its lowest point is on the ground z = 0");
   sub->add_flag("--liquid-figure", o->liquid_figure, "Write only the liquid mask after the cycles of Fig. 7.6 (+ mask_sums.csv)");
   sub->add_option("--figure-cycles", o->figure_cycles, "Cycles at which --liquid-figure writes the mask")
@@ -49,6 +53,7 @@ Run add_render(CLI::App& app, const std::string& command_line) {
   return [=]() {
     o->liquid = !*no_liquid;
     o->place_on_ground = !*no_place;
+    o->up = (*up)[0];
     o->blend = *blend == "add" ? sim::DepositBlend::kAdd : sim::DepositBlend::kOverwrite;
     const auto r = experiments::run_render(*o);
     if (o->liquid_figure)

@@ -76,6 +76,7 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   require(o.mask_extent >= 1.0, fmt::format("--mask-extent: must be >= 1 (got {})", o.mask_extent));
   require(o.width >= 0 && o.height >= 0 && o.width <= 16384 && o.height <= 16384, "--width/--height: must be in [1, 16384]");
   require(!o.out_dir.empty(), "--out: an output folder is required");
+  require(o.up == 'x' || o.up == 'y' || o.up == 'z', fmt::format("--up: must be x, y or z (got '{}')", o.up));
   if (o.liquid_figure) {
     require(o.liquid, "--liquid-figure: needs the liquid stage (drop --no-liquid)");
     require(!o.figure_cycles.empty(), "--figure-cycles: give at least one cycle");
@@ -94,6 +95,11 @@ RenderRunResult run_render(const RenderRunOptions& o) {
 
   // ---- set up ----
   sim::IndexedMesh mesh = prepared->mesh;
+  // Cyclic axis permutations keep the orientation (outward normals stay outward).
+  if (o.up == 'y')
+    for (auto& v : mesh.V) v = sim::Vec3<double>(v.z(), v.x(), v.y());  // (x, y, z) -> (z, x, y): +y becomes +z
+  else if (o.up == 'x')
+    for (auto& v : mesh.V) v = sim::Vec3<double>(v.y(), v.z(), v.x());  // +x becomes +z
   double lift = 0;
   if (o.place_on_ground && !mesh.V.empty()) {
     double zmin = mesh.V[0].z();
@@ -178,6 +184,7 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   j["git_revision"] = std::string(kGitRevision);
   j["command_line"] = o.command_line;
   j["mesh"] = prepared->mesh_json;
+  j["mesh_up_axis"] = std::string(1, o.up);
   j["mesh_lift_z"] = lift;
   j["melt"] = {{"kg", prepared->params.kg}, {"kE", prepared->params.kE}, {"kN", prepared->params.kN}, {"kr", prepared->params.kr}};
   j["cycles"] = {{"requested", last}, {"run", result.cycles_run}, {"melted_at_cycle", result.melted_at_cycle}};

@@ -38,7 +38,7 @@ height: 32
 ice: {ct: 0}
 outputs: {exr: false}
 Y
-    run_ok "$M" render --mesh $MESH --scene scene.yaml --cycles 2 --every 2 --no-liquid --out r
+    run_ok "$M" render --mesh $MESH --scene scene.yaml --cycles 2 --every 2 --no-liquid --up y --out r
     [ -s r/frames/frame_000002.png ] || fail "frame missing"
     [ ! -e r/frames/frame_000002.exr ] || fail "exr written although outputs.exr is false"
     py <<'PY'
@@ -48,6 +48,7 @@ s = ' | '.join(j['skipped'])
 assert 'ice refraction and dispersion (ct = 0)' in s, s
 assert 'liquid (no mask' in s, s
 assert j['liquid'] == 'off (no liquid stage)'
+assert j['mesh_up_axis'] == 'y' and j['mesh_lift_z'] != 0
 PY
     ;;
   liquid_figure)
@@ -81,6 +82,10 @@ PY
     expect_err "missing.yaml"
     expect_exit 2 "$M" render --mesh $MESH --liquid-figure --no-liquid --out r
     expect_one_line_err
+    expect_exit 2 "$M" render --mesh $MESH --up w --out r
+    expect_exit 2 "$M" render --mesh $MESH --threshold 0 --out r
+    expect_err "--threshold"
+    expect_no_dir r
     ;;
   *) fail "unknown case" ;;
 esac

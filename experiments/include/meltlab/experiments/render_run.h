@@ -34,6 +34,7 @@ struct RenderRunOptions {
   bool threshold_texture = false;       ///< p from a procedural relief texture tp in [p/2, 3p/2]
   double far_fraction = 0.10;
   sim::DepositBlend blend = sim::DepositBlend::kOverwrite;
+  char up = 'z';                        ///< the mesh's up axis (x, y or z); rotated so it becomes +z
   bool place_on_ground = true;          ///< translate the mesh so its lowest point is z = 0
   int width = 0, height = 0;            ///< override the scene's size (0 = keep)
   bool liquid_figure = false;           ///< Fig. 7.6 mode: masks only
