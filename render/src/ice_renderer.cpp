@@ -22,6 +22,9 @@ using Eigen::Vector3d;
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// Physical model: an internally reflected path is dropped once its weight falls below this
+// (the bias is below 1e-4 of the radiance it would carry, far under 8-bit quantisation).
+constexpr double kMinPathWeight = 1e-4;
 
 // Cheap per-channel power: x^e for x >= 0.
 Rgb pow_rgb(const Rgb& x, double e) {
@@ -318,6 +321,7 @@ struct FrameContext {
         }
         dir = reflected.normalized();
         o = q - eps * n_out;
+        if (weight.maxCoeff() < kMinPathWeight) break;  // what is left cannot show in the image
       }
     }
     return I;

@@ -19,7 +19,8 @@
 // Ice, physical reference: at the entry, reflection F·(traced reflected ray) and transmission
 // (1 - F) per channel (η per channel if dispersion, else η): the ray is refracted in, traced
 // to the exit through the ice, attenuated by exp(-σ_c·d) (Beer), refracted out with the
-// exit Fresnel weight (internally reflected part followed up to max_internal_bounces), and
+// exit Fresnel weight (internally reflected part followed up to max_internal_bounces, or
+// until its weight is below 1e-4), and
 // the outgoing ray is traced against the scene (ice again: its environment value — no
 // further recursion; ground: shaded; else the environment). No ambient/diffuse/Phong terms:
 // the sun of the environment map gives the highlights.
