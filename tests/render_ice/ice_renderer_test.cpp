@@ -109,6 +109,74 @@ TEST(IceRenderer, WetGroundIsDarkenedByTheExponentAndTiltedAtTheRim) {
   EXPECT_NEAR((w - want).norm(), 0.0, 1e-4) << w.transpose() << " vs " << want.transpose();
 }
 
+TEST(IceRenderer, FilmOffsetShiftsTheTextureAgainstTheViewDirection) {
+  // An oblique pinhole view of a puddle covering the whole view: every ground pixel is wet,
+  // with cs = cr = tilt = 0 its value is (0.7·tdiff(s - d·Vx, t - d·Vy))^1.6 (Eq. 7.10-7.11).
+  RenderScene s;
+  s.camera = Pinhole::look_at(24, 18, 30.0, Vector3d(0.0, -3.0, 2.0), Vector3d(0, 0, 0), Vector3d(0, 0, 1));
+  s.lights = {DirectionalLight{Vector3d(0, 0, 1), Rgb(1, 1, 1)}};
+  s.ground.z = 0.0;
+  s.ground.tile = 1.0;
+  s.ground.ca = 0.2;
+  s.ground.cd = 0.5;
+  s.ground.cs = s.ground.cr = s.ground.tilt_s = s.ground.tilt_t = 0.0;
+  s.ground.d = 0.1;
+  IceRenderer r(s);
+  r.set_mesh(sphere(0.05, Vector3d(100, 100, 1)));
+  sim::LiquidMaskParams mp;
+  mp.width = mp.height = 64;
+  mp.texel_size = 1.0;
+  mp.origin = Eigen::Vector2d(-32, -32);
+  sim::LiquidMask mask(mp);
+  for (auto& v : mask.values()) v = 1.0f;
+  r.set_liquid(&mask);
+  ASSERT_TRUE(r.plan().liquid_offset);
+  const RgbImage img = r.render();
+  const auto& cam = std::get<Pinhole>(r.camera());
+  const Eigen::Isometry3d world_from_camera = cam.camera_from_world.inverse();
+  const RgbImage tex = ground_texture(256, 1);
+  int checked = 0, shifted = 0;
+  for (int j = 9; j < 18; j += 2)  // the lower half of the image looks at the ground
+    for (int i = 0; i < 24; i += 3) {
+      const Vector3d o = world_from_camera.translation();
+      const Vector3d d = (world_from_camera.linear() * Vector3d((i - cam.cx) / cam.fx, (j - cam.cy) / cam.fy, 1)).normalized();
+      ASSERT_LT(d.z(), 0);
+      const Vector3d q = o + (-o.z() / d.z()) * d;
+      const Vector3d V = -d;
+      auto tdiff = [&](double u, double v) { return tex.bilinear(u * 256 - 0.5, v * 256 - 0.5, true); };
+      const Rgb want = (0.7 * tdiff(q.x() - 0.1 * V.x(), q.y() - 0.1 * V.y())).array().pow(1.6).matrix();
+      const Rgb unshifted = (0.7 * tdiff(q.x(), q.y())).array().pow(1.6).matrix();
+      EXPECT_NEAR((img.at(i, j) - want).norm(), 0.0, 1e-4) << i << "," << j;
+      ++checked;
+      shifted += (want - unshifted).norm() > 1e-3;
+    }
+  EXPECT_GT(checked, 20);
+  EXPECT_GT(shifted, checked / 2);  // the offset is visible, so the check above has teeth
+}
+
+TEST(IceRenderer, FlatNormalMapChangesNothingAndBumpsDo) {
+  // Eq. 6.12 decodes the flat map's (½, ½, 1) to the unperturbed normal.
+  auto run = [](bool normal_map, double bump) {
+    RenderScene s;
+    s.width = 40;
+    s.height = 30;
+    s.ice.normal_map = normal_map;
+    s.ice.normal_map_bump = bump;
+    s.ground.z = 0.0;
+    IceRenderer r(s);
+    r.set_mesh(sphere(1.0, Vector3d(0, 0, 1)));
+    return r.render();
+  };
+  const RgbImage plain = run(false, 0), flat = run(true, 0), bumpy = run(true, 2.0);
+  double max_flat = 0, sum_bumpy = 0;
+  for (std::size_t k = 0; k < plain.rgb.size(); ++k) {
+    max_flat = std::max(max_flat, static_cast<double>(std::abs(flat.rgb[k] - plain.rgb[k])));
+    sum_bumpy += static_cast<double>(std::abs(bumpy.rgb[k] - plain.rgb[k]));
+  }
+  EXPECT_LT(max_flat, 1e-4);
+  EXPECT_GT(sum_bumpy / static_cast<double>(plain.rgb.size()), 1e-3);
+}
+
 TEST(IceRenderer, DryMaskIsSkippedAndGivesTheSameImage) {
   auto s = top_down_scene(24, 24, 10.0);
   IceRenderer r(s);
