@@ -289,11 +289,14 @@ struct FrameContext {
     const double cos_i = std::clamp(N.dot(V), 0.0, 1.0);
     Rgb I = Rgb::Zero();
     const int channels = plan.dispersion ? 3 : 1;
-    const double Fr = fresnel(m.fresnel, cos_i, 1.0, plan.dispersion ? m.eta_rgb[1] : m.eta);
-    I += Fr * trace_secondary(p + eps * N, reflect(V, N));
+    // Reflection with each channel's own Fresnel weight, so that reflected + transmitted = 1
+    // per channel (the white-furnace test checks this bookkeeping).
+    const Rgb from_mirror = trace_secondary(p + eps * N, reflect(V, N));
+    if (!plan.dispersion) I += fresnel(m.fresnel, cos_i, 1.0, m.eta) * from_mirror;
     for (int c = 0; c < channels; ++c) {
       const double eta = plan.dispersion ? m.eta_rgb[static_cast<std::size_t>(c)] : m.eta;
       const double F = fresnel(m.fresnel, cos_i, 1.0, eta);
+      if (plan.dispersion) I[c] += F * from_mirror[c];
       const auto T = refract(-V, N, 1.0 / eta);
       if (!T) continue;
       Vector3d dir = *T, o = p - eps * N;

@@ -85,6 +85,10 @@ double value_noise3(const Vector3d& p, std::uint64_t seed) {
 
 RgbImage latlong_environment(const EnvironmentOptions& o) {
   RgbImage env(o.width, o.height);
+  if (o.constant >= 0) {
+    std::fill(env.rgb.begin(), env.rgb.end(), static_cast<float>(o.constant));
+    return env;
+  }
   const Vector3d sun = o.to_sun.normalized();
   const double sun_cos = std::cos(1.5 * std::numbers::pi / 180.0);
   for (int j = 0; j < o.height; ++j) {

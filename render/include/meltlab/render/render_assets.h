@@ -42,6 +42,7 @@ struct EnvironmentOptions {
   double sun_radiance = 30.0;            ///< the sun disc (≈ 1.5° radius)
   Eigen::Vector3d zenith{0.25, 0.45, 0.95}, horizon{0.85, 0.9, 1.0}, floor{0.18, 0.16, 0.14};
   double floor_checker = 0.4;            ///< dark squares are floor·(1 - floor_checker)
+  double constant = -1.0;                ///< >= 0: a uniform map of this radiance (a "white furnace")
 };
 /// Lat-long environment: sky gradient, sun disc, bright vertical "windows" just above the
 /// horizon (so reflections and refractions show structure) and a checkered floor below it.
