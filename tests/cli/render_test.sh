@@ -64,6 +64,21 @@ s = [float(r['mask_sum']) for r in rows]
 assert all(x > 0 for x in s), s
 assert int(rows[-1]['wet_texels']) > 0
 PY
+    # Fig. 7.7: the relief threshold texture (p in [p/2, 3p/2]) gives a different puddle;
+    # the additive deposit holds more liquid than overwriting.
+    run_ok "$M" render --mesh $MESH --liquid-figure --figure-cycles 40 --mask-resolution 64 --threshold-texture --out tex
+    run_ok "$M" render --mesh $MESH --liquid-figure --figure-cycles 40 --mask-resolution 64 --deposit-blend add --out add
+    py <<'PY'
+import csv, json
+last = lambda d: list(csv.DictReader(open(d + '/liquid/mask_sums.csv')))[-1]
+base, tex, add = last('fig'), last('tex'), last('add')
+assert tex['mask_sum'] == base['mask_sum'], (tex, base)       # the same liquid ...
+assert tex['wet_texels'] != base['wet_texels'], (tex, base)   # ... wet in other places
+assert float(add['mask_sum']) > float(base['mask_sum']), (add, base)
+j = json.load(open('tex/render.json'))
+assert j['liquid']['threshold_texture'].startswith('relief'), j['liquid']
+assert json.load(open('add/render.json'))['liquid']['deposit_blend'] == 'add'
+PY
     ;;
   bad_inputs)
     expect_exit 2 "$M" render --mesh nope.off --out r
