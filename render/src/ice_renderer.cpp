@@ -138,6 +138,7 @@ struct FrameContext {
   const RgbImage& normal_tex;
   double ground_z;
   double eps;
+  double ground_far;
   std::vector<Vector3d> to_light;
 
   Rgb env_at(const Vector3d& d) const { return sample_latlong(env, d); }
@@ -179,8 +180,10 @@ struct FrameContext {
       const auto& mp = mask->params();
       tx = (q.x() - mp.origin.x()) / mp.texel_size - 0.5;
       ty = (q.y() - mp.origin.y()) / mp.texel_size - 0.5;
-      w = wet(tx, ty);
-      if (plan.liquid_rim) {
+      const bool near_grid = tx > -3 && ty > -3 && tx < mp.width + 2 && ty < mp.height + 2;
+      // Beyond the grid the border reads zero: no liquid and no rim there.
+      if (near_grid) w = wet(tx, ty);
+      if (near_grid && plan.liquid_rim) {
         n = Vector3d(g.tilt_s * (wet(tx - 1, ty) - wet(tx + 1, ty)), g.tilt_t * (wet(tx, ty - 1) - wet(tx, ty + 1)), 1.0)
                 .normalized();
       }
@@ -211,10 +214,12 @@ struct FrameContext {
   }
 
   // Ground or environment along a ray that does not look at the ice (or after it).
+  // Rays almost parallel to the ground meet it at the horizon: beyond ground_far they see the
+  // environment (this also keeps texel coordinates far inside the range of int).
   Rgb background(const Vector3d& o, const Vector3d& d) const {
     if (d.z() < 0 && o.z() > ground_z) {
       const double t = (ground_z - o.z()) / d.z();
-      return shade_ground(o + t * d, d);
+      if (t < ground_far) return shade_ground(o + t * d, d);
     }
     return env_at(d);
   }
@@ -379,7 +384,7 @@ RgbImage IceRenderer::render() {
     last_plan_log_ = log;
   }
   const double ground_z = scene_.ground.z.value_or(0.0);
-  FrameContext ctx{scene_, p, bvh_, mask_, env_, ground_tex_, normal_tex_, ground_z, 1e-4 * object_size_, {}};
+  FrameContext ctx{scene_, p, bvh_, mask_, env_, ground_tex_, normal_tex_, ground_z, 1e-4 * object_size_, 1e6 * object_size_, {}};
   for (const auto& l : scene_.lights) ctx.to_light.push_back(l.to_light.normalized());
   const Camera& cam = *camera_;
   const int w = camera_width(cam), h = camera_height(cam);

@@ -123,6 +123,10 @@ TEST(Deposit, FootprintIsTheSlabCrossSection) {
   // A thicker slab covers more.
   const auto fp2 = footprint_below(m, p, 0.5);
   EXPECT_GT(std::accumulate(fp2.begin(), fp2.end(), 0), std::accumulate(fp.begin(), fp.end(), 0) * 4);
+  // An object far off the grid draws nothing (and its texel coordinates do not overflow int).
+  const auto far = TriMesh<double>::from_indexed(test::translated(test::octahedron(1.0), {1e12, -1e12, 1.0}));
+  const auto fp_far = footprint_below(far, p, 0.2 + 0.0);
+  EXPECT_EQ(std::accumulate(fp_far.begin(), fp_far.end(), 0), 0);
   // Nothing below the object: empty footprint.
   const auto fp0 = footprint_below(m, p, -0.1);
   EXPECT_EQ(std::accumulate(fp0.begin(), fp0.end(), 0), 0);

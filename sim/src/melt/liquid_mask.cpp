@@ -147,10 +147,13 @@ void fill_triangle(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eig
   const double area = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
   if (area == 0.0) return;
   const double sgn = area > 0 ? 1.0 : -1.0;
-  const int i0 = std::max(0, static_cast<int>(std::ceil(std::min({a.x(), b.x(), c.x()}))));
-  const int i1 = std::min(w - 1, static_cast<int>(std::floor(std::max({a.x(), b.x(), c.x()}))));
-  const int j0 = std::max(0, static_cast<int>(std::ceil(std::min({a.y(), b.y(), c.y()}))));
-  const int j1 = std::min(h - 1, static_cast<int>(std::floor(std::max({a.y(), b.y(), c.y()}))));
+  // Clamp in double before converting, so a triangle far off the grid cannot overflow int.
+  auto lo = [](double x, int n) { return static_cast<int>(std::ceil(std::clamp(x, -1.0, static_cast<double>(n)))); };
+  auto hi = [](double x, int n) { return static_cast<int>(std::floor(std::clamp(x, -1.0, static_cast<double>(n)))); };
+  const int i0 = std::max(0, lo(std::min({a.x(), b.x(), c.x()}), w));
+  const int i1 = std::min(w - 1, hi(std::max({a.x(), b.x(), c.x()}), w));
+  const int j0 = std::max(0, lo(std::min({a.y(), b.y(), c.y()}), h));
+  const int j1 = std::min(h - 1, hi(std::max({a.y(), b.y(), c.y()}), h));
   auto edge = [sgn](const Eigen::Vector2d& p, const Eigen::Vector2d& q, double x, double y) {
     return sgn * ((q.x() - p.x()) * (y - p.y()) - (q.y() - p.y()) * (x - p.x()));
   };
