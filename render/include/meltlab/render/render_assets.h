@@ -1,0 +1,72 @@
+#pragma once
+// Procedural default assets of the ice/liquid renderer, generated in code so nothing is
+// downloaded: a lat-long environment (sky, sun, a room-like horizon), a tileable ground
+// texture, a tileable normal map (stored encoded as Eq. 6.12 expects) and a solid "milky ice"
+// texture standing in for the monograph's photograph tdiff (§6.1).
+//
+// Directions are world vectors with z up. Lat-long: u = atan2(y, x)/2π + ½ (column),
+// v = acos(z)/π (row 0 = zenith). Images are row-major RGB float, linear.
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+namespace meltlab::render {
+
+struct RgbImage {
+  int width = 0, height = 0;
+  std::vector<float> rgb;  ///< 3 floats per pixel, row-major, row 0 at the top
+
+  RgbImage() = default;
+  RgbImage(int w, int h) : width(w), height(h), rgb(static_cast<std::size_t>(w) * h * 3, 0.0f) {}
+  Eigen::Vector3d at(int i, int j) const {
+    const std::size_t k = 3 * (static_cast<std::size_t>(j) * width + i);
+    return {static_cast<double>(rgb[k]), static_cast<double>(rgb[k + 1]), static_cast<double>(rgb[k + 2])};
+  }
+  void set(int i, int j, const Eigen::Vector3d& c) {
+    const std::size_t k = 3 * (static_cast<std::size_t>(j) * width + i);
+    rgb[k] = static_cast<float>(c.x());
+    rgb[k + 1] = static_cast<float>(c.y());
+    rgb[k + 2] = static_cast<float>(c.z());
+  }
+  /// Bilinear lookup at continuous pixel coordinates (pixel centres at integers), wrapping
+  /// in x; in y wrapping (`wrap_y`) or clamping.
+  Eigen::Vector3d bilinear(double x, double y, bool wrap_y) const;
+};
+
+struct EnvironmentOptions {
+  int width = 512, height = 256;
+  Eigen::Vector3d to_sun = Eigen::Vector3d(0.5, -0.4, 0.75);  ///< normalised on use
+  double sun_radiance = 30.0;            ///< the sun disc (≈ 1.5° radius)
+  Eigen::Vector3d zenith{0.25, 0.45, 0.95}, horizon{0.85, 0.9, 1.0}, floor{0.18, 0.16, 0.14};
+  double floor_checker = 0.4;            ///< dark squares are floor·(1 - floor_checker)
+  double constant = -1.0;                ///< >= 0: a uniform map of this radiance (a "white furnace")
+};
+/// Lat-long environment: sky gradient, sun disc, bright vertical "windows" just above the
+/// horizon (so reflections and refractions show structure) and a checkered floor below it.
+RgbImage latlong_environment(const EnvironmentOptions& options = {});
+/// Bilinear lookup of a lat-long map in direction `dir` (any length > 0).
+Eigen::Vector3d sample_latlong(const RgbImage& env, const Eigen::Vector3d& dir);
+
+/// Tileable ground texture in [0, 1]: stone tiles of two tones modulated by value noise.
+RgbImage ground_texture(int size = 256, std::uint64_t seed = 1);
+/// Tileable normal map encoded in [0, 1] (rgb = N/2 + ½, Eq. 6.12 inverted) from a noise
+/// height field; `bump` scales the slopes (0 = flat, rgb = (½, ½, 1)).
+RgbImage normal_map(int size = 256, double bump = 1.0, std::uint64_t seed = 2);
+/// Solid milky-ice texture in [0, 1] at a world point (mesh units); `scale` = feature size.
+double milky_ice(const Eigen::Vector3d& p, double scale);
+
+/// Writes linear RGB as OpenEXR (half float), atomically. Throws InputError on failure.
+void write_exr(const std::filesystem::path& file, const RgbImage& image);
+/// Writes 8-bit PNG: v = clamp(exposure·x)^(1/gamma), atomically.
+void write_png(const std::filesystem::path& file, const RgbImage& image, double exposure = 1.0, double gamma = 2.2);
+/// Writes a one-channel float grid (row 0 = y max, i.e. the ground seen from above) as an
+/// 8-bit gray PNG: clamp(value / white)·255.
+void write_gray_png(const std::filesystem::path& file, const std::vector<float>& values, int width, int height,
+                    float white = 1.0f, bool flip_y = true);
+/// Reads an 8-bit image as RGB in [0, 1] (for reference-image tests). Throws InputError.
+RgbImage read_png(const std::filesystem::path& file);
+
+}  // namespace meltlab::render

@@ -1,0 +1,193 @@
+// Embree BVH over a melting mesh (embree/mesh_bvh.h).
+
+#include <meltlab/render/embree/mesh_bvh.h>
+#include <meltlab/sim/error.h>
+
+#include <embree3/rtcore.h>
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace meltlab::render {
+
+namespace {
+// Embree calls this from C code, so it must not throw: it records the message, and check()
+// turns it into an InvariantError after each build step (errors here are programming errors:
+// bad buffers or state, never bad input).
+void on_embree_error(void* user, RTCError code, const char* message) {
+  *static_cast<std::string*>(user) = fmt::format("Embree error {}: {}", static_cast<int>(code), message ? message : "");
+}
+}  // namespace
+
+struct MeshBvh::Embree {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  RTCGeometry geometry = nullptr;
+  unsigned geometry_id = RTC_INVALID_GEOMETRY_ID;
+  std::string last_error;
+
+  void check() {
+    if (rtcGetDeviceError(device) != RTC_ERROR_NONE || !last_error.empty())
+      throw InvariantError(last_error.empty() ? std::string("Embree error") : last_error);
+  }
+
+  Embree() {
+    device = rtcNewDevice(nullptr);
+    if (!device) throw InvariantError(fmt::format("Embree: cannot create a device (error {})", static_cast<int>(rtcGetDeviceError(nullptr))));
+    rtcSetDeviceErrorFunction(device, on_embree_error, &last_error);
+    scene = rtcNewScene(device);
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_DYNAMIC);
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_LOW);
+  }
+  ~Embree() {
+    if (geometry) rtcReleaseGeometry(geometry);
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+  void drop_geometry() {
+    if (!geometry) return;
+    rtcDetachGeometry(scene, geometry_id);
+    rtcReleaseGeometry(geometry);
+    geometry = nullptr;
+    geometry_id = RTC_INVALID_GEOMETRY_ID;
+  }
+};
+
+MeshBvh::MeshBvh() : rtc_(std::make_unique<Embree>()) {}
+MeshBvh::~MeshBvh() = default;
+
+template <class Real>
+BvhUpdate MeshBvh::update(const sim::TriMesh<Real>& mesh) {
+  std::vector<float> pos(3 * mesh.vertex_slots() + 1, 0.0f);
+  for (std::size_t v = 0; v < mesh.vertex_slots(); ++v)
+    for (int k = 0; k < 3; ++k) pos[3 * v + static_cast<std::size_t>(k)] = static_cast<float>(mesh.position[v][k]);
+  std::vector<std::uint32_t> idx;
+  idx.reserve(3 * mesh.triangle_slots());
+  for (std::size_t t = 0; t < mesh.triangle_slots(); ++t) {
+    if (!mesh.triangle_alive[t]) continue;
+    for (sim::Index v : mesh.triangle[t]) idx.push_back(static_cast<std::uint32_t>(v));
+  }
+  return load(std::move(pos), std::move(idx));
+}
+
+BvhUpdate MeshBvh::update(const sim::IndexedMesh& mesh) {
+  std::vector<float> pos(3 * mesh.V.size() + 1, 0.0f);
+  for (std::size_t v = 0; v < mesh.V.size(); ++v)
+    for (int k = 0; k < 3; ++k) pos[3 * v + static_cast<std::size_t>(k)] = static_cast<float>(mesh.V[v][k]);
+  std::vector<std::uint32_t> idx;
+  idx.reserve(3 * mesh.F.size());
+  for (const auto& f : mesh.F)
+    for (sim::Index v : f) idx.push_back(static_cast<std::uint32_t>(v));
+  return load(std::move(pos), std::move(idx));
+}
+
+template BvhUpdate MeshBvh::update(const sim::TriMesh<double>&);
+template BvhUpdate MeshBvh::update(const sim::TriMesh<float>&);
+
+BvhUpdate MeshBvh::load(std::vector<float> positions, std::vector<std::uint32_t> index) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::size_t nv = (positions.size() - 1) / 3, nt = index.size() / 3;
+  // Smooth normals: area-weighted sums of the (unnormalised) face normals, then normalised.
+  normal_.assign(nv, Eigen::Vector3f::Zero());
+  lower_ = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  upper_ = -lower_;
+  auto P = [&](std::uint32_t v) { return Eigen::Vector3f(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]); };
+  for (std::size_t t = 0; t < nt; ++t) {
+    const std::uint32_t a = index[3 * t], b = index[3 * t + 1], c = index[3 * t + 2];
+    const Eigen::Vector3f n = (P(b) - P(a)).cross(P(c) - P(a));
+    normal_[a] += n;
+    normal_[b] += n;
+    normal_[c] += n;
+    for (std::uint32_t v : {a, b, c}) {
+      lower_ = lower_.cwiseMin(P(v).cast<double>());
+      upper_ = upper_.cwiseMax(P(v).cast<double>());
+    }
+  }
+  for (auto& n : normal_) {
+    const float len = n.norm();
+    if (len > 0.0f) n /= len;
+  }
+  if (nt == 0) lower_ = upper_ = Eigen::Vector3d::Zero();
+
+  BvhUpdate what = BvhUpdate::kRebuild;
+  if (nt == 0) {
+    rtc_->drop_geometry();
+    vertex_ = std::move(positions);
+    index_.clear();
+    rtcCommitScene(rtc_->scene);
+    what = BvhUpdate::kNone;
+  } else if (rtc_->geometry && index == index_ && positions.size() == vertex_.size()) {
+    // Same triangles: rewrite the shared vertex buffer in place and refit.
+    std::copy(positions.begin(), positions.end(), vertex_.begin());
+    rtcUpdateGeometryBuffer(rtc_->geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+    rtcCommitGeometry(rtc_->geometry);
+    rtcCommitScene(rtc_->scene);
+    what = BvhUpdate::kRefit;
+  } else {
+    rtc_->drop_geometry();
+    vertex_ = std::move(positions);
+    index_ = std::move(index);
+    RTCGeometry g = rtcNewGeometry(rtc_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertex_.data(), 0, 3 * sizeof(float), nv);
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, index_.data(), 0, 3 * sizeof(std::uint32_t), nt);
+    rtcSetGeometryBuildQuality(g, RTC_BUILD_QUALITY_REFIT);
+    rtcCommitGeometry(g);
+    rtc_->geometry_id = rtcAttachGeometry(rtc_->scene, g);
+    rtc_->geometry = g;
+    rtcCommitScene(rtc_->scene);
+  }
+  rtc_->check();
+  last_update_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return what;
+}
+
+bool MeshBvh::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_near, double t_far, MeshHit& hit) const {
+  if (index_.empty()) return false;
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh;
+  rh.ray.org_x = static_cast<float>(o.x());
+  rh.ray.org_y = static_cast<float>(o.y());
+  rh.ray.org_z = static_cast<float>(o.z());
+  rh.ray.dir_x = static_cast<float>(d.x());
+  rh.ray.dir_y = static_cast<float>(d.y());
+  rh.ray.dir_z = static_cast<float>(d.z());
+  rh.ray.tnear = static_cast<float>(t_near);
+  rh.ray.tfar = static_cast<float>(std::min(t_far, static_cast<double>(std::numeric_limits<float>::max())));
+  rh.ray.time = 0.0f;
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(rtc_->scene, &context, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+  hit.t = static_cast<double>(rh.ray.tfar);
+  hit.prim = rh.hit.primID;
+  hit.u = static_cast<double>(rh.hit.u);
+  hit.v = static_cast<double>(rh.hit.v);
+  // Our own outward normal (b - a) x (c - a), independent of Embree's Ng sign convention.
+  auto P = [&](std::uint32_t k) {
+    const std::uint32_t v = index_[3 * hit.prim + k];
+    return Eigen::Vector3d(static_cast<double>(vertex_[3 * v]), static_cast<double>(vertex_[3 * v + 1]),
+                           static_cast<double>(vertex_[3 * v + 2]));
+  };
+  const Eigen::Vector3d a = P(0);
+  const Eigen::Vector3d n = (P(1) - a).cross(P(2) - a);
+  const double len = n.norm();
+  hit.ng = len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d(-d.normalized());
+  return true;
+}
+
+Eigen::Vector3d MeshBvh::shading_normal(const MeshHit& hit) const {
+  const std::uint32_t a = index_[3 * hit.prim], b = index_[3 * hit.prim + 1], c = index_[3 * hit.prim + 2];
+  const Eigen::Vector3d n = (1.0 - hit.u - hit.v) * normal_[a].cast<double>() + hit.u * normal_[b].cast<double>() +
+                            hit.v * normal_[c].cast<double>();
+  const double len = n.norm();
+  return len > 1e-12 ? Eigen::Vector3d(n / len) : hit.ng;
+}
+
+}  // namespace meltlab::render

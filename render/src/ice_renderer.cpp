@@ -1,0 +1,406 @@
+// Ray tracer of melting ice on a wet ground (ice_renderer.h).
+
+#include <meltlab/render/ice_renderer.h>
+#include <meltlab/render/optics.h>
+#include <meltlab/sim/error.h>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
+#include <tbb/blocked_range2d.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+namespace meltlab::render {
+
+using Eigen::Vector3d;
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Physical model: an internally reflected path is dropped once its weight falls below this
+// (the bias is below 1e-4 of the radiance it would carry, far under 8-bit quantisation).
+constexpr double kMinPathWeight = 1e-4;
+
+// Cheap per-channel power: x^e for x >= 0.
+Rgb pow_rgb(const Rgb& x, double e) {
+  return Rgb(std::pow(std::max(0.0, x.x()), e), std::pow(std::max(0.0, x.y()), e), std::pow(std::max(0.0, x.z()), e));
+}
+
+// Orthonormal tangent frame for the triplanar normal map: the projection axis is the dominant
+// axis of `ng`; tangent and bitangent are the other two world axes made orthogonal to `n`.
+void tangent_frame(const Vector3d& n, const Vector3d& ng, Vector3d& t, Vector3d& b, int& axis) {
+  const Vector3d a = ng.cwiseAbs();
+  axis = a.x() > a.y() ? (a.x() > a.z() ? 0 : 2) : (a.y() > a.z() ? 1 : 2);
+  const Vector3d u = axis == 0 ? Vector3d::UnitY() : Vector3d::UnitX();
+  t = (u - n * n.dot(u)).normalized();
+  b = n.cross(t);
+}
+
+struct Primary {
+  Vector3d o, d;
+  bool ok = true;
+};
+
+}  // namespace
+
+IceRenderer::IceRenderer(RenderScene scene) : scene_(std::move(scene)) {
+  env_ = latlong_environment(scene_.environment);
+  ground_tex_ = ground_texture(256, 1);
+  if (scene_.ice.normal_map) normal_tex_ = normal_map(256, scene_.ice.normal_map_bump, 2);
+  if (scene_.camera) camera_ = scene_.camera;
+}
+IceRenderer::~IceRenderer() = default;
+
+const Camera& IceRenderer::camera() const {
+  if (!camera_) throw InvariantError("IceRenderer: no camera before the first set_mesh");
+  return *camera_;
+}
+
+void IceRenderer::resolve_defaults() {
+  if (sized_ || bvh_.empty()) return;
+  sized_ = true;
+  const Vector3d ext = bvh_.upper() - bvh_.lower();
+  object_size_ = std::max({ext.x(), ext.y(), ext.z(), 1e-9});
+  if (!(scene_.ice.texture_scale > 0)) scene_.ice.texture_scale = 0.05 * object_size_;
+  if (!(scene_.ice.normal_map_tile > 0)) scene_.ice.normal_map_tile = 0.2 * object_size_;
+  if (!(scene_.ground.tile > 0)) scene_.ground.tile = 0.5 * object_size_;
+  if (!scene_.ground.z) scene_.ground.z = bvh_.lower().z();
+  if (!camera_) camera_ = auto_camera(bvh_.lower(), bvh_.upper(), scene_.width, scene_.height);
+}
+
+template <class Real>
+void IceRenderer::set_mesh(const sim::TriMesh<Real>& mesh) {
+  stats_.bvh = bvh_.update(mesh);
+  stats_.bvh_ms = bvh_.last_update_ms();
+  stats_.triangles = bvh_.triangle_count();
+  resolve_defaults();
+}
+template void IceRenderer::set_mesh(const sim::TriMesh<double>&);
+template void IceRenderer::set_mesh(const sim::TriMesh<float>&);
+void IceRenderer::set_mesh(const sim::IndexedMesh& mesh) {
+  stats_.bvh = bvh_.update(mesh);
+  stats_.bvh_ms = bvh_.last_update_ms();
+  stats_.triangles = bvh_.triangle_count();
+  resolve_defaults();
+}
+
+ShadingPlan IceRenderer::plan() const {
+  ShadingPlan p;
+  const IceMaterial& m = scene_.ice;
+  const GroundMaterial& g = scene_.ground;
+  auto skip = [&](bool& flag, bool keep, const std::string& why) {
+    flag = keep;
+    if (!keep) p.skipped.push_back(why);
+  };
+  if (m.model == IceModel::kMonograph) {
+    skip(p.ice_texture, m.ca > 0 || m.cd > 0, "ice texture and diffuse (ca = cd = 0)");
+    skip(p.ice_specular, m.cs > 0 && !scene_.lights.empty(), "ice specular (cs = 0 or no light)");
+    skip(p.ice_reflection, m.cr > 0, "ice environment reflection (cr = 0)");
+    skip(p.ice_transmission, m.ct > 0, "ice refraction and dispersion (ct = 0)");
+    skip(p.fresnel, p.ice_reflection || p.ice_transmission, "Fresnel (cr = ct = 0)");
+  } else {
+    p.ice_texture = p.ice_specular = false;
+    p.ice_reflection = p.ice_transmission = p.fresnel = true;
+  }
+  const bool distinct_eta = m.eta_rgb[0] != m.eta_rgb[1] || m.eta_rgb[1] != m.eta_rgb[2];
+  if (p.ice_transmission) skip(p.dispersion, m.dispersion && distinct_eta, "dispersion (off or equal indices: one refraction)");
+  else p.dispersion = false;
+  p.normal_map = m.normal_map;
+  skip(p.ground_specular, g.cs > 0 && !scene_.lights.empty(), "ground specular (cs = 0 or no light)");
+  const bool visible = g.a > 0 || g.cr > 0 || g.tilt_s > 0 || g.tilt_t > 0 || g.d > 0;
+  if (!g.liquid) skip(p.liquid, false, "liquid (ground.liquid off)");
+  else if (!mask_) skip(p.liquid, false, "liquid (no mask: sublimation or no liquid stage)");
+  else if (!visible) skip(p.liquid, false, "liquid (a = cr = tilt = d = 0)");
+  else skip(p.liquid, mask_->any_wet(), "liquid (no texel at or above the threshold)");
+  if (p.liquid) {
+    skip(p.liquid_rim, g.tilt_s > 0 || g.tilt_t > 0, "liquid rim normals (tilt = 0)");
+    skip(p.liquid_offset, g.d > 0, "liquid film offset (d = 0)");
+    skip(p.liquid_reflection, g.cr > 0, "liquid environment reflection (cr = 0)");
+  }
+  return p;
+}
+
+namespace {
+
+// Everything a frame needs, read-only while the tiles run.
+struct FrameContext {
+  const RenderScene& scene;
+  const ShadingPlan& plan;
+  const MeshBvh& bvh;
+  const sim::LiquidMask* mask;
+  const RgbImage& env;
+  const RgbImage& ground_tex;
+  const RgbImage& normal_tex;
+  double ground_z;
+  double eps;
+  double ground_far;
+  std::vector<Vector3d> to_light;
+
+  Rgb env_at(const Vector3d& d) const { return sample_latlong(env, d); }
+
+  // ---- the liquid mask ----
+  double mask_bilinear(const std::vector<float>& v, double tx, double ty, bool zero_outside) const {
+    const auto& p = mask->params();
+    const double x0 = std::floor(tx), y0 = std::floor(ty);
+    const double fx = tx - x0, fy = ty - y0;
+    auto texel = [&](int i, int j) -> double {
+      if (zero_outside && (i < 0 || j < 0 || i >= p.width || j >= p.height)) return 0.0;
+      i = std::clamp(i, 0, p.width - 1);
+      j = std::clamp(j, 0, p.height - 1);
+      return static_cast<double>(v[static_cast<std::size_t>(j) * p.width + i]);
+    };
+    const int i = static_cast<int>(x0), j = static_cast<int>(y0);
+    return (1 - fy) * ((1 - fx) * texel(i, j) + fx * texel(i + 1, j)) + fy * ((1 - fx) * texel(i, j + 1) + fx * texel(i + 1, j + 1));
+  }
+  // step(p, mask) at texel coordinates (texel centres at integers).
+  double wet(double tx, double ty) const {
+    const double m = mask_bilinear(mask->values(), tx, ty, true);
+    const double p = mask->threshold_texture().empty() ? static_cast<double>(mask->params().threshold)
+                                                        : mask_bilinear(mask->threshold_texture(), tx, ty, false);
+    return m >= p ? 1.0 : 0.0;
+  }
+
+  Rgb ground_tdiff(double s, double t) const {
+    return ground_tex.bilinear(s * ground_tex.width - 0.5, t * ground_tex.height - 0.5, true);
+  }
+
+  // Eq. 7.17 (or plain Phong off the puddle) at ground point q seen along direction d.
+  Rgb shade_ground(const Vector3d& q, const Vector3d& d) const {
+    const GroundMaterial& g = scene.ground;
+    const Vector3d V = -d.normalized();
+    double w = 0;
+    Vector3d n(0, 0, 1);
+    double tx = 0, ty = 0;
+    if (plan.liquid) {
+      const auto& mp = mask->params();
+      tx = (q.x() - mp.origin.x()) / mp.texel_size - 0.5;
+      ty = (q.y() - mp.origin.y()) / mp.texel_size - 0.5;
+      const bool near_grid = tx > -3 && ty > -3 && tx < mp.width + 2 && ty < mp.height + 2;
+      // Beyond the grid the border reads zero: no liquid and no rim there.
+      if (near_grid) w = wet(tx, ty);
+      if (near_grid && plan.liquid_rim) {
+        n = Vector3d(g.tilt_s * (wet(tx - 1, ty) - wet(tx + 1, ty)), g.tilt_t * (wet(tx, ty - 1) - wet(tx, ty + 1)), 1.0)
+                .normalized();
+      }
+    }
+    double s = q.x() / g.tile, t = q.y() / g.tile;
+    if (plan.liquid_offset && w > 0) {
+      s -= g.d * V.x() * w;
+      t -= g.d * V.y() * w;
+    }
+    const Rgb tdiff = g.textured ? ground_tdiff(s, t) : Rgb(1, 1, 1);
+    const Vector3d ns = g.rs_uses_n_star ? n : Vector3d(0, 0, 1);
+    Rgb diffuse = Rgb::Constant(g.ca), spec = Rgb::Zero();
+    for (std::size_t k = 0; k < to_light.size(); ++k) {
+      const Vector3d& L = to_light[k];
+      const Rgb& Izr = scene.lights[k].colour;
+      diffuse += Izr * g.cd * std::max(0.0, n.dot(L));
+      if (plan.ground_specular) {
+        const Vector3d Rs = reflect(L, ns);
+        spec += Izr * g.cs * std::pow(std::max(0.0, Rs.dot(V)), g.n_spec);
+      }
+    }
+    Rgb I = diffuse.cwiseProduct(tdiff) + spec;
+    if (w > 0) {
+      I = pow_rgb(I, 1.0 + g.a * w);
+      if (plan.liquid_reflection) I += g.cr * w * env_at(reflect(V, n));
+    }
+    return I;
+  }
+
+  // Ground or environment along a ray that does not look at the ice (or after it).
+  // Rays almost parallel to the ground meet it at the horizon: beyond ground_far they see the
+  // environment (this also keeps texel coordinates far inside the range of int).
+  Rgb background(const Vector3d& o, const Vector3d& d) const {
+    if (d.z() < 0 && o.z() > ground_z) {
+      const double t = (ground_z - o.z()) / d.z();
+      if (t < ground_far) return shade_ground(o + t * d, d);
+    }
+    return env_at(d);
+  }
+
+  // Scene radiance along a secondary ray (physical model): the ice again gives its
+  // environment value (no further recursion), else ground or environment.
+  Rgb trace_secondary(const Vector3d& o, const Vector3d& d) const {
+    MeshHit h;
+    const double t_ground = (d.z() < 0 && o.z() > ground_z) ? (ground_z - o.z()) / d.z() : kInf;
+    if (bvh.intersect(o, d, eps, t_ground, h)) return env_at(d);
+    return background(o, d);
+  }
+
+  Vector3d ice_normal(const Vector3d& p, const MeshHit& h, const Vector3d& V) const {
+    Vector3d n = bvh.shading_normal(h);
+    if (plan.normal_map) {
+      Vector3d t, b;
+      int axis = 2;
+      tangent_frame(n, h.ng, t, b, axis);
+      const double tile = scene.ice.normal_map_tile;
+      const double u = (axis == 0 ? p.y() : p.x()) / tile, v = (axis == 2 ? p.y() : p.z()) / tile;
+      const Rgb enc = normal_tex.bilinear(u * normal_tex.width - 0.5, v * normal_tex.height - 0.5, true);
+      const Vector3d nm = 2.0 * (enc - Rgb::Constant(0.5));  // Eq. 6.12
+      n = (nm.x() * t + nm.y() * b + nm.z() * n).normalized();
+    }
+    if (n.dot(V) < 0) n = -n;  // face the eye (back faces seen from inside, bent normals)
+    return n;
+  }
+
+  Rgb shade_ice_monograph(const Vector3d& p, const MeshHit& h, const Vector3d& d) const {
+    const IceMaterial& m = scene.ice;
+    const Vector3d V = -d.normalized();
+    const Vector3d N = ice_normal(p, h, V);
+    Rgb I = Rgb::Zero();
+    if (plan.ice_texture || plan.ice_specular) {
+      Rgb diffuse = Rgb::Constant(m.ca), spec = Rgb::Zero();
+      for (std::size_t k = 0; k < to_light.size(); ++k) {
+        const Vector3d& L = to_light[k];
+        const Rgb& Izr = scene.lights[k].colour;
+        if (plan.ice_texture) diffuse += Izr * m.cd * std::max(0.0, N.dot(L));
+        if (plan.ice_specular) {
+          const Vector3d Rs = reflect(L, N);
+          const double x = m.specular == SpecularTerm::kRsV ? Rs.dot(V) : Rs.dot(L);
+          spec += Izr * m.cs * std::pow(std::max(0.0, x), m.n_spec);
+        }
+      }
+      if (plan.ice_texture) I += diffuse * milky_ice(p, m.texture_scale);
+      I += spec;
+    }
+    if (!plan.fresnel) return I;
+    const double cos_i = std::clamp(N.dot(V), 0.0, 1.0);
+    const double eta_ice = plan.dispersion ? m.eta_rgb[1] : m.eta;
+    const double F = fresnel(m.fresnel, cos_i, 1.0, eta_ice);
+    if (plan.ice_reflection) I += m.cr * F * env_at(reflect(V, N));
+    if (plan.ice_transmission) {
+      if (plan.dispersion) {
+        for (int c = 0; c < 3; ++c) {
+          const auto T = refract(-V, N, 1.0 / m.eta_rgb[static_cast<std::size_t>(c)]);
+          if (T) I[c] += m.ct * (1 - F) * env_at(*T)[c];
+        }
+      } else if (const auto T = refract(-V, N, 1.0 / m.eta)) {
+        I += m.ct * (1 - F) * env_at(*T);
+      }
+    }
+    return I;
+  }
+
+  Rgb shade_ice_physical(const Vector3d& p, const MeshHit& h, const Vector3d& d) const {
+    const IceMaterial& m = scene.ice;
+    const Vector3d V = -d.normalized();
+    const Vector3d N = ice_normal(p, h, V);
+    const double cos_i = std::clamp(N.dot(V), 0.0, 1.0);
+    Rgb I = Rgb::Zero();
+    const int channels = plan.dispersion ? 3 : 1;
+    // Reflection with each channel's own Fresnel weight, so that reflected + transmitted = 1
+    // per channel (the white-furnace test checks this bookkeeping).
+    const Rgb from_mirror = trace_secondary(p + eps * N, reflect(V, N));
+    if (!plan.dispersion) I += fresnel(m.fresnel, cos_i, 1.0, m.eta) * from_mirror;
+    for (int c = 0; c < channels; ++c) {
+      const double eta = plan.dispersion ? m.eta_rgb[static_cast<std::size_t>(c)] : m.eta;
+      const double F = fresnel(m.fresnel, cos_i, 1.0, eta);
+      if (plan.dispersion) I[c] += F * from_mirror[c];
+      const auto T = refract(-V, N, 1.0 / eta);
+      if (!T) continue;
+      Vector3d dir = *T, o = p - eps * N;
+      Rgb weight = Rgb::Constant(1 - F);
+      for (int bounce = 0; bounce <= m.max_internal_bounces; ++bounce) {
+        MeshHit e;
+        if (!bvh.intersect(o, dir, eps, kInf, e)) {  // leaked through a crack: see the environment
+          const Rgb L = env_at(dir);
+          if (plan.dispersion) I[c] += weight[c] * L[c];
+          else I += weight.cwiseProduct(L);
+          break;
+        }
+        for (int k = 0; k < 3; ++k) weight[k] *= std::exp(-m.absorption[static_cast<std::size_t>(k)] * e.t);
+        const Vector3d q = o + e.t * dir;
+        Vector3d n_out = bvh.shading_normal(e);
+        if (n_out.dot(dir) < 0) n_out = -n_out;  // the normal on the far side of the interface
+        const double cos_x = std::clamp(dir.dot(n_out), 0.0, 1.0);
+        const double Fx = fresnel(m.fresnel, cos_x, eta, 1.0);
+        const Vector3d reflected = dir - 2.0 * dir.dot(n_out) * n_out;
+        if (const auto out = refract(dir, -n_out, eta)) {
+          const Rgb L = trace_secondary(q + eps * n_out, *out);
+          if (plan.dispersion) I[c] += weight[c] * (1 - Fx) * L[c];
+          else I += (1 - Fx) * weight.cwiseProduct(L);
+          weight *= Fx;
+        }
+        dir = reflected.normalized();
+        o = q - eps * n_out;
+        if (weight.maxCoeff() < kMinPathWeight) break;  // what is left cannot show in the image
+      }
+    }
+    return I;
+  }
+
+  Rgb shade(const Vector3d& o, const Vector3d& d) const {
+    MeshHit h;
+    const double t_ground = (d.z() < 0 && o.z() > ground_z) ? (ground_z - o.z()) / d.z() : kInf;
+    if (bvh.intersect(o, d, 0.0, t_ground, h)) {
+      const Vector3d p = o + h.t * d;
+      return scene.ice.model == IceModel::kMonograph ? shade_ice_monograph(p, h, d) : shade_ice_physical(p, h, d);
+    }
+    return background(o, d);
+  }
+};
+
+// `world_from_camera`: the pinhole's inverse pose (computed once per frame).
+Primary primary_ray(const Camera& cam, const Eigen::Isometry3d& world_from_camera, int i, int j, double z_top) {
+  Primary r;
+  if (const auto* ortho = std::get_if<OrthographicTopDown>(&cam)) {
+    const double x = ortho->centre.x() + (i - 0.5 * (ortho->width - 1)) / ortho->pixels_per_unit;
+    const double y = ortho->centre.y() - (j - 0.5 * (ortho->height - 1)) / ortho->pixels_per_unit;
+    r.o = Vector3d(x, y, z_top);
+    r.d = Vector3d(0, 0, -1);
+    return r;
+  }
+  const auto& pin = std::get<Pinhole>(cam);
+  double x = (i - pin.cx) / pin.fx, y = (j - pin.cy) / pin.fy;
+  if (pin.distorted()) {
+    double ux = x, uy = y;
+    r.ok = undistort_normalized(pin.distortion, x, y, ux, uy);
+    x = ux;
+    y = uy;
+  }
+  r.o = world_from_camera.translation();
+  r.d = (world_from_camera.linear() * Vector3d(x, y, 1.0)).normalized();
+  return r;
+}
+
+}  // namespace
+
+RgbImage IceRenderer::render() {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!camera_) {
+    if (!scene_.camera) camera_ = auto_camera(Vector3d(-1, -1, 0), Vector3d(1, 1, 1), scene_.width, scene_.height);
+    else camera_ = scene_.camera;
+  }
+  const ShadingPlan p = plan();
+  std::string log = fmt::format("{}", fmt::join(p.skipped, "; "));
+  if (log != last_plan_log_) {
+    spdlog::info("render: skipped: {}", log.empty() ? "nothing" : log);
+    last_plan_log_ = log;
+  }
+  const double ground_z = scene_.ground.z.value_or(0.0);
+  FrameContext ctx{scene_, p, bvh_, mask_, env_, ground_tex_, normal_tex_, ground_z, 1e-4 * object_size_, 1e6 * object_size_, {}};
+  for (const auto& l : scene_.lights) ctx.to_light.push_back(l.to_light.normalized());
+  const Camera& cam = *camera_;
+  const int w = camera_width(cam), h = camera_height(cam);
+  const double z_top = std::max(bvh_.upper().z(), ground_z) + object_size_;
+  const Eigen::Isometry3d world_from_camera =
+      std::holds_alternative<Pinhole>(cam) ? std::get<Pinhole>(cam).camera_from_world.inverse() : Eigen::Isometry3d::Identity();
+  RgbImage img(w, h);
+  tbb::parallel_for(tbb::blocked_range2d<int>(0, h, 16, 0, w, 16), [&](const tbb::blocked_range2d<int>& r) {
+    for (int j = r.rows().begin(); j < r.rows().end(); ++j)
+      for (int i = r.cols().begin(); i < r.cols().end(); ++i) {
+        const Primary ray = primary_ray(cam, world_from_camera, i, j, z_top);
+        img.set(i, j, ray.ok ? ctx.shade(ray.o, ray.d) : Rgb::Zero());
+      }
+  });
+  stats_.trace_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return img;
+}
+
+}  // namespace meltlab::render

@@ -1,0 +1,232 @@
+// Procedural assets and image files of the ice/liquid renderer (render_assets.h).
+
+#include <meltlab/render/render_assets.h>
+#include <meltlab/sim/atomic_file.h>
+#include <meltlab/sim/error.h>
+
+#include <OpenImageIO/imageio.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace meltlab::render {
+
+using Eigen::Vector3d;
+
+Vector3d RgbImage::bilinear(double x, double y, bool wrap_y) const {
+  const double fx0 = std::floor(x), fy0 = std::floor(y);
+  const double fx = x - fx0, fy = y - fy0;
+  auto wrap = [](long k, int n) { return static_cast<int>(((k % n) + n) % n); };
+  const int i0 = wrap(static_cast<long>(fx0), width), i1 = wrap(static_cast<long>(fx0) + 1, width);
+  int j0, j1;
+  if (wrap_y) {
+    j0 = wrap(static_cast<long>(fy0), height);
+    j1 = wrap(static_cast<long>(fy0) + 1, height);
+  } else {
+    j0 = std::clamp(static_cast<int>(fy0), 0, height - 1);
+    j1 = std::clamp(static_cast<int>(fy0) + 1, 0, height - 1);
+  }
+  return (1 - fy) * ((1 - fx) * at(i0, j0) + fx * at(i1, j0)) + fy * ((1 - fx) * at(i0, j1) + fx * at(i1, j1));
+}
+
+namespace {
+
+double hash01(std::int64_t x, std::int64_t y, std::int64_t z, std::uint64_t seed) {
+  std::uint64_t h = seed * 0x9E3779B97F4A7C15ull;
+  for (std::int64_t v : {x, y, z}) {
+    h ^= static_cast<std::uint64_t>(v) + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 31;
+  }
+  return static_cast<double>(h >> 11) * 0x1.0p-53;
+}
+double smooth(double t) { return t * t * (3 - 2 * t); }
+
+// Value noise on a lattice of period `period` cells in x and y (tileable), in [0, 1].
+double periodic_noise(double x, double y, int period, std::uint64_t seed) {
+  const double x0 = std::floor(x), y0 = std::floor(y);
+  const double fx = smooth(x - x0), fy = smooth(y - y0);
+  auto h = [&](double i, double j) {
+    const auto pi = static_cast<std::int64_t>(i), pj = static_cast<std::int64_t>(j);
+    return hash01(((pi % period) + period) % period, ((pj % period) + period) % period, 0, seed);
+  };
+  const double a = h(x0, y0), b = h(x0 + 1, y0), c = h(x0, y0 + 1), d = h(x0 + 1, y0 + 1);
+  return (1 - fy) * ((1 - fx) * a + fx * b) + fy * ((1 - fx) * c + fx * d);
+}
+double periodic_fbm(double u, double v, int base_period, std::uint64_t seed) {
+  double s = 0, amp = 0.5, norm = 0;
+  int period = base_period;
+  for (int o = 0; o < 4; ++o) {
+    s += amp * periodic_noise(u * period, v * period, period, seed + static_cast<std::uint64_t>(o));
+    norm += amp;
+    amp *= 0.5;
+    period *= 2;
+  }
+  return s / norm;
+}
+
+double value_noise3(const Vector3d& p, std::uint64_t seed) {
+  const Vector3d f0 = p.array().floor();
+  const Vector3d f = p - f0;
+  const Vector3d w(smooth(f.x()), smooth(f.y()), smooth(f.z()));
+  const auto x = static_cast<std::int64_t>(f0.x()), y = static_cast<std::int64_t>(f0.y()), z = static_cast<std::int64_t>(f0.z());
+  double s = 0;
+  for (int c = 0; c < 8; ++c) {
+    const int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
+    const double wt = (dx ? w.x() : 1 - w.x()) * (dy ? w.y() : 1 - w.y()) * (dz ? w.z() : 1 - w.z());
+    s += wt * hash01(x + dx, y + dy, z + dz, seed);
+  }
+  return s;
+}
+
+}  // namespace
+
+RgbImage latlong_environment(const EnvironmentOptions& o) {
+  RgbImage env(o.width, o.height);
+  if (o.constant >= 0) {
+    std::fill(env.rgb.begin(), env.rgb.end(), static_cast<float>(o.constant));
+    return env;
+  }
+  const Vector3d sun = o.to_sun.normalized();
+  const double sun_cos = std::cos(1.5 * std::numbers::pi / 180.0);
+  for (int j = 0; j < o.height; ++j) {
+    const double theta = (j + 0.5) / o.height * std::numbers::pi;  // from the zenith
+    for (int i = 0; i < o.width; ++i) {
+      const double phi = ((i + 0.5) / o.width - 0.5) * 2 * std::numbers::pi;
+      const Vector3d d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+      Vector3d c;
+      if (d.z() >= 0) {
+        const double t = std::pow(1.0 - d.z(), 3.0);
+        c = (1 - t) * o.zenith + t * o.horizon;
+        // Bright windows: 8 vertical panels between 3° and 25° elevation.
+        const double elev = std::asin(d.z()) * 180.0 / std::numbers::pi;
+        const double panel = std::fmod((phi / (2 * std::numbers::pi) + 1.0) * 8.0, 1.0);
+        if (elev > 3 && elev < 25 && panel > 0.15 && panel < 0.45) c = Vector3d(2.5, 2.4, 2.2);
+        const double cs = d.dot(sun);
+        if (cs > sun_cos) c = Vector3d::Constant(o.sun_radiance);
+        else c += Vector3d(1.0, 0.9, 0.7) * 0.6 * std::pow(std::max(0.0, cs), 64.0);  // glow
+      } else {
+        // A checkered floor seen from the centre of a room (2 m below, 1 m squares).
+        const double r = 2.0 / std::max(1e-3, -d.z());
+        const int check = (static_cast<int>(std::floor(d.x() * r)) + static_cast<int>(std::floor(d.y() * r))) & 1;
+        c = o.floor * (check ? 1.0 : 1.0 - o.floor_checker);
+      }
+      env.set(i, j, c);
+    }
+  }
+  return env;
+}
+
+Vector3d sample_latlong(const RgbImage& env, const Vector3d& dir) {
+  const Vector3d d = dir.normalized();
+  const double u = std::atan2(d.y(), d.x()) / (2 * std::numbers::pi) + 0.5;
+  const double v = std::acos(std::clamp(d.z(), -1.0, 1.0)) / std::numbers::pi;
+  return env.bilinear(u * env.width - 0.5, v * env.height - 0.5, false);
+}
+
+RgbImage ground_texture(int size, std::uint64_t seed) {
+  RgbImage img(size, size);
+  const Vector3d light(0.62, 0.58, 0.52), dark(0.42, 0.40, 0.37), grout(0.25, 0.24, 0.22);
+  for (int j = 0; j < size; ++j)
+    for (int i = 0; i < size; ++i) {
+      const double u = (i + 0.5) / size, v = (j + 0.5) / size;
+      const double n = periodic_fbm(u, v, 8, seed);
+      // 4 x 4 tiles per texture period, alternating tones, thin grout lines.
+      const double tu = u * 4, tv = v * 4;
+      const bool alt = ((static_cast<int>(tu) + static_cast<int>(tv)) & 1) != 0;
+      const double eu = std::min(tu - std::floor(tu), std::ceil(tu) - tu), ev = std::min(tv - std::floor(tv), std::ceil(tv) - tv);
+      Vector3d c = (alt ? light : dark) * (0.75 + 0.5 * n);
+      if (std::min(eu, ev) < 0.025) c = grout;
+      img.set(i, j, c.cwiseMin(1.0));
+    }
+  return img;
+}
+
+RgbImage normal_map(int size, double bump, std::uint64_t seed) {
+  RgbImage img(size, size);
+  auto height = [&](int i, int j) {
+    return periodic_fbm((((i % size) + size) % size + 0.5) / size, (((j % size) + size) % size + 0.5) / size, 6, seed);
+  };
+  for (int j = 0; j < size; ++j)
+    for (int i = 0; i < size; ++i) {
+      // Slopes of the height field (height range 1 over a texture period of 1 → × size/2).
+      const double dx = (height(i + 1, j) - height(i - 1, j)) * 0.5 * size * bump / 16.0;
+      const double dy = (height(i, j + 1) - height(i, j - 1)) * 0.5 * size * bump / 16.0;
+      const Vector3d n = Vector3d(-dx, -dy, 1.0).normalized();
+      img.set(i, j, 0.5 * n + Vector3d::Constant(0.5));  // inverse of Eq. 6.12
+    }
+  return img;
+}
+
+double milky_ice(const Vector3d& p, double scale) {
+  const Vector3d q = p / scale;
+  const double n = 0.5 * value_noise3(q, 7) + 0.3 * value_noise3(2.03 * q, 8) + 0.2 * value_noise3(4.11 * q, 9);
+  return std::clamp(0.55 + 0.6 * (n - 0.5) + 0.25, 0.0, 1.0);  // mostly bright, cloudy
+}
+
+// ---- files ----------------------------------------------------------------------------
+
+namespace {
+void write_with_oiio(const std::filesystem::path& file, const char* format, int w, int h, int channels, OIIO::TypeDesc file_type,
+                     OIIO::TypeDesc data_type, const void* data) {
+  write_atomically(file, [&](const std::filesystem::path& tmp) {
+    auto out = OIIO::ImageOutput::create(format);
+    if (!out) throw InputError(fmt::format("{}: cannot write {}: {}", file.string(), format, OIIO::geterror()));
+    OIIO::ImageSpec spec(w, h, channels, file_type);
+    bool ok = out->open(tmp.string(), spec);
+    if (ok) ok = out->write_image(data_type, data);
+    const bool closed = out->close();
+    std::string err = out->geterror();
+    if (err.empty()) err = OIIO::geterror();
+    if (!ok || !closed || !err.empty()) throw InputError(fmt::format("{}: cannot write {}: {}", file.string(), format, err));
+  });
+}
+}  // namespace
+
+void write_exr(const std::filesystem::path& file, const RgbImage& image) {
+  write_with_oiio(file, "exr", image.width, image.height, 3, OIIO::TypeDesc::HALF, OIIO::TypeDesc::FLOAT, image.rgb.data());
+}
+
+void write_png(const std::filesystem::path& file, const RgbImage& image, double exposure, double gamma) {
+  std::vector<std::uint8_t> px(image.rgb.size());
+  for (std::size_t k = 0; k < px.size(); ++k) {
+    const double x = std::clamp(exposure * static_cast<double>(image.rgb[k]), 0.0, 1.0);
+    px[k] = static_cast<std::uint8_t>(std::lround(std::pow(x, 1.0 / gamma) * 255.0));
+  }
+  write_with_oiio(file, "png", image.width, image.height, 3, OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT8, px.data());
+}
+
+void write_gray_png(const std::filesystem::path& file, const std::vector<float>& values, int width, int height, float white,
+                    bool flip_y) {
+  std::vector<std::uint8_t> px(static_cast<std::size_t>(width) * height);
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i) {
+      const int src_row = flip_y ? height - 1 - j : j;
+      const double x = static_cast<double>(values[static_cast<std::size_t>(src_row) * width + i] / white);
+      px[static_cast<std::size_t>(j) * width + i] = static_cast<std::uint8_t>(std::lround(std::clamp(x, 0.0, 1.0) * 255.0));
+    }
+  write_with_oiio(file, "png", width, height, 1, OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT8, px.data());
+}
+
+RgbImage read_png(const std::filesystem::path& file) {
+  auto in = OIIO::ImageInput::open(file.string());
+  if (!in) throw InputError(fmt::format("{}: cannot read image: {}", file.string(), OIIO::geterror()));
+  const OIIO::ImageSpec& spec = in->spec();
+  std::vector<std::uint8_t> px(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, px.data()))
+    throw InputError(fmt::format("{}: cannot read image: {}", file.string(), in->geterror()));
+  RgbImage img(spec.width, spec.height);
+  for (int j = 0; j < spec.height; ++j)
+    for (int i = 0; i < spec.width; ++i)
+      for (int c = 0; c < 3; ++c) {
+        const int sc = std::min(c, spec.nchannels - 1);
+        img.rgb[3 * (static_cast<std::size_t>(j) * spec.width + i) + static_cast<std::size_t>(c)] =
+            static_cast<float>(px[(static_cast<std::size_t>(j) * spec.width + i) * spec.nchannels + static_cast<std::size_t>(sc)]) / 255.0f;
+      }
+  in->close();
+  return img;
+}
+
+}  // namespace meltlab::render
