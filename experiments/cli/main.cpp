@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   add(cli::add_synth_sequence(app));
   add(cli::add_fit(app, command_line));
   add(cli::add_manufacture(app, command_line));
+  add(cli::add_reproduce(app));
 
   try {
     app.parse(argc, argv);
