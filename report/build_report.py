@@ -61,9 +61,9 @@ def table_html(rows, link):
     if not rows:
         return "<p class=warn>empty table</p>"
     head, body = rows[0], rows[1:]
-    out = ["<table><thead><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr></thead><tbody>"]
+    out = ["<table><thead><tr>" + "".join(f"<th>{html.escape(str(h))}</th>" for h in head) + "</tr></thead><tbody>"]
     for r in body[:MAX_ROWS]:
-        out.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>")
+        out.append("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>")
     out.append("</tbody></table>")
     note = f" (first {MAX_ROWS} of {len(body)} rows)" if len(body) > MAX_ROWS else ""
     out.append(f'<p class=small><a href="{html.escape(link)}">CSV</a>{note}</p>')
