@@ -107,7 +107,7 @@ ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) 
     throw InputError(fmt::format("{}: line {}: {}", config.string(), e.mark.line + 1, e.msg));
   }
   if (!root.IsMap()) throw InputError(fmt::format("{}: not a YAML map", config.string()));
-  static const std::set<std::string> known{"name", "title", "sources", "inputs", "vars", "steps", "notes"};
+  static const std::set<std::string> known{"name", "title", "sources", "inputs", "vars", "steps", "notes", "exclusive"};
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>();
     if (!known.count(key)) throw InputError(fmt::format("{}: unknown key '{}'", config.string(), key));
@@ -122,6 +122,13 @@ ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) 
   if (root["sources"])
     for (const auto& s : root["sources"]) e.sources.push_back(scalar_of(s, config, "sources[]"));
   e.out_dir = o.out_dir / e.name;
+  if (root["exclusive"]) {
+    try {
+      e.exclusive = root["exclusive"].as<bool>();
+    } catch (const YAML::Exception&) {
+      throw InputError(fmt::format("{}: 'exclusive' must be true or false", config.string()));
+    }
+  }
 
   const std::string mode = o.quick ? "quick" : "full";
   std::map<std::string, std::string> vars{{"out", e.out_dir.string()},
@@ -292,7 +299,7 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
   fs::create_directories(o.out_dir);
   const auto t0 = Clock::now();
   std::mutex mu;
-  std::size_t next = 0, finished = 0, failed = 0, running = 0;
+  std::size_t finished = 0, failed = 0, running = 0;
   ReproduceResult result;
   result.experiments.resize(experiments.size());
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
@@ -373,13 +380,19 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
     write_text_atomically(done, marker.dump(2) + "\n");  // last: the folder is complete
   };
 
+  // Exclusive experiments (timing measurements) run first, one at a time, alone; the others
+  // then share the workers.
+  std::vector<std::size_t> alone, shared;
+  for (std::size_t i = 0; i < experiments.size(); ++i) (experiments[i].exclusive ? alone : shared).push_back(i);
+  std::size_t next = 0;
+  const std::vector<std::size_t>* queue = &alone;
   auto worker = [&] {
     for (;;) {
       std::size_t i = 0;
       {
         std::lock_guard lock(mu);
-        if (next >= experiments.size() || (stop && stop->load())) return;
-        i = next++;
+        if (next >= queue->size() || (stop && stop->load())) return;
+        i = (*queue)[next++];
         ++running;
       }
       auto& out = result.experiments[i];
@@ -402,6 +415,9 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
     }
   };
   const int jobs = std::max(1, std::min<int>(o.jobs, static_cast<int>(std::max<std::size_t>(1, experiments.size()))));
+  worker();  // the exclusive ones, on this thread
+  next = 0;
+  queue = &shared;
   std::vector<std::thread> pool;
   for (int j = 0; j < jobs; ++j) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
@@ -430,6 +446,7 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
                     {"original_seconds", r.original_seconds},
                     {"steps", steps},
                     {"hash", experiments[i].hash},
+                    {"exclusive", experiments[i].exclusive},
                     {"config", experiments[i].config_file.string()},
                     {"folder", experiments[i].name}});
     }

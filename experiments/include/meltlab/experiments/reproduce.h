@@ -14,6 +14,7 @@
 //   title: "Tab. 5.1, Figs. 5.6-5.7: ..."
 //   sources: ["Tab. 5.1", "Fig. 5.6"]     # what it reproduces (for the report)
 //   inputs: [experiments/configs/x.yaml]  # extra files (relative to the repository) hashed
+//   exclusive: true                       # optional: runs alone, before the others (timings)
 //   vars: {cycles: {quick: 3000, full: 20000}}
 //   steps:
 //     - name: object_b                    # [a-z0-9_]+; ${step} = ${out}/<name>
@@ -49,6 +50,7 @@ struct ReproduceExperiment {
   std::vector<std::filesystem::path> hashed_files;  ///< inputs, scripts and file arguments
   std::vector<ReproduceStep> steps;
   std::string hash;  ///< hex content hash (config, mode, hashed files, meltlab version)
+  bool exclusive = false;  ///< run alone (timing measurements), before the others
 };
 
 struct ReproduceOptions {
