@@ -108,7 +108,7 @@ def main(argv):
                  f"{html.escape(', '.join(e['sources']))} · status <b>{html.escape(e['status'])}</b> · config "
                  f"<code>{html.escape(os.path.relpath(e['config'], Path(__file__).resolve().parent.parent))}</code></p>"]
         frag_path = exp / "report.json"
-        if e["status"] not in ("ran", "reused") or not frag_path.is_file():
+        if e["status"] not in ("ran", "reused", "kept") or not frag_path.is_file():
             msg = e["error"] or "no report.json"
             parts.append(f"<p class=bad>FAILED: {html.escape(msg)}</p>")
             for log in sorted((exp / "logs").glob("*.err")) if (exp / "logs").is_dir() else []:
@@ -173,7 +173,8 @@ def main(argv):
 
     if ch8:
         toc.insert(0, '<li><a href="#p1p100">Chapter 8: P1 and P100 of the molds</a></li>')
-    n = {s: sum(1 for e in summary["experiments"] if e["status"] == s) for s in ("ran", "reused", "failed", "not run")}
+    n = {s: sum(1 for e in summary["experiments"] if e["status"] == s)
+         for s in ("ran", "reused", "failed", "not run", "kept")}
     hw_rows = [["", "this machine", "the monograph"],
                ["CPU", hw["CPU"] + f" ({hw['logical CPUs']} logical CPUs)", "Intel Core 2 Duo P8400, 2.26 GHz, 1066 MHz FSB"],
                ["GPU", "none used (CPU only)", "nVidia GeForce 9600M GT (melt, ch. 5); GeForce 6800GT (ice rendering, ch. 6)"],
@@ -198,7 +199,8 @@ section {{ border-top: 2px solid #ccc; margin-top: 1.5em; }}
 <h1>meltlab reproduction report</h1>
 <p>meltlab {html.escape(summary['meltlab']['version'])} ({html.escape(summary['meltlab']['git_revision'])}),
 {html.escape(summary['mode'])} mode, {summary['jobs']} parallel job(s), finished {html.escape(summary['finished'])},
-{summary['seconds']:.1f} s. Experiments: {n['ran']} ran, {n['reused']} reused, {n['failed'] + n['not run']} failed.
+{summary['seconds']:.1f} s. Experiments: {n['ran']} ran, {n['reused']} reused, {n['failed'] + n['not run']} failed
+(and {n['kept']} not selected this time, kept from earlier runs).
 Sources' numbers: <code>spec/melting-monograph.md</code>.</p>
 <h2>Contents</h2><ul>{''.join(toc)}</ul>
 <h2>Hardware</h2>{table_html(hw_rows, 'hardware_both.csv')}

@@ -78,20 +78,22 @@ Run add_reproduce(CLI::App& app) {
         &g_stop);
     std::signal(SIGINT, previous);
 
-    int ran = 0, reused = 0, failed = 0;
+    int ran = 0, reused = 0, failed = 0, kept = 0;
     std::printf("\n%-22s %-8s %9s  %s\n", "experiment", "status", "seconds", "error / steps");
     for (const auto& r : result.experiments) {
       ran += r.status == "ran";
       reused += r.status == "reused";
+      kept += r.status == "kept";
       failed += r.status == "failed" || r.status == "not run";
       std::string detail = r.error;
       if (detail.empty())
         for (const auto& s : r.steps) detail += fmt::format("{}{} {:.1f}s", detail.empty() ? "" : ", ", s.name, s.seconds);
-      const double secs = r.status == "reused" ? r.original_seconds : r.seconds;
-      std::printf("%-22s %-8s %9.1f  %s%s\n", r.name.c_str(), r.status.c_str(), secs, detail.c_str(),
-                  r.status == "reused" ? " (earlier run)" : "");
+      const bool earlier = r.status == "reused" || r.status == "kept";
+      std::printf("%-22s %-8s %9.1f  %s%s\n", r.name.c_str(), r.status.c_str(), earlier ? r.original_seconds : r.seconds,
+                  detail.c_str(), earlier ? " (earlier run)" : "");
     }
-    std::printf("%d ran, %d reused, %d failed in %.1f s; summary: %s\n", ran, reused, failed, result.seconds,
+    std::printf("%d ran, %d reused, %d failed in %.1f s; %d more kept from earlier runs; summary: %s\n", ran, reused,
+                failed, result.seconds, kept,
                 (o->out_dir / "summary.json").string().c_str());
     std::printf("report: %s\n",
                 result.report_status == "built" ? result.report_file.string().c_str() : result.report_status.c_str());

@@ -430,25 +430,54 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
     }
   result.interrupted = stop && stop->load();
   result.seconds = elapsed();
+  // Experiments not selected this time (--only) whose folders are finished with the current
+  // hash stay in the summary and the report as "kept".
+  std::vector<const ReproduceExperiment*> listed;
+  for (const auto& e : experiments) listed.push_back(&e);
+  if (!o.only.empty()) {
+    auto all_options = o;
+    all_options.only.clear();
+    for (const auto& e : load_reproduce_experiments(all_options)) {
+      if (std::find(o.only.begin(), o.only.end(), e.name) != o.only.end()) continue;
+      try {
+        const json d = json::parse(read_file(e.out_dir / "done.json"));
+        if (d.value("hash", "") != e.hash) continue;
+        ExperimentOutcome k;
+        k.name = e.name;
+        k.title = e.title;
+        k.status = "kept";
+        k.hash = e.hash;
+        k.original_seconds = d.value("seconds", 0.0);
+        for (const auto& st : d.value("steps", json::array()))
+          k.steps.push_back({st.value("name", ""), st.value("exit_code", 0), st.value("seconds", 0.0)});
+        result.experiments.push_back(k);
+        result.kept.push_back(e);
+      } catch (const std::exception&) {
+        // no finished folder: not listed
+      }
+    }
+    for (const auto& e : result.kept) listed.push_back(&e);
+  }
 
   auto summary_json = [&] {
     json ex = json::array();
-    for (std::size_t i = 0; i < experiments.size(); ++i) {
+    for (std::size_t i = 0; i < listed.size(); ++i) {
       const auto& r = result.experiments[i];
+      const ReproduceExperiment& x = *listed[i];
       json steps = json::array();
       for (const auto& s : r.steps) steps.push_back({{"name", s.name}, {"exit_code", s.exit_code}, {"seconds", s.seconds}});
       ex.push_back({{"name", r.name},
                     {"title", r.title},
-                    {"sources", experiments[i].sources},
+                    {"sources", x.sources},
                     {"status", r.status},
                     {"error", r.error},
                     {"seconds", r.seconds},
                     {"original_seconds", r.original_seconds},
                     {"steps", steps},
-                    {"hash", experiments[i].hash},
-                    {"exclusive", experiments[i].exclusive},
-                    {"config", experiments[i].config_file.string()},
-                    {"folder", experiments[i].name}});
+                    {"hash", x.hash},
+                    {"exclusive", x.exclusive},
+                    {"config", x.config_file.string()},
+                    {"folder", x.name}});
     }
     return json{{"meltlab", {{"version", kVersion}, {"git_revision", kGitRevision}}},
                 {"mode", o.quick ? "quick" : "full"},

@@ -109,6 +109,16 @@ grep -q "tiny_melt: reused" run2.err || fail "no reuse progress line"
 [ "$(stat -c %y out/tiny_melt/done.json)" = "$stamp" ] || fail "reused folder rewritten"
 [ -s out/report/index.html ] || fail "report not rebuilt"
 
+# --- --only one of them: the other finished experiment stays in the summary and the report as "kept"
+"$M" reproduce --quick --configs "$REAL_CONFIGS" --configs tc --only tiny_melt --out out >run2b.out 2>&1 || fail "--only: $(cat run2b.out)"
+grep -Eq "^0 ran, 1 reused, 0 failed .* 1 more kept" run2b.out || fail "kept: $(cat run2b.out)"
+$PY - <<'PY' || fail "kept experiment in the summary and the report"
+import json
+st = {e["name"]: e["status"] for e in json.load(open("out/summary.json"))["experiments"]}
+assert st == {"tiny_melt": "reused", "tab_2_3": "kept"}, st
+assert 'id="tab_2_3"' in open("out/report/index.html").read()
+PY
+
 # --- a changed config (another cycle count) is run again; --force runs a finished one again
 sed -i 's/quick: 40/quick: 30/' tc/tiny_melt.yaml
 "$M" reproduce --quick --configs tc --only tiny_melt --out out --no-report >run3.out 2>run3.err || fail "third run: $(cat run3.err)"

@@ -79,7 +79,7 @@ struct StepOutcome {
 struct ExperimentOutcome {
   std::string name;
   std::string title;
-  std::string status;  ///< "ran", "reused", "failed", "not run" (interrupted)
+  std::string status;  ///< "ran", "reused", "failed", "not run" (interrupted), "kept" (not selected, finished earlier)
   std::string error;
   double seconds = 0;           ///< this invocation
   double original_seconds = 0;  ///< reused: the run that made the folder
@@ -88,7 +88,8 @@ struct ExperimentOutcome {
 };
 
 struct ReproduceResult {
-  std::vector<ExperimentOutcome> experiments;
+  std::vector<ExperimentOutcome> experiments;  ///< the selected ones in order, then the kept ones
+  std::vector<ReproduceExperiment> kept;       ///< not selected (--only) but finished with the current hash
   double seconds = 0;
   std::string report_status;  ///< "built", "failed: ...", "skipped"
   std::filesystem::path report_file;
