@@ -190,6 +190,7 @@ td, th {{ border: 1px solid #bbb; padding: 2px 6px; text-align: left; }}
 th {{ background: #eee; }}
 figure {{ display: inline-block; margin: .5em; max-width: 100%; vertical-align: top; }}
 img {{ max-width: 520px; border: 1px solid #ddd; }}
+img[src*="/overlays/"] {{ max-width: 250px; }}
 figcaption, .small {{ font-size: 12px; color: #555; }}
 .ok {{ background: #cfc; padding: 0 4px; }} .bad {{ background: #fcc; padding: 0 4px; }}
 .qual {{ background: #ddf; padding: 0 4px; }} .verdict {{ margin: .4em 0; }}
