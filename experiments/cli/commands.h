@@ -18,5 +18,6 @@ Run add_synth_sequence(CLI::App& app);
 Run add_fit(CLI::App& app, const std::string& command_line);
 Run add_manufacture(CLI::App& app, const std::string& command_line);
 Run add_render(CLI::App& app, const std::string& command_line);
+Run add_reproduce(CLI::App& app);
 
 }  // namespace meltlab::cli

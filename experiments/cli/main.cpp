@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   add(cli::add_fit(app, command_line));
   add(cli::add_manufacture(app, command_line));
   add(cli::add_render(app, command_line));
+  add(cli::add_reproduce(app));
 
   try {
     app.parse(argc, argv);

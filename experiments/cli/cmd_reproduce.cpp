@@ -1,0 +1,105 @@
+// meltlab reproduce: run the experiment configs (one per reproduced table/figure/study),
+// reusing finished ones, and build the HTML report.
+
+#include <meltlab/experiments/reproduce.h>
+#include <meltlab/sim/error.h>
+
+#include <fmt/format.h>
+
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <unistd.h>
+
+#include "cli_util.h"
+#include "commands.h"
+
+#ifndef MELTLAB_SOURCE_DIR
+#error "MELTLAB_SOURCE_DIR must name the repository (set by experiments/CMakeLists.txt)"
+#endif
+
+namespace meltlab::cli {
+namespace {
+std::atomic<bool> g_stop{false};
+extern "C" void on_reproduce_interrupt(int) { g_stop.store(true); }
+}  // namespace
+
+Run add_reproduce(CLI::App& app) {
+  namespace fs = std::filesystem;
+  auto* sub = app.add_subcommand(
+      "reproduce",
+      "Run the reproduction experiments (one YAML config per table/figure/study), reuse finished ones, build the report");
+  auto o = std::make_shared<experiments::ReproduceOptions>();
+  auto configs = std::make_shared<std::vector<std::string>>();
+  auto source_dir = std::make_shared<std::string>(MELTLAB_SOURCE_DIR);
+  auto list = std::make_shared<bool>(false);
+  auto no_report = std::make_shared<bool>(false);
+  sub->add_option("--out", o->out_dir, "Output folder: one subfolder per experiment, summary.json, report/index.html")
+      ->required();
+  sub->add_flag("--quick", o->quick, "Reduced sizes (the default of ./scripts/reproduce; < 10 min on 2 cores)");
+  sub->add_option("--only", o->only, "Run only these experiments (repeatable)")->delimiter(',');
+  sub->add_option("--jobs", o->jobs, "Experiments run in parallel")->default_val(2)->check(CLI::Range(1, 64));
+  sub->add_option("--configs", *configs,
+                  "Folders of experiment configs (repeatable; default <source>/experiments/reproduce)");
+  sub->add_option("--source-dir", *source_dir, "The meltlab repository (report/ scripts, relative inputs)")
+      ->default_str(MELTLAB_SOURCE_DIR);
+  sub->add_option("--python", o->python, "Python interpreter with matplotlib")->default_val("/usr/bin/python3");
+  sub->add_flag("--force", o->force, "Run every experiment even if a finished folder with the same hash exists");
+  sub->add_flag("--no-report", *no_report, "Do not build the HTML report");
+  sub->add_flag("--list", *list, "List the experiments (name, steps, hash) and exit");
+  return [=]() {
+    o->source_dir = fs::absolute(*source_dir);
+    o->out_dir = fs::absolute(o->out_dir);
+    o->report = !*no_report;
+    o->config_dirs.clear();
+    if (configs->empty()) o->config_dirs.push_back(o->source_dir / "experiments" / "reproduce");
+    for (const auto& c : *configs) o->config_dirs.push_back(fs::absolute(c));
+    if (!fs::is_regular_file(o->source_dir / "report" / "build_report.py"))
+      throw InputError(fmt::format("--source-dir: '{}' has no report/build_report.py", o->source_dir.string()));
+    o->self_exe = fs::read_symlink("/proc/self/exe");
+    const auto experiments = experiments::load_reproduce_experiments(*o);
+    if (experiments.empty()) throw InputError("reproduce: no experiment configs found");
+    if (*list) {
+      for (const auto& e : experiments) {
+        std::printf("%-22s %zu steps  %s  %s\n", e.name.c_str(), e.steps.size(), e.hash.c_str(), e.title.c_str());
+      }
+      return static_cast<int>(kOk);
+    }
+    std::fprintf(stderr, "meltlab reproduce: %zu experiment(s), %s mode, %d job(s), output %s\n", experiments.size(),
+                 o->quick ? "quick" : "full", o->jobs, o->out_dir.string().c_str());
+    g_stop.store(false);
+    auto previous = std::signal(SIGINT, on_reproduce_interrupt);
+    const auto result = experiments::run_reproduce(
+        *o, experiments,
+        [](const std::string& line) {
+          std::fprintf(stderr, "%s\n", line.c_str());
+          std::fflush(stderr);
+        },
+        &g_stop);
+    std::signal(SIGINT, previous);
+
+    int ran = 0, reused = 0, failed = 0, kept = 0;
+    std::printf("\n%-22s %-8s %9s  %s\n", "experiment", "status", "seconds", "error / steps");
+    for (const auto& r : result.experiments) {
+      ran += r.status == "ran";
+      reused += r.status == "reused";
+      kept += r.status == "kept";
+      failed += r.status == "failed" || r.status == "not run";
+      std::string detail = r.error;
+      if (detail.empty())
+        for (const auto& s : r.steps) detail += fmt::format("{}{} {:.1f}s", detail.empty() ? "" : ", ", s.name, s.seconds);
+      const bool earlier = r.status == "reused" || r.status == "kept";
+      std::printf("%-22s %-8s %9.1f  %s%s\n", r.name.c_str(), r.status.c_str(), earlier ? r.original_seconds : r.seconds,
+                  detail.c_str(), earlier ? " (earlier run)" : "");
+    }
+    std::printf("%d ran, %d reused, %d failed in %.1f s; %d more kept from earlier runs; summary: %s\n", ran, reused,
+                failed, result.seconds, kept,
+                (o->out_dir / "summary.json").string().c_str());
+    std::printf("report: %s\n",
+                result.report_status == "built" ? result.report_file.string().c_str() : result.report_status.c_str());
+    if (result.interrupted) return static_cast<int>(kInterrupted);
+    return failed > 0 || result.report_status.rfind("failed", 0) == 0 ? static_cast<int>(kInvalid) : static_cast<int>(kOk);
+  };
+}
+
+}  // namespace meltlab::cli

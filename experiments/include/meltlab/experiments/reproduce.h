@@ -1,0 +1,104 @@
+#pragma once
+// meltlab reproduce: the main job. Every reproduced table, figure or study of the sources is
+// one YAML config (experiments/reproduce/*.yaml) that lists its inputs and its steps; a step
+// is a meltlab subcommand (run as a child process of the same binary) or a Python script.
+// Steps of one experiment run in order; experiments run in parallel on a bounded number of
+// workers. A finished experiment folder holds done.json with the content hash of its config,
+// its input files and the meltlab version (written atomically, last); a later run with the
+// same hash reuses the folder instead of running it again.
+//
+// Config format (every string may use ${out}, ${step}, ${repo}, ${config_dir}, ${mode} and
+// the config's own vars; a var is a scalar or {quick: ..., full: ...}):
+//
+//   name: tab_5_1                         # [a-z0-9_]+, unique; the folder under --out
+//   title: "Tab. 5.1, Figs. 5.6-5.7: ..."
+//   sources: ["Tab. 5.1", "Fig. 5.6"]     # what it reproduces (for the report)
+//   inputs: [experiments/configs/x.yaml]  # extra files (relative to the repository) hashed
+//   exclusive: true                       # optional: runs alone, before the others (timings)
+//   vars: {cycles: {quick: 3000, full: 20000}}
+//   steps:
+//     - name: object_b                    # [a-z0-9_]+; ${step} = ${out}/<name>
+//       meltlab: [simulate, --mesh, benchmark_b, --cycles, "${cycles}", --out, "${step}"]
+//     - name: report
+//       python: [report/experiment_report.py, cycle_time, "${out}"]   # script relative to the repository
+//       stdout: "${out}/x.json"           # optional: the step's stdout goes to this file
+//
+// Each step's stdout/stderr go to ${out}/logs/<step>.out|.err (unless stdout is redirected).
+
+#include <atomic>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace meltlab::experiments {
+
+struct ReproduceStep {
+  std::string name;
+  std::string kind;               ///< "meltlab" or "python"
+  std::vector<std::string> args;  ///< after variable substitution (python: script first, absolute)
+  std::filesystem::path stdout_file;  ///< empty: ${out}/logs/<name>.out
+};
+
+struct ReproduceExperiment {
+  std::string name;
+  std::string title;
+  std::vector<std::string> sources;
+  std::filesystem::path config_file;
+  std::filesystem::path out_dir;
+  std::vector<std::filesystem::path> hashed_files;  ///< inputs, scripts and file arguments
+  std::vector<ReproduceStep> steps;
+  std::string hash;  ///< hex content hash (config, mode, hashed files, meltlab version)
+  bool exclusive = false;  ///< run alone (timing measurements), before the others
+};
+
+struct ReproduceOptions {
+  std::vector<std::filesystem::path> config_dirs;  ///< every *.yaml in them is an experiment
+  std::filesystem::path out_dir;
+  std::filesystem::path source_dir;  ///< the repository (report/ scripts, relative inputs)
+  std::filesystem::path self_exe;    ///< the meltlab binary run for the meltlab steps
+  std::string python = "/usr/bin/python3";
+  bool quick = false;
+  std::vector<std::string> only;  ///< empty: all
+  int jobs = 2;
+  bool force = false;   ///< run even if a finished folder with the same hash exists
+  bool report = true;   ///< run report/build_report.py at the end
+};
+
+/// Loads and validates the configs of `options.config_dirs` (and `only`), substitutes the
+/// variables and computes the hashes. Throws InputError naming the config file on bad input.
+std::vector<ReproduceExperiment> load_reproduce_experiments(const ReproduceOptions& options);
+
+struct StepOutcome {
+  std::string name;
+  int exit_code = 0;
+  double seconds = 0;
+};
+
+struct ExperimentOutcome {
+  std::string name;
+  std::string title;
+  std::string status;  ///< "ran", "reused", "failed", "not run" (interrupted), "kept" (not selected, finished earlier)
+  std::string error;
+  double seconds = 0;           ///< this invocation
+  double original_seconds = 0;  ///< reused: the run that made the folder
+  std::vector<StepOutcome> steps;
+  std::string hash;
+};
+
+struct ReproduceResult {
+  std::vector<ExperimentOutcome> experiments;  ///< the selected ones in order, then the kept ones
+  std::vector<ReproduceExperiment> kept;       ///< not selected (--only) but finished with the current hash
+  double seconds = 0;
+  std::string report_status;  ///< "built", "failed: ...", "skipped"
+  std::filesystem::path report_file;
+  bool interrupted = false;
+};
+
+/// Runs the experiments (reusing finished ones), writes <out>/summary.json and, if asked,
+/// builds the report. `log` receives one progress line per event (thread-safe calls).
+ReproduceResult run_reproduce(const ReproduceOptions& options, const std::vector<ReproduceExperiment>& experiments,
+                              const std::function<void(const std::string&)>& log, const std::atomic<bool>* stop);
+
+}  // namespace meltlab::experiments

@@ -1,0 +1,516 @@
+#include <meltlab/experiments/reproduce.h>
+#include <meltlab/sim/atomic_file.h>
+#include <meltlab/sim/error.h>
+#include <meltlab/version.h>
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdint>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <mutex>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <thread>
+
+extern char** environ;
+
+namespace meltlab::experiments {
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  if (!in) throw InputError(fmt::format("{}: cannot read", p.string()));
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// Two 64-bit FNV-1a streams with different offsets: a 128-bit content fingerprint (not a
+/// cryptographic hash; it detects changed inputs, not adversaries).
+class Fingerprint {
+ public:
+  void add(const std::string& bytes) {
+    for (unsigned char c : bytes) {
+      a_ = (a_ ^ c) * 0x100000001b3ULL;
+      b_ = (b_ ^ static_cast<unsigned char>(c ^ 0x5a)) * 0x100000001b3ULL;
+    }
+    // Length-delimit every field so concatenations cannot collide.
+    const std::string len = fmt::format("|{}|", bytes.size());
+    for (unsigned char c : len) {
+      a_ = (a_ ^ c) * 0x100000001b3ULL;
+      b_ = (b_ ^ c) * 0x100000001b3ULL;
+    }
+  }
+  std::string hex() const { return fmt::format("{:016x}{:016x}", a_, b_); }
+
+ private:
+  std::uint64_t a_ = 0xcbf29ce484222325ULL;
+  std::uint64_t b_ = 0x84222325cbf29ce4ULL;
+};
+
+bool valid_name(const std::string& s) {
+  static const std::regex re("[a-z0-9_]+");
+  return std::regex_match(s, re);
+}
+
+/// Replaces ${var} in `s`; unknown names are an error naming the config.
+std::string substitute(const std::string& s, const std::map<std::string, std::string>& vars, const fs::path& config) {
+  std::string out;
+  std::size_t i = 0;
+  while (i < s.size()) {
+    const auto open = s.find("${", i);
+    if (open == std::string::npos) {
+      out += s.substr(i);
+      break;
+    }
+    const auto close = s.find('}', open);
+    if (close == std::string::npos) throw InputError(fmt::format("{}: unterminated '${{' in '{}'", config.string(), s));
+    out += s.substr(i, open - i);
+    const std::string key = s.substr(open + 2, close - open - 2);
+    const auto it = vars.find(key);
+    if (it == vars.end()) throw InputError(fmt::format("{}: unknown variable '${{{}}}' in '{}'", config.string(), key, s));
+    out += it->second;
+    i = close + 1;
+  }
+  return out;
+}
+
+std::string scalar_of(const YAML::Node& n, const fs::path& config, const std::string& what) {
+  if (!n.IsScalar()) throw InputError(fmt::format("{}: {} must be a scalar", config.string(), what));
+  return n.as<std::string>();
+}
+
+ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) {
+  const std::string text = read_file(config);
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError(fmt::format("{}: line {}: {}", config.string(), e.mark.line + 1, e.msg));
+  }
+  if (!root.IsMap()) throw InputError(fmt::format("{}: not a YAML map", config.string()));
+  static const std::set<std::string> known{"name", "title", "sources", "inputs", "vars", "steps", "notes", "exclusive"};
+  for (const auto& kv : root) {
+    const auto key = kv.first.as<std::string>();
+    if (!known.count(key)) throw InputError(fmt::format("{}: unknown key '{}'", config.string(), key));
+  }
+  ReproduceExperiment e;
+  e.config_file = config;
+  if (!root["name"]) throw InputError(fmt::format("{}: missing 'name'", config.string()));
+  e.name = scalar_of(root["name"], config, "name");
+  if (!valid_name(e.name) || e.name == "report" || e.name == "logs")
+    throw InputError(fmt::format("{}: name '{}' must be [a-z0-9_]+ and not 'report' or 'logs'", config.string(), e.name));
+  e.title = root["title"] ? scalar_of(root["title"], config, "title") : e.name;
+  if (root["sources"])
+    for (const auto& s : root["sources"]) e.sources.push_back(scalar_of(s, config, "sources[]"));
+  e.out_dir = o.out_dir / e.name;
+  if (root["exclusive"]) {
+    try {
+      e.exclusive = root["exclusive"].as<bool>();
+    } catch (const YAML::Exception&) {
+      throw InputError(fmt::format("{}: 'exclusive' must be true or false", config.string()));
+    }
+  }
+
+  const std::string mode = o.quick ? "quick" : "full";
+  std::map<std::string, std::string> vars{{"out", e.out_dir.string()},
+                                          {"repo", o.source_dir.string()},
+                                          {"config_dir", config.parent_path().string()},
+                                          {"mode", mode}};
+  if (root["vars"]) {
+    if (!root["vars"].IsMap()) throw InputError(fmt::format("{}: 'vars' must be a map", config.string()));
+    for (const auto& kv : root["vars"]) {
+      const auto key = kv.first.as<std::string>();
+      if (vars.count(key) || key == "step") throw InputError(fmt::format("{}: var '{}' is reserved", config.string(), key));
+      const YAML::Node& v = kv.second;
+      if (v.IsMap()) {
+        if (!v["quick"] || !v["full"])
+          throw InputError(fmt::format("{}: var '{}' needs both 'quick' and 'full'", config.string(), key));
+        vars[key] = scalar_of(v[mode], config, "vars." + key + "." + mode);
+      } else {
+        vars[key] = scalar_of(v, config, "vars." + key);
+      }
+    }
+  }
+  auto resolve = [&](const std::string& p) {
+    const fs::path path(p);
+    return path.is_absolute() ? path : o.source_dir / path;
+  };
+  if (root["inputs"])
+    for (const auto& in : root["inputs"]) {
+      const fs::path p = resolve(substitute(scalar_of(in, config, "inputs[]"), vars, config));
+      if (!fs::is_regular_file(p)) throw InputError(fmt::format("{}: input '{}' does not exist", config.string(), p.string()));
+      e.hashed_files.push_back(p);
+    }
+  if (!root["steps"] || !root["steps"].IsSequence() || root["steps"].size() == 0)
+    throw InputError(fmt::format("{}: 'steps' must be a non-empty list", config.string()));
+  std::set<std::string> step_names;
+  for (const auto& s : root["steps"]) {
+    ReproduceStep step;
+    if (!s.IsMap() || !s["name"]) throw InputError(fmt::format("{}: every step needs a 'name'", config.string()));
+    step.name = scalar_of(s["name"], config, "steps[].name");
+    if (!valid_name(step.name) || !step_names.insert(step.name).second)
+      throw InputError(fmt::format("{}: step name '{}' must be [a-z0-9_]+ and unique", config.string(), step.name));
+    if (static_cast<bool>(s["meltlab"]) == static_cast<bool>(s["python"]))
+      throw InputError(fmt::format("{}: step '{}' needs exactly one of 'meltlab' and 'python'", config.string(), step.name));
+    step.kind = s["meltlab"] ? "meltlab" : "python";
+    const YAML::Node& args = s[step.kind];
+    if (!args.IsSequence() || args.size() == 0)
+      throw InputError(fmt::format("{}: step '{}': '{}' must be a non-empty list", config.string(), step.name, step.kind));
+    auto step_vars = vars;
+    step_vars["step"] = (e.out_dir / step.name).string();
+    for (const auto& a : args) step.args.push_back(substitute(scalar_of(a, config, "step argument"), step_vars, config));
+    if (step.kind == "python") {
+      step.args[0] = resolve(step.args[0]).string();
+      if (!fs::is_regular_file(step.args[0]))
+        throw InputError(fmt::format("{}: step '{}': script '{}' does not exist", config.string(), step.name, step.args[0]));
+    }
+    if (s["stdout"]) step.stdout_file = substitute(scalar_of(s["stdout"], config, "stdout"), step_vars, config);
+    // Files named by the arguments (a mesh, a kl field, a script) are inputs too; what lies
+    // under the output folder is not.
+    for (const auto& a : step.args) {
+      std::error_code ec;
+      const fs::path p(a);
+      if (!p.is_absolute() || !fs::is_regular_file(p, ec)) continue;
+      const auto rel = fs::relative(p, o.out_dir, ec);
+      if (!ec && !rel.empty() && rel.begin()->string() != "..") continue;
+      e.hashed_files.push_back(p);
+    }
+    e.steps.push_back(std::move(step));
+  }
+
+  Fingerprint f;
+  f.add("meltlab-reproduce-1");
+  f.add(kVersion);
+  f.add(kGitRevision);
+  f.add(mode);
+  f.add(text);
+  for (const auto& step : e.steps)
+    for (const auto& a : step.args) f.add(a);
+  for (const auto& p : e.hashed_files) {
+    f.add(p.string());
+    f.add(read_file(p));
+  }
+  e.hash = f.hex();
+  return e;
+}
+
+std::string now_utc() {
+  const auto t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::string last_line(const fs::path& p) {
+  std::ifstream in(p);
+  std::string line, last;
+  while (std::getline(in, line)) {
+    // the progress line of a tty run is never written to a file, but strip \r just in case
+    if (const auto cr = line.rfind('\r'); cr != std::string::npos) line = line.substr(cr + 1);
+    if (!line.empty()) last = line;
+  }
+  return last;
+}
+
+/// Runs argv with stdout/stderr redirected; returns the exit code (128+signal if killed).
+int spawn_and_wait(const std::vector<std::string>& argv, const fs::path& out, const fs::path& err, bool search_path) {
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  std::vector<char*> cargv;
+  for (const auto& a : argv) cargv.push_back(const_cast<char*>(a.c_str()));
+  cargv.push_back(nullptr);
+  pid_t pid = 0;
+  const int rc = search_path ? posix_spawnp(&pid, cargv[0], &fa, nullptr, cargv.data(), environ)
+                             : posix_spawn(&pid, cargv[0], &fa, nullptr, cargv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) throw InputError(fmt::format("cannot start '{}': {}", argv[0], std::strerror(rc)));
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) throw InvariantError(fmt::format("waitpid: {}", std::strerror(errno)));
+  if (WIFEXITED(status)) return WEXITSTATUS(status);
+  if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
+  return -1;
+}
+
+std::string quote_join(const std::vector<std::string>& args) {
+  std::string s;
+  for (const auto& a : args) s += (s.empty() ? "" : " ") + (a.find(' ') == std::string::npos ? a : "'" + a + "'");
+  return s;
+}
+
+}  // namespace
+
+std::vector<ReproduceExperiment> load_reproduce_experiments(const ReproduceOptions& o) {
+  std::vector<fs::path> files;
+  for (const auto& dir : o.config_dirs) {
+    if (!fs::is_directory(dir)) throw InputError(fmt::format("--configs: '{}' is not a folder", dir.string()));
+    for (const auto& entry : fs::directory_iterator(dir))
+      if (entry.is_regular_file() && (entry.path().extension() == ".yaml" || entry.path().extension() == ".yml"))
+        files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  std::vector<ReproduceExperiment> all;
+  std::set<std::string> names;
+  for (const auto& f : files) {
+    auto e = load_one(f, o);
+    if (!names.insert(e.name).second) throw InputError(fmt::format("{}: experiment name '{}' used twice", f.string(), e.name));
+    all.push_back(std::move(e));
+  }
+  if (o.only.empty()) return all;
+  std::vector<ReproduceExperiment> picked;
+  for (const auto& want : o.only) {
+    auto it = std::find_if(all.begin(), all.end(), [&](const auto& e) { return e.name == want; });
+    if (it == all.end()) {
+      std::string known;
+      for (const auto& e : all) known += (known.empty() ? "" : ", ") + e.name;
+      throw InputError(fmt::format("--only: no experiment '{}' (known: {})", want, known));
+    }
+    if (std::none_of(picked.begin(), picked.end(), [&](const auto& p) { return p.name == want; })) picked.push_back(*it);
+  }
+  return picked;
+}
+
+ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<ReproduceExperiment>& experiments,
+                              const std::function<void(const std::string&)>& log, const std::atomic<bool>* stop) {
+  fs::create_directories(o.out_dir);
+  const auto t0 = Clock::now();
+  std::mutex mu;
+  std::size_t finished = 0, failed = 0, running = 0;
+  ReproduceResult result;
+  result.experiments.resize(experiments.size());
+  auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
+  auto say = [&](const std::string& msg) {  // caller holds mu
+    log(fmt::format("[{:6.1f}s {}/{} done, {} running, {} failed] {}", elapsed(), finished, experiments.size(), running,
+                    failed, msg));
+  };
+
+  auto run_one = [&](const ReproduceExperiment& e, ExperimentOutcome& out) {
+    out.name = e.name;
+    out.title = e.title;
+    out.hash = e.hash;
+    const fs::path done = e.out_dir / "done.json";
+    if (!o.force && fs::exists(done)) {
+      try {
+        const json d = json::parse(read_file(done));
+        if (d.value("hash", "") == e.hash) {
+          out.status = "reused";
+          out.original_seconds = d.value("seconds", 0.0);
+          for (const auto& s : d.value("steps", json::array()))
+            out.steps.push_back({s.value("name", ""), s.value("exit_code", 0), s.value("seconds", 0.0)});
+          return;
+        }
+      } catch (const std::exception&) {
+        // an unreadable marker means the folder is redone
+      }
+    }
+    const auto te = Clock::now();
+    std::error_code ec;
+    fs::remove_all(e.out_dir, ec);
+    fs::create_directories(e.out_dir / "logs");
+    for (std::size_t k = 0; k < e.steps.size(); ++k) {
+      const auto& s = e.steps[k];
+      if (stop && stop->load()) {
+        out.status = "failed";
+        out.error = "interrupted";
+        break;
+      }
+      std::vector<std::string> argv;
+      if (s.kind == "meltlab") {
+        argv.push_back(o.self_exe.string());
+      } else {
+        argv.push_back(o.python);
+      }
+      argv.insert(argv.end(), s.args.begin(), s.args.end());
+      {
+        std::lock_guard lock(mu);
+        say(fmt::format("{}: step {}/{} {}: {}", e.name, k + 1, e.steps.size(), s.name,
+                        s.kind == "meltlab" ? "meltlab " + quote_join(s.args) : "python " + quote_join(s.args)));
+      }
+      const fs::path out_file = s.stdout_file.empty() ? e.out_dir / "logs" / (s.name + ".out") : s.stdout_file;
+      const fs::path err_file = e.out_dir / "logs" / (s.name + ".err");
+      const auto ts = Clock::now();
+      int code = -1;
+      try {
+        fs::create_directories(out_file.parent_path());
+        code = spawn_and_wait(argv, out_file, err_file, s.kind == "python");
+      } catch (const std::exception& ex) {
+        out.error = fmt::format("step {}: {}", s.name, ex.what());
+      }
+      out.steps.push_back({s.name, code, std::chrono::duration<double>(Clock::now() - ts).count()});
+      if (code != 0) {
+        out.status = "failed";
+        if (out.error.empty())
+          out.error = fmt::format("step {} ({} {}) exited with code {}: {}", s.name, s.kind, s.args.empty() ? "" : s.args[0],
+                                  code, last_line(err_file));
+        break;
+      }
+    }
+    out.seconds = std::chrono::duration<double>(Clock::now() - te).count();
+    if (out.status == "failed") return;
+    out.status = "ran";
+    json steps = json::array();
+    for (const auto& s : out.steps) steps.push_back({{"name", s.name}, {"exit_code", s.exit_code}, {"seconds", s.seconds}});
+    const json marker = {{"experiment", e.name}, {"hash", e.hash},       {"mode", o.quick ? "quick" : "full"},
+                         {"finished", now_utc()}, {"seconds", out.seconds}, {"steps", steps},
+                         {"config", e.config_file.string()}};
+    write_text_atomically(done, marker.dump(2) + "\n");  // last: the folder is complete
+  };
+
+  // Exclusive experiments (timing measurements) run first, one at a time, alone; the others
+  // then share the workers.
+  std::vector<std::size_t> alone, shared;
+  for (std::size_t i = 0; i < experiments.size(); ++i) (experiments[i].exclusive ? alone : shared).push_back(i);
+  std::size_t next = 0;
+  const std::vector<std::size_t>* queue = &alone;
+  auto worker = [&] {
+    for (;;) {
+      std::size_t i = 0;
+      {
+        std::lock_guard lock(mu);
+        if (next >= queue->size() || (stop && stop->load())) return;
+        i = (*queue)[next++];
+        ++running;
+      }
+      auto& out = result.experiments[i];
+      try {
+        run_one(experiments[i], out);
+      } catch (const std::exception& ex) {
+        out.status = "failed";
+        out.error = ex.what();
+      }
+      std::lock_guard lock(mu);
+      --running;
+      ++finished;
+      if (out.status == "failed") ++failed;
+      if (out.status == "reused")
+        say(fmt::format("{}: reused (finished earlier in {:.1f} s)", out.name, out.original_seconds));
+      else if (out.status == "failed")
+        say(fmt::format("{}: FAILED after {:.1f} s: {}", out.name, out.seconds, out.error));
+      else
+        say(fmt::format("{}: done in {:.1f} s", out.name, out.seconds));
+    }
+  };
+  const int jobs = std::max(1, std::min<int>(o.jobs, static_cast<int>(std::max<std::size_t>(1, experiments.size()))));
+  worker();  // the exclusive ones, on this thread
+  next = 0;
+  queue = &shared;
+  std::vector<std::thread> pool;
+  for (int j = 0; j < jobs; ++j) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+  for (std::size_t i = 0; i < experiments.size(); ++i)
+    if (result.experiments[i].status.empty()) {
+      result.experiments[i].name = experiments[i].name;
+      result.experiments[i].title = experiments[i].title;
+      result.experiments[i].status = "not run";
+      result.experiments[i].error = "interrupted before it started";
+    }
+  result.interrupted = stop && stop->load();
+  result.seconds = elapsed();
+  // Experiments not selected this time (--only) whose folders are finished with the current
+  // hash stay in the summary and the report as "kept".
+  std::vector<const ReproduceExperiment*> listed;
+  for (const auto& e : experiments) listed.push_back(&e);
+  if (!o.only.empty()) {
+    auto all_options = o;
+    all_options.only.clear();
+    for (const auto& e : load_reproduce_experiments(all_options)) {
+      if (std::find(o.only.begin(), o.only.end(), e.name) != o.only.end()) continue;
+      try {
+        const json d = json::parse(read_file(e.out_dir / "done.json"));
+        if (d.value("hash", "") != e.hash) continue;
+        ExperimentOutcome k;
+        k.name = e.name;
+        k.title = e.title;
+        k.status = "kept";
+        k.hash = e.hash;
+        k.original_seconds = d.value("seconds", 0.0);
+        for (const auto& st : d.value("steps", json::array()))
+          k.steps.push_back({st.value("name", ""), st.value("exit_code", 0), st.value("seconds", 0.0)});
+        result.experiments.push_back(k);
+        result.kept.push_back(e);
+      } catch (const std::exception&) {
+        // no finished folder: not listed
+      }
+    }
+    for (const auto& e : result.kept) listed.push_back(&e);
+  }
+
+  auto summary_json = [&] {
+    json ex = json::array();
+    for (std::size_t i = 0; i < listed.size(); ++i) {
+      const auto& r = result.experiments[i];
+      const ReproduceExperiment& x = *listed[i];
+      json steps = json::array();
+      for (const auto& s : r.steps) steps.push_back({{"name", s.name}, {"exit_code", s.exit_code}, {"seconds", s.seconds}});
+      ex.push_back({{"name", r.name},
+                    {"title", r.title},
+                    {"sources", x.sources},
+                    {"status", r.status},
+                    {"error", r.error},
+                    {"seconds", r.seconds},
+                    {"original_seconds", r.original_seconds},
+                    {"steps", steps},
+                    {"hash", x.hash},
+                    {"exclusive", x.exclusive},
+                    {"config", x.config_file.string()},
+                    {"folder", x.name}});
+    }
+    return json{{"meltlab", {{"version", kVersion}, {"git_revision", kGitRevision}}},
+                {"mode", o.quick ? "quick" : "full"},
+                {"jobs", jobs},
+                {"finished", now_utc()},
+                {"seconds", result.seconds},
+                {"interrupted", result.interrupted},
+                {"experiments", ex}};
+  };
+  write_text_atomically(o.out_dir / "summary.json", summary_json().dump(2) + "\n");
+
+  result.report_status = "skipped";
+  if (o.report && !result.interrupted) {
+    const fs::path script = o.source_dir / "report" / "build_report.py";
+    const fs::path log_out = o.out_dir / "build_report.out", log_err = o.out_dir / "build_report.err";
+    {
+      std::lock_guard lock(mu);
+      say(fmt::format("report: python {} {}", script.string(), o.out_dir.string()));
+    }
+    int code = -1;
+    try {
+      code = spawn_and_wait({o.python, script.string(), o.out_dir.string()}, log_out, log_err, true);
+    } catch (const std::exception& ex) {
+      result.report_status = fmt::format("failed: {}", ex.what());
+    }
+    if (code == 0) {
+      result.report_status = "built";
+      result.report_file = o.out_dir / "report" / "index.html";
+    } else if (result.report_status == "skipped") {
+      result.report_status = fmt::format("failed: exit {}: {}", code, last_line(log_err));
+    }
+  }
+  return result;
+}
+
+}  // namespace meltlab::experiments
