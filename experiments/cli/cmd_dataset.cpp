@@ -1,11 +1,17 @@
 // meltlab dataset: the catalog of input meshes (libcgal-demo meshes, procedural shapes, molds).
 
 #include <meltlab/datasets/catalog.h>
+#include <meltlab/datasets/procedural.h>
+#include <meltlab/sim/error.h>
+#include <meltlab/sim/polygon_mesh.h>
+#include <meltlab/sim/topology.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <functional>
+#include <map>
 
 #include "cli_util.h"
 #include "commands.h"
@@ -21,7 +27,34 @@ Run add_dataset(CLI::App& app) {
   auto* get = sub->add_subcommand("get", "Extract or generate datasets into the cache and print their paths");
   auto names = std::make_shared<std::vector<std::string>>();
   get->add_option("names", *names, "Dataset names (or 'all')")->required();
+  // Tab. 2.3's polyhedra in their polygon form (faces with hole loops), which no mesh file
+  // format keeps: the catalog stores them triangulated, so their file counts differ.
+  auto* euler = sub->add_subcommand("euler", "Eq. 2.3 counts (V E F H S G chi) of the Tab. 2.3 polyhedra in polygon form, as JSON");
+  auto shapes = std::make_shared<std::vector<std::string>>();
+  euler->add_option("names", *shapes, "cube_quads, cube_triangles, double_cube_quads, cube_with_face_hole, cube_with_tunnel, "
+                                      "cube_with_tunnel_front_triangulated (default: all)");
   return [=]() {
+    if (euler->parsed()) {
+      const std::map<std::string, std::function<sim::PolygonMesh()>> polygon_forms{
+          {"cube_quads", [] { return datasets::cube_quads(); }},
+          {"cube_triangles", [] { return sim::to_polygon_mesh(datasets::cube_triangles()); }},
+          {"double_cube_quads", [] { return datasets::double_cube_quads(); }},
+          {"cube_with_face_hole", [] { return datasets::cube_with_face_hole(); }},
+          {"cube_with_tunnel", [] { return datasets::cube_with_tunnel(); }},
+          {"cube_with_tunnel_front_triangulated", [] { return datasets::cube_with_tunnel_front_triangulated(); }}};
+      std::vector<std::string> wanted = *shapes;
+      if (wanted.empty())
+        for (const auto& [n, make] : polygon_forms) wanted.push_back(n);
+      nlohmann::json out = nlohmann::json::object();
+      for (const auto& n : wanted) {
+        const auto it = polygon_forms.find(n);
+        if (it == polygon_forms.end()) throw InputError(fmt::format("dataset euler: '{}' is not one of the Tab. 2.3 polyhedra", n));
+        const sim::EulerCounts c = sim::euler_counts(it->second());
+        out[n] = {{"V", c.V}, {"E", c.E}, {"F", c.F}, {"H", c.H}, {"S", c.S}, {"G", c.G}, {"chi", c.chi}, {"consistent", c.genus_valid}};
+      }
+      std::printf("%s\n", out.dump(2).c_str());
+      return static_cast<int>(kOk);
+    }
     if (list->parsed()) {
       const auto catalog = datasets::dataset_catalog();
       if (*as_json) {

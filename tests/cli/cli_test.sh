@@ -165,6 +165,18 @@ PY
     expect_exit 0 "$M" dataset get benchmark_a
     [ -s "$(cat out.txt)" ] || fail "dataset get did not produce a file"
     expect_exit 2 "$M" dataset get no_such_thing; expect_err "no_such_thing"
+    # Tab. 2.3 in polygon form: the tunnel cube (two faces with a hole each) has genus 1.
+    expect_exit 0 "$M" dataset euler
+    py <<'PY'
+import json
+j = json.load(open('out.txt'))
+assert len(j) == 6, j.keys()
+t = j['cube_with_tunnel']
+assert (t['V'], t['E'], t['F'], t['H'], t['S'], t['G'], t['chi']) == (16, 24, 10, 2, 1, 1, 0), t
+f = j['cube_with_face_hole']
+assert (f['V'], f['E'], f['F'], f['H'], f['G']) == (16, 24, 11, 1, 0), f
+PY
+    expect_exit 2 "$M" dataset euler cube_with_nothing; expect_err "cube_with_nothing"; expect_one_line_err
     ;;
   *) fail "unknown case" ;;
 esac
