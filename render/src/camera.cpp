@@ -2,6 +2,7 @@
 // JSON description (see camera.h).
 
 #include <meltlab/render/camera.h>
+#include <meltlab/sim/yaml_keys.h>
 #include <meltlab/sim/error.h>
 
 #include <fmt/format.h>
@@ -124,14 +125,7 @@ std::vector<double> read_list(const YAML::Node& n, const std::string& at, const 
 class Keys {
  public:
   Keys(const YAML::Node& n, std::string at, const std::set<std::string>& allowed) : n_(n), at_(std::move(at)) {
-    for (auto it = n.begin(); it != n.end(); ++it) {
-      const std::string k = it->first.as<std::string>();
-      if (!allowed.count(k)) {
-        std::string list;
-        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-        throw InputError(fmt::format("{}: unknown key '{}' (allowed: {})", at_, k, list));
-      }
-    }
+    refuse_unknown_keys(n, at_, allowed);
   }
   bool has(const std::string& k) const { return static_cast<bool>(n_[k]); }
   void require(const std::string& k) const {

@@ -1,6 +1,7 @@
 // Scene description of the ice/liquid ray tracer (render_scene.h).
 
 #include <meltlab/render/render_scene.h>
+#include <meltlab/sim/yaml_keys.h>
 #include <meltlab/sim/error.h>
 
 #include <fmt/format.h>
@@ -25,14 +26,7 @@ class Section {
  public:
   Section(const YAML::Node& n, std::string at, const std::set<std::string>& allowed) : n_(n), at_(std::move(at)) {
     if (!n.IsMap()) throw InputError(fmt::format("{}: must be a mapping", at_));
-    for (auto it = n.begin(); it != n.end(); ++it) {
-      const std::string k = it->first.as<std::string>();
-      if (!allowed.count(k)) {
-        std::string list;
-        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-        throw InputError(fmt::format("{}: unknown key '{}' (allowed: {})", at_, k, list));
-      }
-    }
+    refuse_unknown_keys(n, at_, allowed);
   }
   bool has(const std::string& k) const { return static_cast<bool>(n_[k]); }
   const YAML::Node node(const std::string& k) const { return n_[k]; }

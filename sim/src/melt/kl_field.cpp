@@ -2,6 +2,7 @@
 // pressure from a ground plane, a trilinear 3-D grid, and products / maxima / minima.
 
 #include <meltlab/sim/error.h>
+#include <meltlab/sim/yaml_keys.h>
 #include <meltlab/sim/kl_field.h>
 
 #include <fmt/format.h>
@@ -206,14 +207,7 @@ Vec3<double> read_vec3(const YAML::Node& n, const std::string& at, const std::st
 class Keys {
  public:
   Keys(const YAML::Node& n, std::string at, std::set<std::string> allowed) : n_(n), at_(std::move(at)) {
-    for (auto it = n.begin(); it != n.end(); ++it) {
-      const std::string k = it->first.as<std::string>();
-      if (!allowed.count(k)) {
-        std::string list;
-        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-        throw InputError(fmt::format("{}: unknown key '{}' (allowed: {})", at_, k, list));
-      }
-    }
+    refuse_unknown_keys(n, at_, allowed);
   }
   bool has(const std::string& k) const { return static_cast<bool>(n_[k]); }
   double number(const std::string& k, double def) const { return has(k) ? read_number(n_[k], at_, k) : def; }

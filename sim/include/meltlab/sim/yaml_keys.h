@@ -1,0 +1,27 @@
+#pragma once
+// Refusing unknown keys of a YAML mapping (a typo in a config must not pass silently).
+// Header-only: used by the .cpp files that already read YAML (kl fields, cameras, scenes).
+
+#include <meltlab/sim/error.h>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <set>
+#include <string>
+
+namespace meltlab {
+
+/// Throws InputError "AT: unknown key 'K' (allowed: a, b, ...)" for the first key of the
+/// mapping `n` that is not in `allowed`.
+inline void refuse_unknown_keys(const YAML::Node& n, const std::string& at, const std::set<std::string>& allowed) {
+  for (auto it = n.begin(); it != n.end(); ++it) {
+    const std::string k = it->first.as<std::string>();
+    if (allowed.count(k)) continue;
+    std::string list;
+    for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+    throw InputError(fmt::format("{}: unknown key '{}' (allowed: {})", at, k, list));
+  }
+}
+
+}  // namespace meltlab
