@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <set>
 
@@ -34,7 +35,8 @@ DatasetKind kind_from_name(const std::string& s, const std::string& context) {
   if (s == "cgal") return DatasetKind::kCgal;
   if (s == "procedural") return DatasetKind::kProcedural;
   if (s == "mold") return DatasetKind::kMold;
-  throw InputError(fmt::format("{}: kind '{}' is not one of cgal, procedural, mold", context, s));
+  if (s == "refined") return DatasetKind::kRefined;
+  throw InputError(fmt::format("{}: kind '{}' is not one of cgal, procedural, mold, refined", context, s));
 }
 
 template <class T>
@@ -69,8 +71,8 @@ DatasetEntry parse_entry(const YAML::Node& node, const std::string& file) {
   e.triangles = scalar_as<std::int64_t>(node["triangles"], context, "triangles");
   if (e.triangles <= 0) throw InputError(fmt::format("{}: 'triangles' must be positive", context));
   if (node["params"]) {
-    if (e.kind != DatasetKind::kProcedural && e.kind != DatasetKind::kMold)
-      throw InputError(fmt::format("{}: only procedural and mold datasets take 'params'", context));
+    if (e.kind == DatasetKind::kCgal)
+      throw InputError(fmt::format("{}: only procedural, mold and refined datasets take 'params'", context));
     if (!node["params"].IsMap()) throw InputError(fmt::format("{}: 'params' must be a map", context));
     for (const auto& kv : node["params"])
       e.params[kv.first.as<std::string>()] = scalar_as<std::string>(kv.second, context, "params");
@@ -108,6 +110,8 @@ DatasetEntry parse_entry(const YAML::Node& node, const std::string& file) {
         throw InputError(fmt::format("{}: {}", context, err.what()));
       }
       break;
+    case DatasetKind::kRefined:
+      break;  // the source must name another dataset: checked once the whole list is read
   }
   return e;
 }
@@ -150,6 +154,16 @@ CatalogFile read_catalog(const fs::path& yaml_file) {
       throw InputError(fmt::format("{}: {}: dataset name '{}' is used twice", file, where(node), e.name));
     out.entries.push_back(std::move(e));
   }
+  for (const DatasetEntry& e : out.entries) {
+    if (e.kind != DatasetKind::kRefined) continue;
+    const auto src = std::find_if(out.entries.begin(), out.entries.end(),
+                                  [&](const DatasetEntry& s) { return s.name == e.source; });
+    if (src == out.entries.end())
+      throw InputError(fmt::format("{}: refined dataset '{}': source '{}' is not a dataset of the catalog", file, e.name,
+                                   e.source));
+    if (src->kind == DatasetKind::kRefined)
+      throw InputError(fmt::format("{}: refined dataset '{}': source '{}' is itself refined", file, e.name, e.source));
+  }
   return out;
 }
 
@@ -163,6 +177,8 @@ std::string dataset_kind_name(DatasetKind kind) {
       return "procedural";
     case DatasetKind::kMold:
       return "mold";
+    case DatasetKind::kRefined:
+      return "refined";
   }
   return "unknown";
 }

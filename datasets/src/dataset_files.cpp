@@ -5,6 +5,7 @@
 #include <meltlab/datasets/mesh_transforms.h>
 #include <meltlab/datasets/molds.h>
 #include <meltlab/datasets/procedural.h>
+#include <meltlab/datasets/refine.h>
 #include <meltlab/sim/error.h>
 #include <meltlab/sim/mesh_io.h>
 
@@ -262,7 +263,7 @@ bool is_known_generator(const std::string& generator) { return generators().coun
 
 }  // namespace detail
 
-IndexedMesh generated_mesh(const DatasetEntry& entry) {
+IndexedMesh generated_mesh(const DatasetEntry& entry, const fs::path& cache_dir) {
   Params params(entry);
   IndexedMesh mesh;
   switch (entry.kind) {
@@ -278,10 +279,25 @@ IndexedMesh generated_mesh(const DatasetEntry& entry) {
     case DatasetKind::kMold:
       mesh = mold_entry_mesh(entry, params);
       break;
+    case DatasetKind::kRefined: {
+      const int levels = static_cast<int>(params.integer("loop_levels"));
+      const std::int64_t target = params.integer_or("target_triangles", 0);
+      try {
+        // A source marked need_repair (the ChineseDragon has a small hole) is repaired on load.
+        sim::LoadOptions load;
+        load.repair = dataset_entry(entry.source).need_repair;
+        mesh = refined(sim::load_mesh(dataset_path(entry.source, cache_dir), load).mesh, levels, target);
+      } catch (const InputError& e) {
+        throw InputError(fmt::format("{}: {}", entry.name, e.what()));
+      }
+      break;
+    }
   }
   params.require_all_used();
   return mesh;
 }
+
+IndexedMesh generated_mesh(const DatasetEntry& entry) { return generated_mesh(entry, default_cache_dir()); }
 
 fs::path dataset_path(const std::string& name, const fs::path& cache_dir) {
   const DatasetEntry e = dataset_entry(name);
@@ -293,9 +309,11 @@ fs::path dataset_path(const std::string& name, const fs::path& cache_dir) {
   if (e.kind == DatasetKind::kCgal) return extracted_cgal_file(e, cache_dir);
   const fs::path target = cache_dir / generated_file_name(e);
   if (usable_file(target)) return target;
+  // A refined entry's source is fetched before the lock (dataset_path takes it too).
+  if (e.kind == DatasetKind::kRefined) (void)dataset_path(e.source, cache_dir);
   const std::lock_guard<std::mutex> lock(generation_mutex());
   if (usable_file(target)) return target;  // another thread made it meanwhile
-  sim::save_mesh(generated_mesh(e), target);
+  sim::save_mesh(generated_mesh(e, cache_dir), target);
   return target;
 }
 

@@ -24,15 +24,16 @@
 
 namespace meltlab::datasets {
 
-enum class DatasetKind { kCgal, kProcedural, kMold };
+enum class DatasetKind { kCgal, kProcedural, kMold, kRefined };
 
-/// "cgal", "procedural", "mold".
+/// "cgal", "procedural", "mold", "refined".
 std::string dataset_kind_name(DatasetKind kind);
 
 struct DatasetEntry {
   std::string name;  ///< unique key, e.g. "bunny00", "benchmark_b", "giraffe"
   DatasetKind kind = DatasetKind::kProcedural;
-  std::string source;                         ///< archive member | generator name | mold name
+  std::string source;                         ///< archive member | generator name | mold name |
+                                              ///< (refined) the dataset it refines
   std::map<std::string, std::string> params;  ///< generator arguments (procedural only), as text
   std::string description;                    ///< one line
   std::int64_t triangles = 0;                 ///< triangles after loading (cgal: load_mesh, or the file's
@@ -68,9 +69,13 @@ std::filesystem::path cgal_data_archive();
 /// folder is not created.
 std::filesystem::path default_cache_dir();
 
-/// The mesh of a procedural or mold entry, generated in memory (metres). Throws
-/// InputError for a cgal entry, an unknown generator, a missing, unused or malformed
-/// parameter ("<name>: parameter 'rings': ...").
+/// The mesh of a procedural, mold or refined entry, generated in memory (metres; a refined
+/// entry reads its source through dataset_path(source, cache_dir), see refine.h for its
+/// params loop_levels and target_triangles). Throws InputError for a cgal entry, an unknown
+/// generator, a missing, unused or malformed parameter ("<name>: parameter 'rings': ...").
+sim::IndexedMesh generated_mesh(const DatasetEntry& entry, const std::filesystem::path& cache_dir);
+
+/// generated_mesh(entry, default_cache_dir()).
 sim::IndexedMesh generated_mesh(const DatasetEntry& entry);
 
 /// Path of the dataset's file in `cache_dir`, creating the file (and the folder) if it is
@@ -78,7 +83,7 @@ sim::IndexedMesh generated_mesh(const DatasetEntry& entry);
 ///   cgal       — <cache_dir>/<name>.<ext of the member>, extracted with
 ///                `tar -xzf <archive> -C <unique temp dir> <member>` (spawned, not via a
 ///                shell) and renamed into place;
-///   procedural, mold — <cache_dir>/<name>-<8 hex digits>.off, written atomically; the hex
+///   procedural, mold, refined — <cache_dir>/<name>-<8 hex digits>.off, written atomically; the hex
 ///                digits hash the generator, its parameters and the generator revision, so
 ///                a changed generator never returns a stale file.
 /// Safe when several threads or processes ask for the same dataset at once: each writes to
