@@ -26,9 +26,55 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // (the bias is below 1e-4 of the radiance it would carry, far under 8-bit quantisation).
 constexpr double kMinPathWeight = 1e-4;
 
-// Cheap per-channel power: x^e for x >= 0.
-Rgb pow_rgb(const Rgb& x, double e) {
-  return Rgb(std::pow(std::max(0.0, x.x()), e), std::pow(std::max(0.0, x.y()), e), std::pow(std::max(0.0, x.z()), e));
+// max(0, x)^e (e >= 0; 0^0 = 1 as std::pow), without calling pow for the many non-positive bases.
+double pow_pos(double x, double e) { return x > 0 ? std::pow(x, e) : (e == 0 ? 1.0 : 0.0); }
+
+// Per-channel power: x^e for x >= 0.
+Rgb pow_rgb(const Rgb& x, double e) { return Rgb(pow_pos(x.x(), e), pow_pos(x.y(), e), pow_pos(x.z(), e)); }
+
+// What the wet test (Eq. 7.7 on the bilinear mask) gives around each texel, so that the
+// ground shading can skip the five bilinear tests (centre and the rim's four neighbours)
+// where their outcome is known: the tests at texel coordinates within one texel of
+// [i, i+1) x [j, j+1) read only texels [i-1, i+2] x [j-1, j+2], and a bilinear value is a
+// convex combination of the texels it reads. kDry: all of them below p (every test is 0);
+// kWet: all above p by a margin that covers the rounding of the interpolation (every test
+// is 1); kMixed: evaluate. Only for a constant threshold p > 0.
+enum WetWindow : std::uint8_t { kDry = 0, kWet = 1, kMixed = 2 };
+constexpr double kWetMargin = 1e-6;  // relative; the interpolation rounds at ~1e-16
+
+std::vector<std::uint8_t> wet_windows(const sim::LiquidMask& mask) {
+  const auto& mp = mask.params();
+  const int w = mp.width, h = mp.height;
+  const auto& v = mask.values();
+  const double p = mp.threshold;
+  auto texel = [&](int i, int j) -> double {  // zero outside, as the shading reads it
+    return (i < 0 || j < 0 || i >= w || j >= h) ? 0.0 : static_cast<double>(v[static_cast<std::size_t>(j) * w + i]);
+  };
+  // Separable minimum and maximum over the 4 x 4 window.
+  std::vector<double> row_min(static_cast<std::size_t>(w) * (h + 3)), row_max(row_min.size());
+  for (int j = -1; j <= h + 1; ++j)
+    for (int i = 0; i < w; ++i) {
+      double lo = kInf, hi = -kInf;
+      for (int k = i - 1; k <= i + 2; ++k) {
+        lo = std::min(lo, texel(k, j));
+        hi = std::max(hi, texel(k, j));
+      }
+      const std::size_t at = static_cast<std::size_t>(j + 1) * w + i;
+      row_min[at] = lo;
+      row_max[at] = hi;
+    }
+  std::vector<std::uint8_t> out(static_cast<std::size_t>(w) * h);
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      double lo = kInf, hi = -kInf;
+      for (int k = j - 1; k <= j + 2; ++k) {
+        const std::size_t at = static_cast<std::size_t>(k + 1) * w + i;
+        lo = std::min(lo, row_min[at]);
+        hi = std::max(hi, row_max[at]);
+      }
+      out[static_cast<std::size_t>(j) * w + i] = hi < p ? kDry : (lo >= p * (1 + kWetMargin) ? kWet : kMixed);
+    }
+  return out;
 }
 
 // Orthonormal tangent frame for the triplanar normal map: the projection axis is the dominant
@@ -140,6 +186,7 @@ struct FrameContext {
   double eps;
   double ground_far;
   std::vector<Vector3d> to_light;
+  std::vector<std::uint8_t> wet_window;  ///< per texel (WetWindow), empty if not usable
 
   Rgb env_at(const Vector3d& d) const { return sample_latlong(env, d); }
 
@@ -180,7 +227,14 @@ struct FrameContext {
       const auto& mp = mask->params();
       tx = (q.x() - mp.origin.x()) / mp.texel_size - 0.5;
       ty = (q.y() - mp.origin.y()) / mp.texel_size - 0.5;
-      const bool near_grid = tx > -3 && ty > -3 && tx < mp.width + 2 && ty < mp.height + 2;
+      bool near_grid = tx > -3 && ty > -3 && tx < mp.width + 2 && ty < mp.height + 2;
+      if (near_grid && !wet_window.empty() && tx >= 0 && ty >= 0 && tx < mp.width && ty < mp.height) {
+        const auto state = wet_window[static_cast<std::size_t>(ty) * mp.width + static_cast<std::size_t>(tx)];
+        if (state != kMixed) {  // the five tests agree: w = 0 or 1, the rim normal is flat
+          w = state == kWet ? 1.0 : 0.0;
+          near_grid = false;
+        }
+      }
       // Beyond the grid the border reads zero: no liquid and no rim there.
       if (near_grid) w = wet(tx, ty);
       if (near_grid && plan.liquid_rim) {
@@ -202,7 +256,7 @@ struct FrameContext {
       diffuse += Izr * g.cd * std::max(0.0, n.dot(L));
       if (plan.ground_specular) {
         const Vector3d Rs = reflect(L, ns);
-        spec += Izr * g.cs * std::pow(std::max(0.0, Rs.dot(V)), g.n_spec);
+        spec += Izr * g.cs * pow_pos(Rs.dot(V), g.n_spec);
       }
     }
     Rgb I = diffuse.cwiseProduct(tdiff) + spec;
@@ -263,7 +317,7 @@ struct FrameContext {
         if (plan.ice_specular) {
           const Vector3d Rs = reflect(L, N);
           const double x = m.specular == SpecularTerm::kRsV ? Rs.dot(V) : Rs.dot(L);
-          spec += Izr * m.cs * std::pow(std::max(0.0, x), m.n_spec);
+          spec += Izr * m.cs * pow_pos(x, m.n_spec);
         }
       }
       if (plan.ice_texture) I += diffuse * milky_ice(p, m.texture_scale);
@@ -384,8 +438,9 @@ RgbImage IceRenderer::render() {
     last_plan_log_ = log;
   }
   const double ground_z = scene_.ground.z.value_or(0.0);
-  FrameContext ctx{scene_, p, bvh_, mask_, env_, ground_tex_, normal_tex_, ground_z, 1e-4 * object_size_, 1e6 * object_size_, {}};
+  FrameContext ctx{scene_, p, bvh_, mask_, env_, ground_tex_, normal_tex_, ground_z, 1e-4 * object_size_, 1e6 * object_size_, {}, {}};
   for (const auto& l : scene_.lights) ctx.to_light.push_back(l.to_light.normalized());
+  if (p.liquid && mask_->threshold_texture().empty() && mask_->params().threshold > 0) ctx.wet_window = wet_windows(*mask_);
   const Camera& cam = *camera_;
   const int w = camera_width(cam), h = camera_height(cam);
   const double z_top = std::max(bvh_.upper().z(), ground_z) + object_size_;

@@ -18,12 +18,14 @@ using Eigen::Vector3d;
 Vector3d RgbImage::bilinear(double x, double y, bool wrap_y) const {
   const double fx0 = std::floor(x), fy0 = std::floor(y);
   const double fx = x - fx0, fy = y - fy0;
+  // One modulo per axis (the neighbour wraps by a compare): this runs for every texture,
+  // environment and normal-map lookup of a frame.
   auto wrap = [](long k, int n) { return static_cast<int>(((k % n) + n) % n); };
-  const int i0 = wrap(static_cast<long>(fx0), width), i1 = wrap(static_cast<long>(fx0) + 1, width);
+  const int i0 = wrap(static_cast<long>(fx0), width), i1 = i0 + 1 == width ? 0 : i0 + 1;
   int j0, j1;
   if (wrap_y) {
     j0 = wrap(static_cast<long>(fy0), height);
-    j1 = wrap(static_cast<long>(fy0) + 1, height);
+    j1 = j0 + 1 == height ? 0 : j0 + 1;
   } else {
     j0 = std::clamp(static_cast<int>(fy0), 0, height - 1);
     j1 = std::clamp(static_cast<int>(fy0) + 1, 0, height - 1);
