@@ -5,7 +5,7 @@ the registration and optionally kl parameters on the first N photos (the rest ar
 and predicted), then a table of the fitted values with standard errors, P over the fitted
 photos and over the held-out ones, and one figure of the P curves.
 
-Usage: report/fit_manufactured.py MELTLAB SET_DIR OUT_DIR [--fit-photos N] [--kl FILE --fit-kl NAME,...]
+Usage: report/fit_manufactured.py MELTLAB SET_DIR OUT_DIR [--fit-photos N] [--kl FILE] [--fit-extra kn,kl.NAME,...] [--bound NAME=LO:HI]
 """
 import argparse
 import csv
@@ -25,7 +25,9 @@ def main():
     ap.add_argument("out_dir")
     ap.add_argument("--fit-photos", type=int, default=100)
     ap.add_argument("--kl", default=None)
-    ap.add_argument("--fit-kl", default="")
+    ap.add_argument("--fit-extra", "--fit-kl", dest="fit_extra", default="",
+                    help="more parameters to fit besides kg, K and the registration: kn, kl.<path in --kl>")
+    ap.add_argument("--bound", action="append", default=[], help="passed to meltlab fit: name=lower:upper (repeatable)")
     ap.add_argument("--cycles-per-photo", type=float, default=8.0, help="start value of the time scale")
     ap.add_argument("--meshes", default=",".join(MESHES))
     a = ap.parse_args()
@@ -41,12 +43,14 @@ def main():
         n_photos = sum(1 for _ in os.scandir(os.path.join(seq, "frames")))
         holdout = max(0.0, 1.0 - a.fit_photos / n_photos)
         fit_dir = os.path.join(a.out_dir, mesh)
-        free = "kg,cycles_per_photo,reg" + ("," + a.fit_kl if a.fit_kl else "")
+        free = "kg,cycles_per_photo,reg" + ("," + a.fit_extra if a.fit_extra else "")
         cmd = [a.meltlab, "fit", "--mesh", os.path.join(seq, "truth", "initial_mesh.ply"), "--observations", manifest,
                "--fit", free, "--cycles-per-photo", str(a.cycles_per_photo), "--holdout", f"{holdout:.6f}",
                "--overlay-every", "25", "--out", fit_dir, "--overwrite"]
         if a.kl:
             cmd += ["--kl", a.kl]
+        for b in a.bound:
+            cmd += ["--bound", b]
         print(f"== fit {mesh}: {' '.join(cmd[1:])}", flush=True)
         t0 = time.time()
         with open(os.path.join(a.out_dir, mesh + ".log"), "w") as log:

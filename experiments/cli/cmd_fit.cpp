@@ -61,8 +61,8 @@ Run add_fit(CLI::App& app, const std::string& command_line) {
   sub->add_option("--observations", o->observations, "Observation manifest (.yaml/.yml/.json)")->required();
   sub->add_option("--out", o->out_dir, "Output folder (fit.json, comparison/)")->required();
   sub->add_option("--fit", *fit,
-                  "Parameters to fit, comma separated: kg, cycles_per_photo, reg (= reg.tx_px,reg.ty_px,reg.angle_deg,"
-                  "reg.scale), kl.<path in the --kl YAML, e.g. kl.of.0.strength>")
+                  "Parameters to fit, comma separated: kg, kn (weight of M_N, --kn units), cycles_per_photo, reg "
+                  "(= reg.tx_px,reg.ty_px,reg.angle_deg,reg.scale), kl.<path in the --kl YAML, e.g. kl.of.0.strength>")
       ->default_val("kg,reg");
   sub->add_option("--fix", *fix, "Fixed values: name=value[,name=value...]");
   sub->add_option("--initial", *initial, "Starting values: name=value[,...]");

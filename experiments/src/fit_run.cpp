@@ -80,6 +80,8 @@ class EmpiricalModel final : public verify::FitModel {
     for (const auto& [name, v] : values) {
       if (name == "kg") {
         params.kg = v;
+      } else if (name == "kn") {  // in the --kn units: relative to L0 unless --units absolute
+        params.kN = v * (p_->opt.relative_units ? p_->mean_edge_length : 1.0);
       } else if (name.rfind("kl.", 0) == 0) {
         YAML::Node leaf = node_at(doc, name, p_->opt.kl_file.string());
         leaf = v;
@@ -121,6 +123,12 @@ std::vector<verify::FitParameter> fit_parameters(const FitRunOptions& o, double 
       {"reg.angle_deg", {0, -45, 45, 0.2}},
       {"reg.scale", {1, 0.7, 1.4, 0.004}},
   };
+  // kn, the weight of the normal term M_N (Eq. 3.6): flat faces creep at kg·kN per cycle while
+  // convex features move at up to kg·kE, so kN/kE shapes how thin parts melt against broad
+  // ones. Bounded by kE (the monograph's kN << kE). A change of kE/200 moves a flat side by
+  // ≈ 0.5 L0 over 100 photos of 7 cycles, many pixels.
+  const double kn_initial = o.simulation.kN.value_or(o.simulation.kE / 100.0);
+  known["kn"] = {kn_initial, 0.0, std::max(o.simulation.kE, kn_initial), std::max(o.simulation.kE / 200.0, 1e-9)};
   for (const auto& [name, v] : kl_values)
     known[name] = {v, v >= 0 ? 0.0 : -kInf, kInf, std::max(std::abs(v) * 0.05, 1e-4)};
 
@@ -129,7 +137,7 @@ std::vector<verify::FitParameter> fit_parameters(const FitRunOptions& o, double 
     if (f == "reg") {
       free.insert({"reg.tx_px", "reg.ty_px", "reg.angle_deg", "reg.scale"});
     } else {
-      require(known.count(f) > 0, fmt::format("--fit: unknown parameter '{}' (kg, cycles_per_photo, reg, reg.tx_px, reg.ty_px, "
+      require(known.count(f) > 0, fmt::format("--fit: unknown parameter '{}' (kg, kn, cycles_per_photo, reg, reg.tx_px, reg.ty_px, "
                                               "reg.angle_deg, reg.scale, kl.<path in the --kl file>)", f));
       free.insert(f);
     }
@@ -228,7 +236,7 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
   // The fitted run against every frame (held-out frames included).
   std::map<std::string, double> model_values;
   for (const auto& e : fit.estimates)
-    if (e.name == "kg" || e.name.rfind("kl.", 0) == 0) model_values[e.name] = e.value;
+    if (e.name == "kg" || e.name == "kn" || e.name.rfind("kl.", 0) == 0) model_values[e.name] = e.value;
   auto meshes = model.start(model_values);
   verify::CompareOptions copt;
   copt.mapping.cycles_per_photo = fit.cycles_per_photo();
