@@ -95,9 +95,12 @@ struct Primary {
 }  // namespace
 
 IceRenderer::IceRenderer(RenderScene scene) : scene_(std::move(scene)) {
-  env_ = latlong_environment(scene_.environment);
-  ground_tex_ = ground_texture(256, 1);
-  if (scene_.ice.normal_map) normal_tex_ = normal_map(256, scene_.ice.normal_map_bump, 2);
+  // Image files named by the scene replace the procedural assets (read through OpenImageIO).
+  env_ = scene_.environment.file.empty() ? latlong_environment(scene_.environment) : read_rgb_image(scene_.environment.file);
+  ground_tex_ = scene_.ground.texture_file.empty() ? ground_texture(256, 1) : read_rgb_image(scene_.ground.texture_file);
+  if (scene_.ice.normal_map)
+    normal_tex_ = scene_.ice.normal_map_file.empty() ? normal_map(256, scene_.ice.normal_map_bump, 2)
+                                                     : read_rgb_image(scene_.ice.normal_map_file);
   if (scene_.camera) camera_ = scene_.camera;
 }
 IceRenderer::~IceRenderer() = default;

@@ -212,23 +212,27 @@ void write_gray_png(const std::filesystem::path& file, const std::vector<float>&
   write_with_oiio(file, "png", width, height, 1, OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT8, px.data());
 }
 
-RgbImage read_png(const std::filesystem::path& file) {
+RgbImage read_rgb_image(const std::filesystem::path& file) {
   auto in = OIIO::ImageInput::open(file.string());
   if (!in) throw InputError(fmt::format("{}: cannot read image: {}", file.string(), OIIO::geterror()));
-  const OIIO::ImageSpec& spec = in->spec();
-  std::vector<std::uint8_t> px(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, px.data()))
+  const OIIO::ImageSpec spec = in->spec();
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+    throw InputError(fmt::format("{}: the image holds no pixels", file.string()));
+  std::vector<float> px(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data()))
     throw InputError(fmt::format("{}: cannot read image: {}", file.string(), in->geterror()));
-  RgbImage img(spec.width, spec.height);
-  for (int j = 0; j < spec.height; ++j)
-    for (int i = 0; i < spec.width; ++i)
-      for (int c = 0; c < 3; ++c) {
-        const int sc = std::min(c, spec.nchannels - 1);
-        img.rgb[3 * (static_cast<std::size_t>(j) * spec.width + i) + static_cast<std::size_t>(c)] =
-            static_cast<float>(px[(static_cast<std::size_t>(j) * spec.width + i) * spec.nchannels + static_cast<std::size_t>(sc)]) / 255.0f;
-      }
   in->close();
+  RgbImage img(spec.width, spec.height);
+  const int grey = spec.nchannels < 3;  // 1 or 2 channels: grey (+ alpha)
+  for (std::size_t k = 0; k < static_cast<std::size_t>(spec.width) * spec.height; ++k)
+    for (std::size_t c = 0; c < 3; ++c) {
+      const float v = px[k * static_cast<std::size_t>(spec.nchannels) + (grey ? 0 : c)];
+      if (!std::isfinite(v)) throw InputError(fmt::format("{}: pixel {} is not finite", file.string(), k));
+      img.rgb[3 * k + c] = v;
+    }
   return img;
 }
+
+RgbImage read_png(const std::filesystem::path& file) { return read_rgb_image(file); }
 
 }  // namespace meltlab::render

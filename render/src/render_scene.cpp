@@ -79,6 +79,17 @@ class Section {
     if (nonzero && out.norm() == 0) throw InputError(fmt::format("{}: '{}' must not be the zero vector", at_, k));
     return out;
   }
+  // An image file: relative paths are relative to the scene file's folder `base`; the file
+  // must exist (it is read when the renderer is built).
+  std::filesystem::path file(const std::string& k, const std::filesystem::path& base) const {
+    if (!has(k)) return {};
+    if (!n_[k].IsScalar() || n_[k].Scalar().empty()) throw InputError(fmt::format("{}: '{}' must be a file name", at_, k));
+    std::filesystem::path f(n_[k].Scalar());
+    if (f.is_relative()) f = base / f;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(f, ec)) throw InputError(fmt::format("{}: '{}': no such image file {}", at_, k, f.string()));
+    return f;
+  }
   std::string choice(const std::string& k, const std::string& fallback, const std::set<std::string>& options) const {
     if (!has(k)) return fallback;
     if (!n_[k].IsScalar()) throw InputError(fmt::format("{}: '{}' must be a string", at_, k));
@@ -101,6 +112,7 @@ class Section {
 RenderScene parse_render_scene(const YAML::Node& node, const std::string& source) {
   RenderScene s;
   if (!node || node.IsNull()) return s;
+  const std::filesystem::path base = std::filesystem::path(source).parent_path();
   const Section top(node, where(node, source, "scene"),
                     {"camera", "width", "height", "lights", "ice", "ground", "environment", "outputs"});
   if (top.has("camera")) s.camera = parse_camera(top.node("camera"), source);
@@ -121,7 +133,8 @@ RenderScene parse_render_scene(const YAML::Node& node, const std::string& source
   if (top.has("ice")) {
     const Section is(top.node("ice"), where(top.node("ice"), source, "ice"),
                      {"model", "ca", "cd", "cs", "n_spec", "cr", "ct", "fresnel", "specular", "dispersion", "eta", "eta_rgb",
-                      "texture_scale", "normal_map", "normal_map_tile", "normal_map_bump", "absorption", "max_internal_bounces"});
+                      "texture_scale", "normal_map", "normal_map_tile", "normal_map_bump", "normal_map_file", "absorption",
+                      "max_internal_bounces"});
     IceMaterial& m = s.ice;
     m.model = is.choice("model", "monograph", {"monograph", "physical"}) == "physical" ? IceModel::kPhysical : IceModel::kMonograph;
     m.ca = is.number("ca", m.ca, 0, 100);
@@ -143,6 +156,8 @@ RenderScene parse_render_scene(const YAML::Node& node, const std::string& source
     m.normal_map = is.flag("normal_map", m.normal_map);
     m.normal_map_tile = is.number("normal_map_tile", m.normal_map_tile, 0, INFINITY);
     m.normal_map_bump = is.number("normal_map_bump", m.normal_map_bump, 0, 100);
+    m.normal_map_file = is.file("normal_map_file", base);
+    if (!m.normal_map_file.empty()) m.normal_map = true;
     const Vec3d ab = is.vec3("absorption", Vec3d(m.absorption[0], m.absorption[1], m.absorption[2]));
     for (int c = 0; c < 3; ++c) {
       if (ab[c] < 0) throw InputError(fmt::format("{}: 'absorption' values must be >= 0", is.at()));
@@ -152,11 +167,13 @@ RenderScene parse_render_scene(const YAML::Node& node, const std::string& source
   }
   if (top.has("ground")) {
     const Section gs(top.node("ground"), where(top.node("ground"), source, "ground"),
-                     {"z", "tile", "textured", "ca", "cd", "cs", "n_spec", "a", "cr", "tilt_s", "tilt_t", "d", "rs_uses_n_star", "liquid"});
+                     {"z", "tile", "textured", "texture", "ca", "cd", "cs", "n_spec", "a", "cr", "tilt_s", "tilt_t", "d",
+                      "rs_uses_n_star", "liquid"});
     GroundMaterial& g = s.ground;
     if (gs.has("z")) g.z = gs.number("z", 0.0);
     g.tile = gs.number("tile", g.tile, 0, INFINITY);
     g.textured = gs.flag("textured", g.textured);
+    g.texture_file = gs.file("texture", base);
     g.ca = gs.number("ca", g.ca, 0, 100);
     g.cd = gs.number("cd", g.cd, 0, 100);
     g.cs = gs.number("cs", g.cs, 0, 100);
@@ -171,11 +188,12 @@ RenderScene parse_render_scene(const YAML::Node& node, const std::string& source
   }
   if (top.has("environment")) {
     const Section es(top.node("environment"), where(top.node("environment"), source, "environment"),
-                     {"width", "height", "to_sun", "sun_radiance"});
+                     {"width", "height", "to_sun", "sun_radiance", "file"});
     s.environment.width = es.integer("width", s.environment.width, 8, 16384);
     s.environment.height = es.integer("height", s.environment.height, 4, 8192);
     s.environment.to_sun = es.vec3("to_sun", s.environment.to_sun, true);
     s.environment.sun_radiance = es.number("sun_radiance", s.environment.sun_radiance, 0, 1e6);
+    s.environment.file = es.file("file", base);
   }
   if (top.has("outputs")) {
     const Section os(top.node("outputs"), where(top.node("outputs"), source, "outputs"), {"exr", "png", "exposure", "gamma"});
@@ -214,6 +232,16 @@ Pinhole auto_camera(const Vec3d& lower, const Vec3d& upper, int width, int heigh
 std::string describe_render_scene_json(const RenderScene& s) {
   const IceMaterial& m = s.ice;
   const GroundMaterial& g = s.ground;
+  // A file name as a JSON string, or `fallback` (what is used instead) when there is none.
+  auto source_of = [](const std::filesystem::path& f, const char* fallback) {
+    if (f.empty()) return fmt::format("\"{}\"", fallback);
+    std::string out = "\"";
+    for (const char c : f.string()) {
+      if (c == '"' || c == '\\') out += '\\';
+      out += c;
+    }
+    return out + "\"";
+  };
   std::string lights;
   for (const auto& l : s.lights)
     lights += fmt::format("{}{{\"to_light\": [{}, {}, {}], \"colour\": [{}, {}, {}]}}", lights.empty() ? "" : ", ", l.to_light.x(),
@@ -224,18 +252,19 @@ std::string describe_render_scene_json(const RenderScene& s) {
       "\"fresnel\": \"{}\", \"specular\": \"{}\", \"dispersion\": {}, \"eta\": {}, \"eta_rgb\": [{}, {}, {}], "
       "\"eta_convention\": \"air to ice eta_i/eta_t = 1/eta\", \"texture_scale\": {}, \"normal_map\": {}, "
       "\"normal_map_space\": \"tangent, projected along the dominant axis\", \"normal_map_tile\": {}, \"normal_map_bump\": {}, "
+      "\"normal_map_source\": {}, "
       "\"absorption\": [{}, {}, {}], \"max_internal_bounces\": {}}}, "
-      "\"ground\": {{\"z\": {}, \"tile\": {}, \"textured\": {}, \"ca\": {}, \"cd\": {}, \"cs\": {}, \"n_spec\": {}, \"a\": {}, \"cr\": {}, "
+      "\"ground\": {{\"z\": {}, \"tile\": {}, \"textured\": {}, \"texture_source\": {}, \"ca\": {}, \"cd\": {}, \"cs\": {}, \"n_spec\": {}, \"a\": {}, \"cr\": {}, "
       "\"tilt_s\": {}, \"tilt_t\": {}, \"d\": {}, \"rs_uses_n_star\": {}, \"liquid\": {}, \"rim_offset_texels\": 1}}, "
-      "\"environment\": {{\"type\": \"procedural lat-long\", \"width\": {}, \"height\": {}, \"to_sun\": [{}, {}, {}], "
+      "\"environment\": {{\"type\": \"lat-long\", \"source\": {}, \"width\": {}, \"height\": {}, \"to_sun\": [{}, {}, {}], "
       "\"sun_radiance\": {}}}, \"outputs\": {{\"exr\": {}, \"png\": {}, \"exposure\": {}, \"gamma\": {}}}}}",
       s.camera ? describe_camera_json(*s.camera) : std::string("\"auto\""), lights,
       m.model == IceModel::kMonograph ? "monograph" : "physical", m.ca, m.cd, m.cs, m.n_spec, m.cr, m.ct,
       m.fresnel == FresnelMode::kFull ? "full" : "schlick", m.specular == SpecularTerm::kRsV ? "RsV" : "RsL", m.dispersion,
       m.eta, m.eta_rgb[0], m.eta_rgb[1], m.eta_rgb[2], m.texture_scale, m.normal_map, m.normal_map_tile, m.normal_map_bump,
-      m.absorption[0], m.absorption[1], m.absorption[2], m.max_internal_bounces,
-      g.z ? fmt::format("{}", *g.z) : std::string("null"), g.tile, g.textured, g.ca, g.cd, g.cs, g.n_spec, g.a, g.cr, g.tilt_s, g.tilt_t, g.d,
-      g.rs_uses_n_star, g.liquid, s.environment.width, s.environment.height, s.environment.to_sun.x(), s.environment.to_sun.y(),
+      source_of(m.normal_map_file, "procedural"), m.absorption[0], m.absorption[1], m.absorption[2], m.max_internal_bounces,
+      g.z ? fmt::format("{}", *g.z) : std::string("null"), g.tile, g.textured, source_of(g.texture_file, "procedural"), g.ca, g.cd, g.cs, g.n_spec, g.a, g.cr, g.tilt_s, g.tilt_t, g.d,
+      g.rs_uses_n_star, g.liquid, source_of(s.environment.file, "procedural"), s.environment.width, s.environment.height, s.environment.to_sun.x(), s.environment.to_sun.y(),
       s.environment.to_sun.z(), s.environment.sun_radiance, s.outputs.exr, s.outputs.png, s.outputs.exposure, s.outputs.gamma);
 }
 

@@ -11,6 +11,7 @@
 #include <meltlab/sim/error.h>
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -391,6 +392,60 @@ TEST(RenderScene, ParsesAndRefusesUnknownKeys) {
   EXPECT_NE(message("{ice: {fresnel: exact}}").find("'fresnel' must be one of"), std::string::npos);
   EXPECT_NE(message("{ground: {a: -1}}").find("'a' must be in"), std::string::npos);
   EXPECT_NE(message("{lights: [{to_light: [0, 0, 0]}]}").find("zero vector"), std::string::npos);
+}
+
+// Image files named in the scene YAML (relative to the scene file) replace the procedural
+// assets; the dry ground is then Phong times the file's texture, bilinearly wrapped.
+TEST(RenderScene, ImageFilesReplaceTheProceduralAssets) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("meltlab_scene_files_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir / "tex");
+  RgbImage tex(4, 4), env(8, 4);
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) tex.set(i, j, Rgb(0.1 + 0.2 * i, 0.1 + 0.2 * j, 0.5));
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 8; ++i) env.set(i, j, Rgb(0.25, 0.5, 1.0));
+  write_exr(dir / "tex" / "ground.exr", tex);
+  write_exr(dir / "sky.exr", env);
+  const std::string scene_file = (dir / "scene.yaml").string();
+  const RenderScene parsed =
+      parse_render_scene(YAML::Load("{ground: {texture: tex/ground.exr}, environment: {file: sky.exr}}"), scene_file);
+  EXPECT_EQ(parsed.ground.texture_file, dir / "tex" / "ground.exr");
+  EXPECT_EQ(parsed.environment.file, dir / "sky.exr");
+  EXPECT_NE(describe_render_scene_json(parsed).find("sky.exr"), std::string::npos);
+  // The EXR round trip (half float: 11 significant bits).
+  const RgbImage back = read_rgb_image(parsed.ground.texture_file);
+  ASSERT_EQ(back.width, 4);
+  EXPECT_NEAR((back.at(3, 2) - tex.at(3, 2)).norm(), 0.0, 1e-3);
+
+  auto s = top_down_scene(32, 32, 10.0);
+  s.ground.z = 0.0;
+  s.ground.tile = 2.0;
+  s.ground.ca = 0.2;
+  s.ground.cd = 0.5;
+  s.ground.cs = 0.0;
+  s.ground.texture_file = parsed.ground.texture_file;
+  s.environment.file = parsed.environment.file;
+  IceRenderer r(s);
+  r.set_mesh(sphere(0.1, Vector3d(100, 100, 1)));  // far outside the view
+  const RgbImage img = r.render();
+  for (int j = 0; j < 32; j += 5)
+    for (int i = 0; i < 32; i += 7) {
+      const double x = (i - 15.5) / 10.0, y = -(j - 15.5) / 10.0;
+      const Rgb want = 0.7 * back.bilinear(x / 2.0 * 4 - 0.5, y / 2.0 * 4 - 0.5, true);
+      EXPECT_NEAR((pixel(img, i, j) - want).norm(), 0.0, kPixelTol) << i << "," << j;
+    }
+
+  auto message = [&](const std::string& y) {
+    try {
+      parse_render_scene(YAML::Load(y), scene_file);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  EXPECT_NE(message("{environment: {file: nope.exr}}").find("no such image file"), std::string::npos);
+  std::filesystem::remove_all(dir);
 }
 
 // ---- reference images ----------------------------------------------------------------

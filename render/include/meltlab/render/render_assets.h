@@ -43,6 +43,7 @@ struct EnvironmentOptions {
   Eigen::Vector3d zenith{0.25, 0.45, 0.95}, horizon{0.85, 0.9, 1.0}, floor{0.18, 0.16, 0.14};
   double floor_checker = 0.4;            ///< dark squares are floor·(1 - floor_checker)
   double constant = -1.0;                ///< >= 0: a uniform map of this radiance (a "white furnace")
+  std::filesystem::path file;            ///< non-empty: a lat-long map read from this image instead
 };
 /// Lat-long environment: sky gradient, sun disc, bright vertical "windows" just above the
 /// horizon (so reflections and refractions show structure) and a checkered floor below it.
@@ -66,7 +67,12 @@ void write_png(const std::filesystem::path& file, const RgbImage& image, double 
 /// 8-bit gray PNG: clamp(value / white)·255.
 void write_gray_png(const std::filesystem::path& file, const std::vector<float>& values, int width, int height,
                     float white = 1.0f, bool flip_y = true);
-/// Reads an 8-bit image as RGB in [0, 1] (for reference-image tests). Throws InputError.
+/// Reads any image OpenImageIO reads (EXR, HDR, PNG, JPEG, TIFF, ...) as RGB floats: the
+/// stored values (linear for EXR/HDR; 8- and 16-bit files normalised to [0, 1] without a
+/// colour transform), grey replicated, alpha and extra channels dropped. Throws InputError
+/// naming the file if it cannot be read or holds no pixels.
+RgbImage read_rgb_image(const std::filesystem::path& file);
+/// read_rgb_image of an 8-bit PNG (the reference-image tests).
 RgbImage read_png(const std::filesystem::path& file);
 
 }  // namespace meltlab::render

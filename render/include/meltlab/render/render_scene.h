@@ -15,6 +15,7 @@
 #include <meltlab/sim/mesh.h>
 
 #include <array>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -55,6 +56,7 @@ struct IceMaterial {
   bool normal_map = false;        ///< Eq. 6.12 (replaces the normal; triplanar, see ice_renderer.h)
   double normal_map_tile = 0.0;   ///< normal-map period, mesh units; 0 = 20 % of the object's size
   double normal_map_bump = 1.0;
+  std::filesystem::path normal_map_file;  ///< non-empty: the normal map (rgb = N/2 + ½) read from this image
   /// Physical model: Beer absorption per mesh unit, per channel (clear ice absorbs red most).
   std::array<double, 3> absorption{0.6, 0.25, 0.15};
   int max_internal_bounces = 6;   ///< physical model: internal reflections followed
@@ -65,6 +67,7 @@ struct GroundMaterial {
   double tile = 0.0;              ///< ground texture period, mesh units; 0 = 50 % of the object's size
   double ca = 0.25, cd = 0.75, cs = 0.3, n_spec = 30;  ///< Phong (Eq. 2.13) of the substrate
   bool textured = true;           ///< false: tdiff = 1 (a plain substrate)
+  std::filesystem::path texture_file;  ///< non-empty: the diffuse texture tdiff read from this image
   // Liquid (Eq. 7.14-7.17); monograph values.
   double a = 0.6;                 ///< wet darkening exponent factor
   double cr = 0.2;                ///< water environment reflection
