@@ -64,6 +64,15 @@ const sim::LiquidMask& wet_mask() {
   return *mask;
 }
 
+// The timed loop: one warm-up frame (it also logs the plan), then a frame per iteration.
+void time_frames(benchmark::State& state, render::IceRenderer& r) {
+  render::RgbImage img = r.render();
+  for (auto _ : state) {
+    img = r.render();
+    benchmark::DoNotOptimize(img.rgb.data());
+  }
+}
+
 enum Variant { kFull, kNoDispersion, kReflectOnly, kNoLiquid, kMinimal, kPhysical };
 const char* kNames[] = {"full", "no_dispersion", "reflect_only", "no_liquid", "minimal", "physical"};
 
@@ -89,11 +98,7 @@ void BM_RenderBunny(benchmark::State& state) {
   render::IceRenderer r(s);
   r.set_mesh(bunny());
   if (liquid) r.set_liquid(&wet_mask());
-  render::RgbImage img = r.render();  // warm up (and log the plan)
-  for (auto _ : state) {
-    img = r.render();
-    benchmark::DoNotOptimize(img.rgb.data());
-  }
+  time_frames(state, r);
   state.SetLabel(std::string(kNames[v]) + " 1024x768");
   state.counters["triangles"] = static_cast<double>(bunny().live_triangle_count());
   state.counters["skipped_terms"] = static_cast<double>(r.plan().skipped.size());
@@ -122,11 +127,7 @@ void BM_RenderDragons(benchmark::State& state) {
   render::IceRenderer r(s);
   r.set_mesh(mesh);
   r.set_liquid(mask.get());
-  render::RgbImage img = r.render();  // warm up
-  for (auto _ : state) {
-    img = r.render();
-    benchmark::DoNotOptimize(img.rgb.data());
-  }
+  time_frames(state, r);
   state.SetLabel(std::to_string(copies) + " dragon(s) 1024x768");
   state.counters["triangles"] = static_cast<double>(mesh.live_triangle_count());
 }

@@ -81,7 +81,7 @@ class EmpiricalModel final : public verify::FitModel {
       if (name == "kg") {
         params.kg = v;
       } else if (name == "kn") {  // in the --kn units: relative to L0 unless --units absolute
-        params.kN = v * (p_->opt.relative_units ? p_->mean_edge_length : 1.0);
+        params.kN = v * p_->coefficient_unit();
       } else if (name.rfind("kl.", 0) == 0) {
         YAML::Node leaf = node_at(doc, name, p_->opt.kl_file.string());
         leaf = v;

@@ -210,7 +210,7 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o,
   p->mean_edge_length = q.mean_edge_length;
 
   // Coefficients: relative units scale with the input's mean edge length L0.
-  const double scale = o.relative_units ? q.mean_edge_length : 1.0;
+  const double scale = p->coefficient_unit();
   auto checked = [](double x, const char* name) {
     if (!std::isfinite(x) || x < 0) throw InputError(fmt::format("{}: must be a finite number >= 0 (got {})", name, x));
     return x;

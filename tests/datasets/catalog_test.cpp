@@ -35,14 +35,7 @@ bool archive_present() {
   return fs::is_regular_file(cgal_data_archive(), ec);
 }
 
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no InputError)";
-}
+using test::message_of;
 
 void write_file(const fs::path& p, const std::string& text) {
   std::ofstream out(p);

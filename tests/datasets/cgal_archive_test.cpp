@@ -26,22 +26,29 @@ std::vector<std::string> cgal_names() {
   return out;
 }
 
+bool archive_missing() {
+  std::error_code ec;
+  return !std::filesystem::is_regular_file(cgal_data_archive(), ec);
+}
+
+// A loaded closed solid has the entry's triangle count, genus and shells, oriented outward.
+void expect_catalogued_solid(const sim::IndexedMesh& mesh, const DatasetEntry& e) {
+  EXPECT_EQ(static_cast<std::int64_t>(mesh.F.size()), e.triangles);
+  const auto r = test::topology_of(mesh);
+  EXPECT_TRUE(r.valid());
+  EXPECT_EQ(r.counts.G, e.genus);
+  EXPECT_EQ(r.counts.S, e.shells);
+  EXPECT_GT(test::signed_volume(mesh), 0.0) << "oriented outward";
+}
+
 class CgalArchive : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(CgalArchive, EntryMatchesTheFile) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(cgal_data_archive(), ec))
-    GTEST_SKIP() << "libcgal-demo is not installed (" << cgal_data_archive() << ")";
+  if (archive_missing()) GTEST_SKIP() << "libcgal-demo is not installed (" << cgal_data_archive() << ")";
   const DatasetEntry e = dataset_entry(GetParam());
   const auto file = dataset_path(e.name, MELTLAB_TEST_DATASET_CACHE);
   if (e.closed_manifold) {
-    const sim::LoadedMesh m = sim::load_mesh(file);
-    EXPECT_EQ(static_cast<std::int64_t>(m.mesh.F.size()), e.triangles);
-    const auto r = test::topology_of(m.mesh);
-    EXPECT_TRUE(r.valid());
-    EXPECT_EQ(r.counts.G, e.genus);
-    EXPECT_EQ(r.counts.S, e.shells);
-    EXPECT_GT(test::signed_volume(m.mesh), 0.0) << "oriented outward";
+    expect_catalogued_solid(sim::load_mesh(file).mesh, e);
   } else {
     EXPECT_TRUE(e.need_repair);
     EXPECT_THROW(sim::load_mesh(file), InputError);
@@ -63,21 +70,14 @@ INSTANTIATE_TEST_SUITE_P(Catalog, CgalArchive, ::testing::ValuesIn(cgal_names())
 // Loop subdivision pulls convex parts in by a fraction of an edge length, the splits move
 // nothing).
 TEST(CgalArchiveRefined, EntriesMatchTheirTargetAndSource) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(cgal_data_archive(), ec))
-    GTEST_SKIP() << "libcgal-demo is not installed (" << cgal_data_archive() << ")";
+  if (archive_missing()) GTEST_SKIP() << "libcgal-demo is not installed (" << cgal_data_archive() << ")";
   int refined = 0;
   for (const auto& e : dataset_catalog()) {
     if (e.kind != DatasetKind::kRefined) continue;
     SCOPED_TRACE(e.name);
     ++refined;
     const sim::LoadedMesh m = sim::load_mesh(dataset_path(e.name, MELTLAB_TEST_DATASET_CACHE));
-    EXPECT_EQ(static_cast<std::int64_t>(m.mesh.F.size()), e.triangles);
-    const auto r = test::topology_of(m.mesh);
-    EXPECT_TRUE(r.valid());
-    EXPECT_EQ(r.counts.G, e.genus);
-    EXPECT_EQ(r.counts.S, e.shells);
-    EXPECT_GT(test::signed_volume(m.mesh), 0.0) << "oriented outward";
+    expect_catalogued_solid(m.mesh, e);
     sim::LoadOptions repair;
     repair.repair = true;
     const sim::LoadedMesh src = sim::load_mesh(dataset_path(e.source, MELTLAB_TEST_DATASET_CACHE), repair);

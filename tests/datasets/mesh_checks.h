@@ -3,6 +3,7 @@
 // not shared with the library, so a bug in the generators cannot hide behind the same bug
 // in the check.
 
+#include <meltlab/sim/error.h>
 #include <meltlab/sim/mesh.h>
 #include <meltlab/sim/polygon_mesh.h>
 #include <meltlab/sim/topology.h>
@@ -17,6 +18,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <numbers>
 #include <numeric>
 #include <optional>
@@ -172,6 +174,16 @@ class ScopedEnv {
   const char* name_;
   std::optional<std::string> old_;
 };
+
+/// The message of the InputError `f` throws, or "(no InputError)".
+inline std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no InputError)";
+}
 
 /// A fresh, empty folder under the system temp folder, removed at the end of the scope.
 class TempFolder {

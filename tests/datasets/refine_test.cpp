@@ -23,14 +23,7 @@ using ::testing::HasSubstr;
 // Volumes of meshes with vertices on a unit grid: exact up to summation rounding.
 constexpr double kVolumeTolerance = 1e-12;
 
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no InputError)";
-}
+using test::message_of;
 
 TEST(Refine, SplittingTheCubesDiagonalsKeepsItsShape) {
   const sim::IndexedMesh cube = cube_triangles(1.0);

@@ -44,6 +44,18 @@ RenderScene top_down_scene(int w, int h, double ppu) {
   return s;
 }
 
+// top_down_scene over the plain Phong ground z = 0 (ca 0.2 + cd 0.5 under the vertical
+// light, no specular), its texture tiled every 2 units.
+RenderScene dry_ground_scene(int w, int h, double ppu) {
+  RenderScene s = top_down_scene(w, h, ppu);
+  s.ground.z = 0.0;
+  s.ground.tile = 2.0;
+  s.ground.ca = 0.2;
+  s.ground.cd = 0.5;
+  s.ground.cs = 0.0;
+  return s;
+}
+
 sim::IndexedMesh sphere(double r, const Vector3d& c) {
   auto m = datasets::icosphere(4, r);
   for (auto& v : m.V) v += c;
@@ -53,12 +65,7 @@ sim::IndexedMesh sphere(double r, const Vector3d& c) {
 Rgb pixel(const RgbImage& img, int i, int j) { return img.at(i, j); }
 
 TEST(IceRenderer, DryGroundIsPhongTimesTexture) {
-  auto s = top_down_scene(32, 32, 10.0);
-  s.ground.z = 0.0;
-  s.ground.tile = 2.0;
-  s.ground.ca = 0.2;
-  s.ground.cd = 0.5;
-  s.ground.cs = 0.0;
+  const auto s = dry_ground_scene(32, 32, 10.0);
   IceRenderer r(s);
   r.set_mesh(sphere(0.1, Vector3d(100, 100, 1)));  // far outside the view
   const RgbImage img = r.render();
@@ -72,12 +79,7 @@ TEST(IceRenderer, DryGroundIsPhongTimesTexture) {
 }
 
 TEST(IceRenderer, WetGroundIsDarkenedByTheExponentAndTiltedAtTheRim) {
-  auto s = top_down_scene(40, 40, 10.0);  // 4 x 4 units
-  s.ground.z = 0.0;
-  s.ground.tile = 2.0;
-  s.ground.ca = 0.2;
-  s.ground.cd = 0.5;
-  s.ground.cs = 0.0;
+  auto s = dry_ground_scene(40, 40, 10.0);  // 4 x 4 units
   s.ground.cr = 0.0;
   s.ground.d = 0.0;
   IceRenderer r(s);
@@ -418,12 +420,7 @@ TEST(RenderScene, ImageFilesReplaceTheProceduralAssets) {
   ASSERT_EQ(back.width, 4);
   EXPECT_NEAR((back.at(3, 2) - tex.at(3, 2)).norm(), 0.0, 1e-3);
 
-  auto s = top_down_scene(32, 32, 10.0);
-  s.ground.z = 0.0;
-  s.ground.tile = 2.0;
-  s.ground.ca = 0.2;
-  s.ground.cd = 0.5;
-  s.ground.cs = 0.0;
+  auto s = dry_ground_scene(32, 32, 10.0);
   s.ground.texture_file = parsed.ground.texture_file;
   s.environment.file = parsed.environment.file;
   IceRenderer r(s);

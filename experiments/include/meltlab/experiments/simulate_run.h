@@ -73,6 +73,8 @@ struct PreparedSimulation {
   sim::LoadedMesh loaded;
   sim::IndexedMesh mesh;     ///< as melted (renumbered if morton_order)
   double mean_edge_length = 0;  ///< L0 of the input, mesh units
+  /// Mesh units per unit of the --ke/--kn/--kr options: L0 with relative units, else 1.
+  double coefficient_unit() const { return opt.relative_units ? mean_edge_length : 1.0; }
   sim::MeltParams params;    ///< absolute units
   sim::KlFieldPtr kl;
   nlohmann::json mesh_json;
