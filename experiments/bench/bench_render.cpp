@@ -8,6 +8,9 @@
 //   no_liquid     sublimation: no mask
 //   minimal       ct = 0, cs = 0, no liquid, cr = 0 on the ground
 //   physical      the physically based reference (refraction in and out, Beer, traced)
+//   full_mipmap   full with texture_filter: mipmap (OpenImageIO TextureSystem lookups with
+//                 footprints from ray differentials instead of point-sampled bilinear ones)
+//   physical_mipmap  physical with texture_filter: mipmap
 // plus the per-cycle BVH update (refit and rebuild), and the scaling of Tab. 6.1 / Fig. 6.11:
 // the full frame of 1, 4 and 9 copies of the 871 414-triangle dragon (dataset dragon_871k,
 // CGAL's Chinese dragon refined; 9 copies = 7 842 726 triangles) standing in a grid, each
@@ -19,6 +22,7 @@
 #include <meltlab/datasets/catalog.h>
 #include <meltlab/datasets/mesh_transforms.h>
 #include <meltlab/render/embree/mesh_bvh.h>
+#include <meltlab/render/filtered_textures.h>
 #include <meltlab/render/ice_renderer.h>
 #include <meltlab/sim/liquid_mask.h>
 #include <meltlab/sim/mesh_io.h>
@@ -30,6 +34,7 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -73,8 +78,8 @@ void time_frames(benchmark::State& state, render::IceRenderer& r) {
   }
 }
 
-enum Variant { kFull, kNoDispersion, kReflectOnly, kNoLiquid, kMinimal, kPhysical };
-const char* kNames[] = {"full", "no_dispersion", "reflect_only", "no_liquid", "minimal", "physical"};
+enum Variant { kFull, kNoDispersion, kReflectOnly, kNoLiquid, kMinimal, kPhysical, kFullMipmap, kPhysicalMipmap };
+const char* kNames[] = {"full", "no_dispersion", "reflect_only", "no_liquid", "minimal", "physical", "full_mipmap", "physical_mipmap"};
 
 void BM_RenderBunny(benchmark::State& state) {
   const auto v = static_cast<Variant>(state.range(0));
@@ -94,6 +99,11 @@ void BM_RenderBunny(benchmark::State& state) {
       liquid = false;
       break;
     case kPhysical: s.ice.model = render::IceModel::kPhysical; break;
+    case kFullMipmap: s.texture_filter = render::TextureFilter::kMipmap; break;
+    case kPhysicalMipmap:
+      s.ice.model = render::IceModel::kPhysical;
+      s.texture_filter = render::TextureFilter::kMipmap;
+      break;
   }
   render::IceRenderer r(s);
   r.set_mesh(bunny());
@@ -103,7 +113,7 @@ void BM_RenderBunny(benchmark::State& state) {
   state.counters["triangles"] = static_cast<double>(bunny().live_triangle_count());
   state.counters["skipped_terms"] = static_cast<double>(r.plan().skipped.size());
 }
-BENCHMARK(BM_RenderBunny)->DenseRange(0, 5)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderBunny)->DenseRange(0, 7)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Fig. 6.11: frame time against the number of dragons (arg), full material and wet ground.
 // The copies stand on a square grid with a gap of a fifth of the dragon's footprint.
@@ -134,6 +144,36 @@ void BM_RenderDragons(benchmark::State& state) {
 BENCHMARK(BM_RenderDragons)->Arg(1)->Arg(4)->Arg(9)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // args: 0 = refit (positions moved), 1 = rebuild (triangles changed)
+// One texture lookup of the 256x256 ground texture at 4096 scattered points: the bilinear
+// RgbImage lookup (arg 0) against OpenImageIO's TextureSystem with a zero footprint (1), an
+// isotropic footprint of 4 texels (2) and an 8:1 anisotropic one (3).
+void BM_TextureLookup(benchmark::State& state) {
+  const render::RgbImage tex = render::ground_texture(256, 1);
+  render::FilteredTextures ft;
+  const int id = ft.add(tex, render::FilteredTextures::Kind::kTexture, "ground");
+  std::vector<Eigen::Vector2d> st(4096);
+  for (std::size_t k = 0; k < st.size(); ++k)
+    st[k] = Eigen::Vector2d(std::fmod(0.6180339887 * static_cast<double>(k), 1.0), std::fmod(0.7548776662 * static_cast<double>(k), 1.0));
+  const double texel = 1.0 / 256;
+  const Eigen::Vector2d dx = state.range(0) == 2 ? Eigen::Vector2d(4 * texel, 0) : Eigen::Vector2d(8 * texel, 0);
+  const Eigen::Vector2d dy = state.range(0) == 2 ? Eigen::Vector2d(0, 4 * texel) : Eigen::Vector2d(0, texel);
+  for (auto _ : state) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const auto& p : st) {
+      switch (state.range(0)) {
+        case 0: sum += tex.bilinear(p.x() * 256 - 0.5, p.y() * 256 - 0.5, true); break;
+        case 1: sum += ft.texture(id, p.x(), p.y(), Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()); break;
+        default: sum += ft.texture(id, p.x(), p.y(), dx, dy); break;
+      }
+    }
+    benchmark::DoNotOptimize(sum);
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(st.size()));
+  const char* names[] = {"bilinear", "oiio point", "oiio 4 texels", "oiio 8:1 aniso"};
+  state.SetLabel(names[state.range(0)]);
+}
+BENCHMARK(BM_TextureLookup)->DenseRange(0, 3);
+
 void BM_BvhUpdate(benchmark::State& state) {
   render::MeshBvh bvh;
   sim::TriMesh<double> m = bunny();

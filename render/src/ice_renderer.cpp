@@ -1,6 +1,7 @@
 // Ray tracer of melting ice on a wet ground (ice_renderer.h).
 
 #include <meltlab/render/ice_renderer.h>
+#include <meltlab/render/filtered_textures.h>
 #include <meltlab/render/optics.h>
 #include <meltlab/sim/error.h>
 
@@ -14,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace meltlab::render {
 
@@ -96,12 +98,19 @@ struct Primary {
 
 IceRenderer::IceRenderer(RenderScene scene) : scene_(std::move(scene)) {
   // Image files named by the scene replace the procedural assets (read through OpenImageIO).
-  env_ = scene_.environment.file.empty() ? latlong_environment(scene_.environment) : read_rgb_image(scene_.environment.file);
+  env_ = scene_.environment.file.empty() ? latlong_environment(scene_.environment)
+                                         : read_environment(scene_.environment.file, scene_.environment.layout);
   ground_tex_ = scene_.ground.texture_file.empty() ? ground_texture(256, 1) : read_rgb_image(scene_.ground.texture_file);
   if (scene_.ice.normal_map)
     normal_tex_ = scene_.ice.normal_map_file.empty() ? normal_map(256, scene_.ice.normal_map_bump, 2)
                                                      : read_rgb_image(scene_.ice.normal_map_file);
   if (scene_.camera) camera_ = scene_.camera;
+  if (scene_.texture_filter == TextureFilter::kMipmap) {
+    filtered_ = std::make_unique<FilteredTextures>();
+    env_id_ = filtered_->add(env_, FilteredTextures::Kind::kLatLongEnvironment, "environment");
+    ground_id_ = filtered_->add(ground_tex_, FilteredTextures::Kind::kTexture, "ground texture");
+    if (scene_.ice.normal_map) normal_id_ = filtered_->add(normal_tex_, FilteredTextures::Kind::kTexture, "normal map");
+  }
 }
 IceRenderer::~IceRenderer() = default;
 
@@ -176,6 +185,33 @@ ShadingPlan IceRenderer::plan() const {
 
 namespace {
 
+// The ids of the assets in FilteredTextures (texture_filter: mipmap).
+struct FilteredIds {
+  int environment = -1, ground = -1, normal = -1;
+};
+
+// A ray's footprint (texture_filter: mipmap): the change of a point or direction from this
+// pixel's ray to the rays through the next pixel to the right (dx) and below (dy).
+struct Differential {
+  Vector3d dx = Vector3d::Zero(), dy = Vector3d::Zero();
+};
+struct RayDifferential {
+  Differential o, d;  ///< of the origin and of the (unit) direction
+};
+
+// Where the two neighbouring rays of `rd` meet the plane through p with normal n, relative to p.
+Differential plane_footprint(const Vector3d& o, const Vector3d& d, const RayDifferential& rd, const Vector3d& p,
+                             const Vector3d& n, double far) {
+  auto at = [&](const Vector3d& dox, const Vector3d& ddx) -> Vector3d {
+    const Vector3d o2 = o + dox, d2 = d + ddx;
+    const double den = n.dot(d2);
+    double t = std::abs(den) > 1e-12 ? n.dot(p - o2) / den : far;
+    if (!(t > 0) || t > far) t = far;  // the neighbour misses the plane (the horizon): a huge footprint
+    return o2 + t * d2 - p;
+  };
+  return {at(rd.o.dx, rd.d.dx), at(rd.o.dy, rd.d.dy)};
+}
+
 // Everything a frame needs, read-only while the tiles run.
 struct FrameContext {
   const RenderScene& scene;
@@ -190,8 +226,15 @@ struct FrameContext {
   double ground_far;
   std::vector<Vector3d> to_light;
   std::vector<std::uint8_t> wet_window;  ///< per texel (WetWindow), empty if not usable
+  const FilteredTextures* filtered = nullptr;  ///< texture_filter: mipmap
+  FilteredIds ids;
 
-  Rgb env_at(const Vector3d& d) const { return sample_latlong(env, d); }
+  // Environment along d; `dd` its footprint (nullptr: none, the finest level).
+  Rgb env_at(const Vector3d& d, const Differential* dd = nullptr) const {
+    if (!filtered) return sample_latlong(env, d);
+    return dd ? filtered->environment(ids.environment, d, dd->dx, dd->dy)
+              : filtered->environment(ids.environment, d, Vector3d::Zero(), Vector3d::Zero());
+  }
 
   // ---- the liquid mask ----
   double mask_bilinear(const std::vector<float>& v, double tx, double ty, bool zero_outside) const {
@@ -215,12 +258,17 @@ struct FrameContext {
     return m >= p ? 1.0 : 0.0;
   }
 
-  Rgb ground_tdiff(double s, double t) const {
-    return ground_tex.bilinear(s * ground_tex.width - 0.5, t * ground_tex.height - 0.5, true);
+  // tdiff at (s, t) in texture periods; `dst` the footprint in periods (x, y components).
+  Rgb ground_tdiff(double s, double t, const Differential* dst) const {
+    if (!filtered) return ground_tex.bilinear(s * ground_tex.width - 0.5, t * ground_tex.height - 0.5, true);
+    const Eigen::Vector2d dx = dst ? Eigen::Vector2d(dst->dx.head<2>()) : Eigen::Vector2d::Zero();
+    const Eigen::Vector2d dy = dst ? Eigen::Vector2d(dst->dy.head<2>()) : Eigen::Vector2d::Zero();
+    return filtered->texture(ids.ground, s, t, dx, dy);
   }
 
-  // Eq. 7.17 (or plain Phong off the puddle) at ground point q seen along direction d.
-  Rgb shade_ground(const Vector3d& q, const Vector3d& d) const {
+  // Eq. 7.17 (or plain Phong off the puddle) at ground point q seen along direction d;
+  // `dq`, `dd`: the footprint of q and of d (nullptr: none).
+  Rgb shade_ground(const Vector3d& q, const Vector3d& d, const Differential* dq, const Differential* dd) const {
     const GroundMaterial& g = scene.ground;
     const Vector3d V = -d.normalized();
     double w = 0;
@@ -250,7 +298,15 @@ struct FrameContext {
       s -= g.d * V.x() * w;
       t -= g.d * V.y() * w;
     }
-    const Rgb tdiff = g.textured ? ground_tdiff(s, t) : Rgb(1, 1, 1);
+    Rgb tdiff(1, 1, 1);
+    if (g.textured) {
+      if (dq) {
+        const Differential dst{dq->dx / g.tile, dq->dy / g.tile};
+        tdiff = ground_tdiff(s, t, &dst);
+      } else {
+        tdiff = ground_tdiff(s, t, nullptr);
+      }
+    }
     const Vector3d ns = g.rs_uses_n_star ? n : Vector3d(0, 0, 1);
     Rgb diffuse = Rgb::Constant(g.ca), spec = Rgb::Zero();
     for (std::size_t k = 0; k < to_light.size(); ++k) {
@@ -265,7 +321,16 @@ struct FrameContext {
     Rgb I = diffuse.cwiseProduct(tdiff) + spec;
     if (w > 0) {
       I = pow_rgb(I, 1.0 + g.a * w);
-      if (plan.liquid_reflection) I += g.cr * w * env_at(reflect(V, n));
+      if (plan.liquid_reflection) {
+        const Vector3d R = reflect(V, n);
+        if (dd) {
+          const Differential dR{reflect_differential(V, -dd->dx, n, Vector3d::Zero()),
+                                reflect_differential(V, -dd->dy, n, Vector3d::Zero())};
+          I += g.cr * w * env_at(R, &dR);
+        } else {
+          I += g.cr * w * env_at(R);
+        }
+      }
     }
     return I;
   }
@@ -273,43 +338,63 @@ struct FrameContext {
   // Ground or environment along a ray that does not look at the ice (or after it).
   // Rays almost parallel to the ground meet it at the horizon: beyond ground_far they see the
   // environment (this also keeps texel coordinates far inside the range of int).
-  Rgb background(const Vector3d& o, const Vector3d& d) const {
+  Rgb background(const Vector3d& o, const Vector3d& d, const RayDifferential* rd) const {
     if (d.z() < 0 && o.z() > ground_z) {
       const double t = (ground_z - o.z()) / d.z();
-      if (t < ground_far) return shade_ground(o + t * d, d);
+      if (t < ground_far) {
+        const Vector3d q = o + t * d;
+        if (!rd) return shade_ground(q, d, nullptr, nullptr);
+        const Differential dq = plane_footprint(o, d, *rd, q, Vector3d::UnitZ(), ground_far);
+        return shade_ground(q, d, &dq, &rd->d);
+      }
     }
-    return env_at(d);
+    return env_at(d, rd ? &rd->d : nullptr);
   }
 
   // Scene radiance along a secondary ray (physical model): the ice again gives its
   // environment value (no further recursion), else ground or environment.
-  Rgb trace_secondary(const Vector3d& o, const Vector3d& d) const {
+  Rgb trace_secondary(const Vector3d& o, const Vector3d& d, const RayDifferential* rd) const {
     MeshHit h;
     const double t_ground = (d.z() < 0 && o.z() > ground_z) ? (ground_z - o.z()) / d.z() : kInf;
-    if (bvh.intersect(o, d, eps, t_ground, h)) return env_at(d);
-    return background(o, d);
+    if (bvh.intersect(o, d, eps, t_ground, h)) return env_at(d, rd ? &rd->d : nullptr);
+    return background(o, d, rd);
   }
 
-  Vector3d ice_normal(const Vector3d& p, const MeshHit& h, const Vector3d& V) const {
+  // The shading normal facing V (normal-mapped if planned); with a footprint `dp` of p also
+  // its change dN (of the interpolated normal; the normal map's own slope change is not
+  // followed) and the map's filtered lookup.
+  Vector3d ice_normal(const Vector3d& p, const MeshHit& h, const Vector3d& V, const Differential* dp, Differential* dN) const {
     Vector3d n = bvh.shading_normal(h);
+    if (dp) *dN = {bvh.shading_normal_differential(h, dp->dx), bvh.shading_normal_differential(h, dp->dy)};
     if (plan.normal_map) {
       Vector3d t, b;
       int axis = 2;
       tangent_frame(n, h.ng, t, b, axis);
       const double tile = scene.ice.normal_map_tile;
-      const double u = (axis == 0 ? p.y() : p.x()) / tile, v = (axis == 2 ? p.y() : p.z()) / tile;
-      const Rgb enc = normal_tex.bilinear(u * normal_tex.width - 0.5, v * normal_tex.height - 0.5, true);
+      auto uv = [&](const Vector3d& x) {
+        return Eigen::Vector2d((axis == 0 ? x.y() : x.x()) / tile, (axis == 2 ? x.y() : x.z()) / tile);
+      };
+      const Eigen::Vector2d st = uv(p);
+      Rgb enc;
+      if (!filtered) enc = normal_tex.bilinear(st.x() * normal_tex.width - 0.5, st.y() * normal_tex.height - 0.5, true);
+      else if (dp) enc = filtered->texture(ids.normal, st.x(), st.y(), uv(dp->dx), uv(dp->dy));
+      else enc = filtered->texture(ids.normal, st.x(), st.y(), Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero());
       const Vector3d nm = 2.0 * (enc - Rgb::Constant(0.5));  // Eq. 6.12
       n = (nm.x() * t + nm.y() * b + nm.z() * n).normalized();
     }
-    if (n.dot(V) < 0) n = -n;  // face the eye (back faces seen from inside, bent normals)
+    if (n.dot(V) < 0) {  // face the eye (back faces seen from inside, bent normals)
+      n = -n;
+      if (dp) *dN = {-dN->dx, -dN->dy};
+    }
     return n;
   }
 
-  Rgb shade_ice_monograph(const Vector3d& p, const MeshHit& h, const Vector3d& d) const {
+  // `rd`: the footprint at the hit (o = that of p, d = that of the ray direction), or nullptr.
+  Rgb shade_ice_monograph(const Vector3d& p, const MeshHit& h, const Vector3d& d, const RayDifferential* rd) const {
     const IceMaterial& m = scene.ice;
     const Vector3d V = -d.normalized();
-    const Vector3d N = ice_normal(p, h, V);
+    Differential dN;
+    const Vector3d N = ice_normal(p, h, V, rd ? &rd->o : nullptr, &dN);
     Rgb I = Rgb::Zero();
     if (plan.ice_texture || plan.ice_specular) {
       Rgb diffuse = Rgb::Constant(m.ca), spec = Rgb::Zero();
@@ -330,30 +415,51 @@ struct FrameContext {
     const double cos_i = std::clamp(N.dot(V), 0.0, 1.0);
     const double eta_ice = plan.dispersion ? m.eta_rgb[1] : m.eta;
     const double F = fresnel(m.fresnel, cos_i, 1.0, eta_ice);
-    if (plan.ice_reflection) I += m.cr * F * env_at(reflect(V, N));
+    if (plan.ice_reflection) {
+      if (rd) {
+        const Differential dR{reflect_differential(V, -rd->d.dx, N, dN.dx), reflect_differential(V, -rd->d.dy, N, dN.dy)};
+        I += m.cr * F * env_at(reflect(V, N), &dR);
+      } else {
+        I += m.cr * F * env_at(reflect(V, N));
+      }
+    }
     if (plan.ice_transmission) {
+      auto seen_through = [&](double eta_rel) -> std::optional<Rgb> {
+        const auto T = refract(-V, N, eta_rel);
+        if (!T) return std::nullopt;
+        if (!rd) return env_at(*T);
+        const Differential dT{refract_differential(-V, rd->d.dx, N, dN.dx, eta_rel),
+                              refract_differential(-V, rd->d.dy, N, dN.dy, eta_rel)};
+        return env_at(*T, &dT);
+      };
       if (plan.dispersion) {
-        for (int c = 0; c < 3; ++c) {
-          const auto T = refract(-V, N, 1.0 / m.eta_rgb[static_cast<std::size_t>(c)]);
-          if (T) I[c] += m.ct * (1 - F) * env_at(*T)[c];
-        }
-      } else if (const auto T = refract(-V, N, 1.0 / m.eta)) {
-        I += m.ct * (1 - F) * env_at(*T);
+        for (int c = 0; c < 3; ++c)
+          if (const auto L = seen_through(1.0 / m.eta_rgb[static_cast<std::size_t>(c)])) I[c] += m.ct * (1 - F) * (*L)[c];
+      } else if (const auto L = seen_through(1.0 / m.eta)) {
+        I += m.ct * (1 - F) * *L;
       }
     }
     return I;
   }
 
-  Rgb shade_ice_physical(const Vector3d& p, const MeshHit& h, const Vector3d& d) const {
+  Rgb shade_ice_physical(const Vector3d& p, const MeshHit& h, const Vector3d& d, const RayDifferential* rd) const {
     const IceMaterial& m = scene.ice;
     const Vector3d V = -d.normalized();
-    const Vector3d N = ice_normal(p, h, V);
+    Differential dN;
+    const Vector3d N = ice_normal(p, h, V, rd ? &rd->o : nullptr, &dN);
     const double cos_i = std::clamp(N.dot(V), 0.0, 1.0);
     Rgb I = Rgb::Zero();
     const int channels = plan.dispersion ? 3 : 1;
     // Reflection with each channel's own Fresnel weight, so that reflected + transmitted = 1
-    // per channel (the white-furnace test checks this bookkeeping).
-    const Rgb from_mirror = trace_secondary(p + eps * N, reflect(V, N));
+    // per channel (the white-furnace test checks this bookkeeping). Only the mirrored ray
+    // carries a footprint; the paths through the ice look up the finest level.
+    Rgb from_mirror;
+    if (rd) {
+      const RayDifferential mirror{rd->o, {reflect_differential(V, -rd->d.dx, N, dN.dx), reflect_differential(V, -rd->d.dy, N, dN.dy)}};
+      from_mirror = trace_secondary(p + eps * N, reflect(V, N), &mirror);
+    } else {
+      from_mirror = trace_secondary(p + eps * N, reflect(V, N), nullptr);
+    }
     if (!plan.dispersion) I += fresnel(m.fresnel, cos_i, 1.0, m.eta) * from_mirror;
     for (int c = 0; c < channels; ++c) {
       const double eta = plan.dispersion ? m.eta_rgb[static_cast<std::size_t>(c)] : m.eta;
@@ -379,7 +485,7 @@ struct FrameContext {
         const double Fx = fresnel(m.fresnel, cos_x, eta, 1.0);
         const Vector3d reflected = dir - 2.0 * dir.dot(n_out) * n_out;
         if (const auto out = refract(dir, -n_out, eta)) {
-          const Rgb L = trace_secondary(q + eps * n_out, *out);
+          const Rgb L = trace_secondary(q + eps * n_out, *out, nullptr);
           if (plan.dispersion) I[c] += weight[c] * (1 - Fx) * L[c];
           else I += (1 - Fx) * weight.cwiseProduct(L);
           weight *= Fx;
@@ -392,14 +498,18 @@ struct FrameContext {
     return I;
   }
 
-  Rgb shade(const Vector3d& o, const Vector3d& d) const {
+  // Radiance along the primary ray o + t·d (d unit); `rd` its footprint or nullptr.
+  Rgb shade(const Vector3d& o, const Vector3d& d, const RayDifferential* rd) const {
     MeshHit h;
     const double t_ground = (d.z() < 0 && o.z() > ground_z) ? (ground_z - o.z()) / d.z() : kInf;
     if (bvh.intersect(o, d, 0.0, t_ground, h)) {
       const Vector3d p = o + h.t * d;
-      return scene.ice.model == IceModel::kMonograph ? shade_ice_monograph(p, h, d) : shade_ice_physical(p, h, d);
+      const bool monograph = scene.ice.model == IceModel::kMonograph;
+      if (!rd) return monograph ? shade_ice_monograph(p, h, d, nullptr) : shade_ice_physical(p, h, d, nullptr);
+      const RayDifferential at_hit{plane_footprint(o, d, *rd, p, h.ng, ground_far), rd->d};
+      return monograph ? shade_ice_monograph(p, h, d, &at_hit) : shade_ice_physical(p, h, d, &at_hit);
     }
-    return background(o, d);
+    return background(o, d, rd);
   }
 };
 
@@ -441,7 +551,8 @@ RgbImage IceRenderer::render() {
     last_plan_log_ = log;
   }
   const double ground_z = scene_.ground.z.value_or(0.0);
-  FrameContext ctx{scene_, p, bvh_, mask_, env_, ground_tex_, normal_tex_, ground_z, 1e-4 * object_size_, 1e6 * object_size_, {}, {}};
+  FrameContext ctx{scene_,  p,  bvh_, mask_, env_, ground_tex_, normal_tex_, ground_z, 1e-4 * object_size_, 1e6 * object_size_,
+                   {},      {}, filtered_.get(), {env_id_, ground_id_, normal_id_}};
   for (const auto& l : scene_.lights) ctx.to_light.push_back(l.to_light.normalized());
   if (p.liquid && mask_->threshold_texture().empty() && mask_->params().threshold > 0) ctx.wet_window = wet_windows(*mask_);
   const Camera& cam = *camera_;
@@ -454,7 +565,16 @@ RgbImage IceRenderer::render() {
     for (int j = r.rows().begin(); j < r.rows().end(); ++j)
       for (int i = r.cols().begin(); i < r.cols().end(); ++i) {
         const Primary ray = primary_ray(cam, world_from_camera, i, j, z_top);
-        img.set(i, j, ray.ok ? ctx.shade(ray.o, ray.d) : Rgb::Zero());
+        if (!ray.ok) {
+          img.set(i, j, Rgb::Zero());
+        } else if (!ctx.filtered) {
+          img.set(i, j, ctx.shade(ray.o, ray.d, nullptr));
+        } else {  // the footprint: the rays through the next pixel to the right and below
+          const Primary rx = primary_ray(cam, world_from_camera, i + 1, j, z_top);
+          const Primary ry = primary_ray(cam, world_from_camera, i, j + 1, z_top);
+          const RayDifferential rd{{rx.o - ray.o, ry.o - ray.o}, {rx.d - ray.d, ry.d - ray.d}};
+          img.set(i, j, ctx.shade(ray.o, ray.d, &rd));
+        }
       }
   });
   stats_.trace_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -234,5 +235,127 @@ RgbImage read_rgb_image(const std::filesystem::path& file) {
 }
 
 RgbImage read_png(const std::filesystem::path& file) { return read_rgb_image(file); }
+
+// ---- environment files ----------------------------------------------------------------
+
+namespace {
+
+// Faces in the order px nx py ny pz nz; each at cell (col, row) of a layout of cols x rows
+// square cells, `rotated` = stored turned by 180°.
+struct CubeCell {
+  int col = 0, row = 0;
+  bool rotated = false;
+};
+struct CubeGeometry {
+  int cols = 0, rows = 0;
+  std::array<CubeCell, 6> cells;
+};
+
+CubeGeometry cube_geometry(EnvironmentLayout layout) {
+  switch (layout) {
+    case EnvironmentLayout::kCube3x2: return {3, 2, {{{0, 0}, {0, 1}, {1, 0}, {1, 1}, {2, 0}, {2, 1}}}};
+    case EnvironmentLayout::kCube1x6: return {1, 6, {{{0, 0}, {0, 1}, {0, 2}, {0, 3}, {0, 4}, {0, 5}}}};
+    case EnvironmentLayout::kCrossHorizontal: return {4, 3, {{{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {3, 1}}}};
+    case EnvironmentLayout::kCrossVertical: return {3, 4, {{{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {1, 3, true}}}};
+    default: throw InvariantError("cube_geometry: not a cube-map layout");
+  }
+}
+
+// The face of cube-frame direction c and its coordinates on it, s to the right and t down,
+// in [0, 1] (the face table of render_assets.h).
+void cube_face(const Vector3d& c, int& face, double& s, double& t) {
+  const Vector3d a = c.cwiseAbs();
+  double sc = 0, tc = 0, major = 0;
+  if (a.x() >= a.y() && a.x() >= a.z()) {
+    major = a.x();
+    face = c.x() > 0 ? 0 : 1;
+    sc = c.x() > 0 ? -c.z() : c.z();
+    tc = -c.y();
+  } else if (a.y() >= a.z()) {
+    major = a.y();
+    face = c.y() > 0 ? 2 : 3;
+    sc = c.x();
+    tc = c.y() > 0 ? c.z() : -c.z();
+  } else {
+    major = a.z();
+    face = c.z() > 0 ? 4 : 5;
+    sc = c.z() > 0 ? c.x() : -c.x();
+    tc = -c.y();
+  }
+  s = 0.5 * (sc / major + 1.0);
+  t = 0.5 * (tc / major + 1.0);
+}
+
+RgbImage latlong_from_cube(const RgbImage& img, EnvironmentLayout layout, const std::filesystem::path& file) {
+  const CubeGeometry g = cube_geometry(layout);
+  const int F = img.width / g.cols;
+  if (F < 1 || img.width != g.cols * F || img.height != g.rows * F)
+    throw InputError(fmt::format("{}: a {} cube map must be {} x {} square faces, not {} x {} pixels", file.string(),
+                                 environment_layout_name(layout), g.cols, g.rows, img.width, img.height));
+  auto texel = [&](int face, int x, int y) {
+    const CubeCell& cell = g.cells[static_cast<std::size_t>(face)];
+    if (cell.rotated) {
+      x = F - 1 - x;
+      y = F - 1 - y;
+    }
+    return img.at(cell.col * F + x, cell.row * F + y);
+  };
+  RgbImage out(4 * F, 2 * F);
+  for (int j = 0; j < out.height; ++j) {
+    const double theta = (j + 0.5) / out.height * std::numbers::pi;
+    for (int i = 0; i < out.width; ++i) {
+      const double phi = ((i + 0.5) / out.width - 0.5) * 2 * std::numbers::pi;
+      const Vector3d d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+      int face = 0;
+      double s = 0, t = 0;
+      cube_face(Vector3d(-d.y(), d.z(), d.x()), face, s, t);  // world -> the cube's y-up frame
+      const double x = std::clamp(s * F - 0.5, 0.0, F - 1.0), y = std::clamp(t * F - 0.5, 0.0, F - 1.0);
+      const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+      const int x1 = std::min(x0 + 1, F - 1), y1 = std::min(y0 + 1, F - 1);
+      const double fx = x - x0, fy = y - y0;
+      out.set(i, j, (1 - fy) * ((1 - fx) * texel(face, x0, y0) + fx * texel(face, x1, y0)) +
+                        fy * ((1 - fx) * texel(face, x0, y1) + fx * texel(face, x1, y1)));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+const char* environment_layout_name(EnvironmentLayout layout) {
+  switch (layout) {
+    case EnvironmentLayout::kAuto: return "auto";
+    case EnvironmentLayout::kLatLong: return "latlong";
+    case EnvironmentLayout::kCube3x2: return "cube_3x2";
+    case EnvironmentLayout::kCube1x6: return "cube_1x6";
+    case EnvironmentLayout::kCrossHorizontal: return "cross_horizontal";
+    case EnvironmentLayout::kCrossVertical: return "cross_vertical";
+  }
+  return "?";
+}
+
+std::optional<EnvironmentLayout> environment_layout_from_name(const std::string& name) {
+  for (auto l : {EnvironmentLayout::kAuto, EnvironmentLayout::kLatLong, EnvironmentLayout::kCube3x2, EnvironmentLayout::kCube1x6,
+                 EnvironmentLayout::kCrossHorizontal, EnvironmentLayout::kCrossVertical})
+    if (name == environment_layout_name(l)) return l;
+  return std::nullopt;
+}
+
+RgbImage read_environment(const std::filesystem::path& file, EnvironmentLayout layout) {
+  RgbImage img = read_rgb_image(file);
+  if (layout == EnvironmentLayout::kAuto) {
+    const int w = img.width, h = img.height;
+    if (w == 2 * h) layout = EnvironmentLayout::kLatLong;
+    else if (2 * w == 3 * h) layout = EnvironmentLayout::kCube3x2;
+    else if (h == 6 * w) layout = EnvironmentLayout::kCube1x6;
+    else if (3 * w == 4 * h) layout = EnvironmentLayout::kCrossHorizontal;
+    else if (4 * w == 3 * h) layout = EnvironmentLayout::kCrossVertical;
+    else
+      throw InputError(fmt::format("{}: a {} x {} environment is neither a 2:1 lat-long map nor a cube map (3:2, 1:6, 4:3, 3:4); "
+                                   "set environment.layout",
+                                   file.string(), w, h));
+  }
+  return layout == EnvironmentLayout::kLatLong ? img : latlong_from_cube(img, layout, file);
+}
 
 }  // namespace meltlab::render

@@ -114,10 +114,12 @@ RenderScene parse_render_scene(const YAML::Node& node, const std::string& source
   if (!node || node.IsNull()) return s;
   const std::filesystem::path base = std::filesystem::path(source).parent_path();
   const Section top(node, where(node, source, "scene"),
-                    {"camera", "width", "height", "lights", "ice", "ground", "environment", "outputs"});
+                    {"camera", "width", "height", "texture_filter", "lights", "ice", "ground", "environment", "outputs"});
   if (top.has("camera")) s.camera = parse_camera(top.node("camera"), source);
   s.width = top.integer("width", s.width, 1, 16384);
   s.height = top.integer("height", s.height, 1, 16384);
+  s.texture_filter = top.choice("texture_filter", "bilinear", {"bilinear", "mipmap"}) == "mipmap" ? TextureFilter::kMipmap
+                                                                                                 : TextureFilter::kBilinear;
   if (top.has("lights")) {
     const YAML::Node list = top.node("lights");
     if (!list.IsSequence()) throw InputError(fmt::format("{}: 'lights' must be a list", top.at()));
@@ -188,12 +190,14 @@ RenderScene parse_render_scene(const YAML::Node& node, const std::string& source
   }
   if (top.has("environment")) {
     const Section es(top.node("environment"), where(top.node("environment"), source, "environment"),
-                     {"width", "height", "to_sun", "sun_radiance", "file"});
+                     {"width", "height", "to_sun", "sun_radiance", "file", "layout"});
     s.environment.width = es.integer("width", s.environment.width, 8, 16384);
     s.environment.height = es.integer("height", s.environment.height, 4, 8192);
     s.environment.to_sun = es.vec3("to_sun", s.environment.to_sun, true);
     s.environment.sun_radiance = es.number("sun_radiance", s.environment.sun_radiance, 0, 1e6);
     s.environment.file = es.file("file", base);
+    s.environment.layout = *environment_layout_from_name(
+        es.choice("layout", "auto", {"auto", "latlong", "cube_3x2", "cube_1x6", "cross_horizontal", "cross_vertical"}));
   }
   if (top.has("outputs")) {
     const Section os(top.node("outputs"), where(top.node("outputs"), source, "outputs"), {"exr", "png", "exposure", "gamma"});
@@ -247,7 +251,7 @@ std::string describe_render_scene_json(const RenderScene& s) {
     lights += fmt::format("{}{{\"to_light\": [{}, {}, {}], \"colour\": [{}, {}, {}]}}", lights.empty() ? "" : ", ", l.to_light.x(),
                           l.to_light.y(), l.to_light.z(), l.colour.x(), l.colour.y(), l.colour.z());
   return fmt::format(
-      "{{\"camera\": {}, \"lights\": [{}], "
+      "{{\"camera\": {}, \"texture_filter\": \"{}\", \"lights\": [{}], "
       "\"ice\": {{\"model\": \"{}\", \"ca\": {}, \"cd\": {}, \"cs\": {}, \"n_spec\": {}, \"cr\": {}, \"ct\": {}, "
       "\"fresnel\": \"{}\", \"specular\": \"{}\", \"dispersion\": {}, \"eta\": {}, \"eta_rgb\": [{}, {}, {}], "
       "\"eta_convention\": \"air to ice eta_i/eta_t = 1/eta\", \"texture_scale\": {}, \"normal_map\": {}, "
@@ -256,15 +260,16 @@ std::string describe_render_scene_json(const RenderScene& s) {
       "\"absorption\": [{}, {}, {}], \"max_internal_bounces\": {}}}, "
       "\"ground\": {{\"z\": {}, \"tile\": {}, \"textured\": {}, \"texture_source\": {}, \"ca\": {}, \"cd\": {}, \"cs\": {}, \"n_spec\": {}, \"a\": {}, \"cr\": {}, "
       "\"tilt_s\": {}, \"tilt_t\": {}, \"d\": {}, \"rs_uses_n_star\": {}, \"liquid\": {}, \"rim_offset_texels\": 1}}, "
-      "\"environment\": {{\"type\": \"lat-long\", \"source\": {}, \"width\": {}, \"height\": {}, \"to_sun\": [{}, {}, {}], "
+      "\"environment\": {{\"type\": \"lat-long\", \"source\": {}, \"layout\": \"{}\", \"width\": {}, \"height\": {}, \"to_sun\": [{}, {}, {}], "
       "\"sun_radiance\": {}}}, \"outputs\": {{\"exr\": {}, \"png\": {}, \"exposure\": {}, \"gamma\": {}}}}}",
-      s.camera ? describe_camera_json(*s.camera) : std::string("\"auto\""), lights,
+      s.camera ? describe_camera_json(*s.camera) : std::string("\"auto\""),
+      s.texture_filter == TextureFilter::kMipmap ? "mipmap (OpenImageIO TextureSystem, ray differentials)" : "bilinear", lights,
       m.model == IceModel::kMonograph ? "monograph" : "physical", m.ca, m.cd, m.cs, m.n_spec, m.cr, m.ct,
       m.fresnel == FresnelMode::kFull ? "full" : "schlick", m.specular == SpecularTerm::kRsV ? "RsV" : "RsL", m.dispersion,
       m.eta, m.eta_rgb[0], m.eta_rgb[1], m.eta_rgb[2], m.texture_scale, m.normal_map, m.normal_map_tile, m.normal_map_bump,
       source_of(m.normal_map_file, "procedural"), m.absorption[0], m.absorption[1], m.absorption[2], m.max_internal_bounces,
       g.z ? fmt::format("{}", *g.z) : std::string("null"), g.tile, g.textured, source_of(g.texture_file, "procedural"), g.ca, g.cd, g.cs, g.n_spec, g.a, g.cr, g.tilt_s, g.tilt_t, g.d,
-      g.rs_uses_n_star, g.liquid, source_of(s.environment.file, "procedural"), s.environment.width, s.environment.height, s.environment.to_sun.x(), s.environment.to_sun.y(),
+      g.rs_uses_n_star, g.liquid, source_of(s.environment.file, "procedural"), environment_layout_name(s.environment.layout), s.environment.width, s.environment.height, s.environment.to_sun.x(), s.environment.to_sun.y(),
       s.environment.to_sun.z(), s.environment.sun_radiance, s.outputs.exr, s.outputs.png, s.outputs.exposure, s.outputs.gamma);
 }
 

@@ -315,8 +315,9 @@ TEST(IceRenderer, PhysicalReferenceAttenuatesByBeersLaw) {
 // split (reflect F, transmit 1 - F, total internal reflection) must conserve the weight.
 TEST(IceRenderer, WhiteFurnaceConservesEnergy) {
   constexpr double L = 0.7;
-  auto run = [&](IceModel model, bool dispersion, FresnelMode mode) {
+  auto run = [&](IceModel model, bool dispersion, FresnelMode mode, TextureFilter filter) {
     RenderScene s;
+    s.texture_filter = filter;
     s.width = 48;
     s.height = 36;
     s.environment.constant = L;
@@ -338,17 +339,20 @@ TEST(IceRenderer, WhiteFurnaceConservesEnergy) {
     r.set_mesh(m);
     return r.render();
   };
+  // The filtered lookups (with their footprints) of a constant map are that constant too.
+  for (auto filter : {TextureFilter::kBilinear, TextureFilter::kMipmap})
   for (auto model : {IceModel::kMonograph, IceModel::kPhysical})
     for (bool dispersion : {false, true})
       for (auto mode : {FresnelMode::kFull, FresnelMode::kSchlick}) {
-        const RgbImage img = run(model, dispersion, mode);
+        const RgbImage img = run(model, dispersion, mode, filter);
         double worst = 0;
         for (float v : img.rgb) worst = std::max(worst, std::abs(static_cast<double>(v) - L));
         // Monograph: F·L + (1 - F)·L, float storage only. Physical: paths dropped once their
         // weight is below 1e-4 (measured: ≤ 7e-5 of L).
         const double tol = model == IceModel::kMonograph ? 1e-6 : 2e-4;
         EXPECT_LT(worst, tol * L) << (model == IceModel::kPhysical ? "physical" : "monograph") << " dispersion "
-                                         << dispersion << " schlick " << (mode == FresnelMode::kSchlick);
+                                         << dispersion << " schlick " << (mode == FresnelMode::kSchlick)
+                                         << " mipmap " << (filter == TextureFilter::kMipmap);
       }
 }
 
@@ -373,10 +377,12 @@ TEST(MeshBvh, RefitsWhenOnlyPositionsMoveAndRebuildsOtherwise) {
 }
 
 TEST(RenderScene, ParsesAndRefusesUnknownKeys) {
-  const auto s = parse_render_scene(YAML::Load("{width: 64, height: 48, ice: {model: physical, fresnel: schlick, ct: 0},"
+  const auto s = parse_render_scene(YAML::Load("{width: 64, height: 48, texture_filter: mipmap, ice: {model: physical, fresnel: schlick, ct: 0},"
                                                " ground: {a: 0.5}, outputs: {exr: false}}"),
                                     "scene.yaml");
   EXPECT_EQ(s.width, 64);
+  EXPECT_EQ(s.texture_filter, TextureFilter::kMipmap);
+  EXPECT_EQ(parse_render_scene(YAML::Load("{}"), "scene.yaml").texture_filter, TextureFilter::kBilinear);
   EXPECT_EQ(s.ice.model, IceModel::kPhysical);
   EXPECT_EQ(s.ice.fresnel, FresnelMode::kSchlick);
   EXPECT_EQ(s.ice.ct, 0.0);
@@ -392,6 +398,8 @@ TEST(RenderScene, ParsesAndRefusesUnknownKeys) {
   };
   EXPECT_NE(message("{ice: {cx: 1}}").find("unknown key 'cx'"), std::string::npos) << message("{ice: {cx: 1}}");
   EXPECT_NE(message("{ice: {fresnel: exact}}").find("'fresnel' must be one of"), std::string::npos);
+  EXPECT_NE(message("{texture_filter: trilinear}").find("'texture_filter' must be one of"), std::string::npos);
+  EXPECT_NE(message("{environment: {layout: sphere}}").find("'layout' must be one of"), std::string::npos);
   EXPECT_NE(message("{ground: {a: -1}}").find("'a' must be in"), std::string::npos);
   EXPECT_NE(message("{lights: [{to_light: [0, 0, 0]}]}").find("zero vector"), std::string::npos);
 }

@@ -34,6 +34,16 @@
 //   or ground.liquid off) the ground is plain Phong (Eq. 2.13) × tdiff.
 // No shadows and no ice seen through the ground, as in the monograph.
 //
+// Texture lookups (scene `texture_filter`): `bilinear` (default) point-samples the environment,
+// the ground texture and the normal map bilinearly at their finest level, as the monograph's GPU
+// did; `mipmap` looks them up through OpenImageIO's TextureSystem (filtered_textures.h) with
+// the pixel's footprint: ray differentials of the primary rays (the rays through the next pixel
+// to the right and below), carried to the ground plane and to the ice's tangent plane, and
+// through reflection and refraction with the change of the interpolated normal (optics.h's
+// reflect_differential / refract_differential; pbrt's scheme). The physical model's paths
+// through the ice look up the finest level. The milky-ice texture is solid and procedural
+// (not filtered).
+//
 // Skip what the scene does not need (design.md): terms with a zero weight are not computed
 // (no environment reflection if cr = 0, no refraction or dispersion lookups if ct = 0, no
 // Fresnel if both, no specular if cs = 0, no texture if ca = cd = 0, no liquid when the mask
@@ -52,6 +62,8 @@
 #include <vector>
 
 namespace meltlab::render {
+
+class FilteredTextures;
 
 /// Which terms a frame computes (from the scene's weights and the current mask).
 struct ShadingPlan {
@@ -98,6 +110,8 @@ class IceRenderer {
   MeshBvh bvh_;
   const sim::LiquidMask* mask_ = nullptr;
   RgbImage env_, ground_tex_, normal_tex_;
+  std::unique_ptr<FilteredTextures> filtered_;  ///< texture_filter: mipmap
+  int env_id_ = -1, ground_id_ = -1, normal_id_ = -1;
   bool sized_ = false;
   double object_size_ = 1.0;
   std::string last_plan_log_;

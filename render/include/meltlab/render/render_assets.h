@@ -11,6 +11,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace meltlab::render {
@@ -36,6 +38,20 @@ struct RgbImage {
   Eigen::Vector3d bilinear(double x, double y, bool wrap_y) const;
 };
 
+/// How an environment image file stores directions.
+///   lat-long: 2:1, the convention above (OpenImageIO's z-up lat-long).
+///   Cube maps: six square faces with OpenImageIO's (= OpenGL's) face table in a y-up frame
+///   (face: major axis, +column, +row): px +x -z -y, nx -x +z -y, py +y +x +z, ny -y +x -z,
+///   pz +z +x -y, nz -z -x -y. World direction (x, y, z) reads the cube at (-y, z, x): the
+///   relation of OpenImageIO's y-up and z-up lat-long maps, so a cube map and the lat-long map
+///   of the same y-up environment (OpenEXR's envmap conventions) render alike.
+///     cube_3x2: px py pz / nx ny nz (OpenImageIO, RenderMan)
+///     cube_1x6: px nx py ny pz nz stacked vertically (OpenEXR envmap=cube)
+///     cross_horizontal: 4x3 cells, py above pz, row nx pz px nz, ny below pz
+///     cross_vertical: 3x4 cells, py; nx pz px; ny; nz rotated by 180° at the bottom
+///   auto: by the aspect ratio (2:1, 3:2, 1:6, 4:3, 3:4), anything else is refused.
+enum class EnvironmentLayout { kAuto, kLatLong, kCube3x2, kCube1x6, kCrossHorizontal, kCrossVertical };
+
 struct EnvironmentOptions {
   int width = 512, height = 256;
   Eigen::Vector3d to_sun = Eigen::Vector3d(0.5, -0.4, 0.75);  ///< normalised on use
@@ -43,7 +59,8 @@ struct EnvironmentOptions {
   Eigen::Vector3d zenith{0.25, 0.45, 0.95}, horizon{0.85, 0.9, 1.0}, floor{0.18, 0.16, 0.14};
   double floor_checker = 0.4;            ///< dark squares are floor·(1 - floor_checker)
   double constant = -1.0;                ///< >= 0: a uniform map of this radiance (a "white furnace")
-  std::filesystem::path file;            ///< non-empty: a lat-long map read from this image instead
+  std::filesystem::path file;            ///< non-empty: a lat-long or cube map read from this image instead
+  EnvironmentLayout layout = EnvironmentLayout::kAuto;  ///< how `file` stores the directions
 };
 /// Lat-long environment: sky gradient, sun disc, bright vertical "windows" just above the
 /// horizon (so reflections and refractions show structure) and a checkered floor below it.
@@ -72,6 +89,15 @@ void write_gray_png(const std::filesystem::path& file, const std::vector<float>&
 /// colour transform), grey replicated, alpha and extra channels dropped. Throws InputError
 /// naming the file if it cannot be read or holds no pixels.
 RgbImage read_rgb_image(const std::filesystem::path& file);
+/// The lat-long environment stored in `file` in `layout`. Cube maps are resampled to a
+/// lat-long map of 4F x 2F texels (F = face size; the equator keeps the faces' texel
+/// density), bilinear within each face with its edge texels clamped. Throws InputError naming
+/// the file if it cannot be read or its size does not fit the layout.
+RgbImage read_environment(const std::filesystem::path& file, EnvironmentLayout layout = EnvironmentLayout::kAuto);
+/// The layout's name in scene files (latlong, cube_3x2, ...; auto) and back (nullopt if unknown).
+const char* environment_layout_name(EnvironmentLayout layout);
+std::optional<EnvironmentLayout> environment_layout_from_name(const std::string& name);
+
 /// read_rgb_image of an 8-bit PNG (the reference-image tests).
 RgbImage read_png(const std::filesystem::path& file);
 

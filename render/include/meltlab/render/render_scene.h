@@ -82,9 +82,16 @@ struct RenderOutputs {
   double exposure = 1.0, gamma = 2.2;  ///< PNG display transform
 };
 
+/// How the renderer looks its image assets up (environment, ground texture, normal map).
+enum class TextureFilter {
+  kBilinear,  ///< point-sampled bilinear at the finest level (the monograph's GPU lookups)
+  kMipmap,    ///< OpenImageIO's TextureSystem: MIP-mapped, anisotropic, footprints from ray differentials
+};
+
 struct RenderScene {
   std::optional<Camera> camera;   ///< unset: framed automatically on the mesh (auto_camera)
   int width = 640, height = 480;  ///< for the automatic camera
+  TextureFilter texture_filter = TextureFilter::kBilinear;  ///< `texture_filter: bilinear|mipmap`
   std::vector<DirectionalLight> lights{DirectionalLight{}};
   IceMaterial ice;
   GroundMaterial ground;
@@ -93,8 +100,8 @@ struct RenderScene {
 };
 
 /// Reads a scene (all keys optional; defaults above). Top-level keys: camera (camera.h's
-/// format), width, height, lights [{to_light, colour}], ice {...}, ground {...},
-/// environment {width, height, to_sun, sun_radiance}, outputs {exr, png, exposure, gamma}.
+/// format), width, height, texture_filter, lights [{to_light, colour}], ice {...}, ground {...},
+/// environment {width, height, to_sun, sun_radiance, file, layout}, outputs {exr, png, exposure, gamma}.
 /// Enumerations: ice.model monograph|physical, ice.fresnel full|schlick, ice.specular RsV|RsL.
 /// Throws InputError naming `source`, the line and the key.
 RenderScene parse_render_scene(const YAML::Node& node, const std::string& source);

@@ -48,6 +48,10 @@ class MeshBvh {
   bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_near, double t_far, MeshHit& hit) const;
   /// Interpolated unit vertex normal at a hit (falls back to the geometric normal).
   Eigen::Vector3d shading_normal(const MeshHit& hit) const;
+  /// The change of shading_normal(hit) when the hit point moves by `dp` in the triangle's
+  /// plane (the barycentric change of dp, through the vertex normals; zero where the normal
+  /// falls back to the geometric one). For the footprints of reflected and refracted rays.
+  Eigen::Vector3d shading_normal_differential(const MeshHit& hit, const Eigen::Vector3d& dp) const;
 
   std::size_t triangle_count() const { return index_.size() / 3; }
   bool empty() const { return index_.empty(); }
