@@ -107,7 +107,7 @@ ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) 
     throw InputError(fmt::format("{}: line {}: {}", config.string(), e.mark.line + 1, e.msg));
   }
   if (!root.IsMap()) throw InputError(fmt::format("{}: not a YAML map", config.string()));
-  static const std::set<std::string> known{"name", "title", "sources", "inputs", "vars", "steps", "notes", "exclusive"};
+  static const std::set<std::string> known{"name", "title", "sources", "inputs", "vars", "steps", "notes", "exclusive", "modes"};
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>();
     if (!known.count(key)) throw InputError(fmt::format("{}: unknown key '{}'", config.string(), key));
@@ -131,6 +131,17 @@ ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) 
   }
 
   const std::string mode = o.quick ? "quick" : "full";
+  if (root["modes"]) {
+    if (!root["modes"].IsSequence() || root["modes"].size() == 0)
+      throw InputError(fmt::format("{}: 'modes' must be a non-empty list of quick and/or full", config.string()));
+    e.modes.clear();
+    for (const auto& m : root["modes"]) {
+      const std::string v = scalar_of(m, config, "modes[]");
+      if (v != "quick" && v != "full") throw InputError(fmt::format("{}: 'modes' must be quick and/or full (got '{}')", config.string(), v));
+      e.modes.push_back(v);
+    }
+  }
+  e.in_mode = std::find(e.modes.begin(), e.modes.end(), mode) != e.modes.end();
   std::map<std::string, std::string> vars{{"out", e.out_dir.string()},
                                           {"repo", o.source_dir.string()},
                                           {"config_dir", config.parent_path().string()},
@@ -280,7 +291,10 @@ std::vector<ReproduceExperiment> load_reproduce_experiments(const ReproduceOptio
     if (!names.insert(e.name).second) throw InputError(fmt::format("{}: experiment name '{}' used twice", f.string(), e.name));
     all.push_back(std::move(e));
   }
-  if (o.only.empty()) return all;
+  if (o.only.empty()) {
+    all.erase(std::remove_if(all.begin(), all.end(), [](const auto& e) { return !e.in_mode; }), all.end());
+    return all;
+  }
   std::vector<ReproduceExperiment> picked;
   for (const auto& want : o.only) {
     auto it = std::find_if(all.begin(), all.end(), [&](const auto& e) { return e.name == want; });
@@ -289,6 +303,8 @@ std::vector<ReproduceExperiment> load_reproduce_experiments(const ReproduceOptio
       for (const auto& e : all) known += (known.empty() ? "" : ", ") + e.name;
       throw InputError(fmt::format("--only: no experiment '{}' (known: {})", want, known));
     }
+    if (!it->in_mode)
+      throw InputError(fmt::format("--only: experiment '{}' runs only in {} mode", want, it->modes.front()));
     if (std::none_of(picked.begin(), picked.end(), [&](const auto& p) { return p.name == want; })) picked.push_back(*it);
   }
   return picked;

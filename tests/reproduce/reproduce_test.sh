@@ -24,6 +24,15 @@ repro() { "$M" reproduce --quick --configs "$REAL_CONFIGS" --configs tc --only t
 [ "$(wc -l <e.txt)" -eq 1 ] && grep -q "no experiment 'nope'" e.txt || fail "--only nope: $(cat e.txt)"
 [ ! -e bad ] || fail "a refused run wrote its output folder"
 
+# --- modes: a full-only experiment is left out of quick runs and refused by --only
+"$M" reproduce --quick --configs tc --list --out bad >o.txt 2>e.txt || fail "--list: $(cat e.txt)"
+grep -q "tiny_melt" o.txt && ! grep -q "full_only" o.txt || fail "quick --list: $(cat o.txt)"
+"$M" reproduce --configs tc --list --out bad >o.txt 2>e.txt || fail "--list (full): $(cat e.txt)"
+grep -q "full_only" o.txt || fail "full --list lacks full_only: $(cat o.txt)"
+"$M" reproduce --quick --configs tc --only full_only --out bad >o.txt 2>e.txt; rc=$?
+[ $rc -eq 2 ] && grep -q "runs only in full mode" e.txt || fail "--quick --only full_only: exit $rc: $(cat e.txt)"
+[ ! -e bad ] || fail "a refused run wrote its output folder"
+
 # --- first run: two experiments finish, the failing one is listed with its error (exit 1)
 repro >run1.out 2>run1.err; rc=$?
 [ $rc -eq 1 ] || fail "first run: exit $rc, want 1 (one failed experiment): $(cat run1.err)"

@@ -15,6 +15,8 @@
 //   sources: ["Tab. 5.1", "Fig. 5.6"]     # what it reproduces (for the report)
 //   inputs: [experiments/configs/x.yaml]  # extra files (relative to the repository) hashed
 //   exclusive: true                       # optional: runs alone, before the others (timings)
+//   modes: [full]                         # optional (default [quick, full]): the modes it runs in;
+//                                         # without --only the others leave it out, --only refuses
 //   vars: {cycles: {quick: 3000, full: 20000}}
 //   steps:
 //     - name: object_b                    # [a-z0-9_]+; ${step} = ${out}/<name>
@@ -51,6 +53,8 @@ struct ReproduceExperiment {
   std::vector<ReproduceStep> steps;
   std::string hash;  ///< hex content hash (config, mode, hashed files, meltlab version)
   bool exclusive = false;  ///< run alone (timing measurements), before the others
+  std::vector<std::string> modes{"quick", "full"};  ///< the modes it runs in
+  bool in_mode = true;     ///< runs in the mode of this invocation
 };
 
 struct ReproduceOptions {
