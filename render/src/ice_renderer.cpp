@@ -573,7 +573,8 @@ RgbImage IceRenderer::render() {
           const Primary rx = primary_ray(cam, world_from_camera, i + 1, j, z_top);
           const Primary ry = primary_ray(cam, world_from_camera, i, j + 1, z_top);
           const RayDifferential rd{{rx.o - ray.o, ry.o - ray.o}, {rx.d - ray.d, ry.d - ray.d}};
-          img.set(i, j, ctx.shade(ray.o, ray.d, &rd));
+          // A neighbour whose undistortion did not converge gives no footprint (finest level).
+          img.set(i, j, ctx.shade(ray.o, ray.d, rx.ok && ry.ok ? &rd : nullptr));
         }
       }
   });
