@@ -81,9 +81,12 @@ std::vector<std::uint8_t> wet_windows(const sim::LiquidMask& mask) {
 
 // Orthonormal tangent frame for the triplanar normal map: the projection axis is the dominant
 // axis of `ng`; tangent and bitangent are the other two world axes made orthogonal to `n`.
-void tangent_frame(const Vector3d& n, const Vector3d& ng, Vector3d& t, Vector3d& b, int& axis) {
+int dominant_axis(const Vector3d& ng) {
   const Vector3d a = ng.cwiseAbs();
-  axis = a.x() > a.y() ? (a.x() > a.z() ? 0 : 2) : (a.y() > a.z() ? 1 : 2);
+  return a.x() > a.y() ? (a.x() > a.z() ? 0 : 2) : (a.y() > a.z() ? 1 : 2);
+}
+void tangent_frame(const Vector3d& n, const Vector3d& ng, Vector3d& t, Vector3d& b, int& axis) {
+  axis = dominant_axis(ng);
   const Vector3d u = axis == 0 ? Vector3d::UnitY() : Vector3d::UnitX();
   t = (u - n * n.dot(u)).normalized();
   b = n.cross(t);
@@ -104,12 +107,14 @@ IceRenderer::IceRenderer(RenderScene scene) : scene_(std::move(scene)) {
   if (scene_.ice.normal_map)
     normal_tex_ = scene_.ice.normal_map_file.empty() ? normal_map(256, scene_.ice.normal_map_bump, 2)
                                                      : read_rgb_image(scene_.ice.normal_map_file);
+  if (!scene_.ice.texture_file.empty()) ice_tex_ = read_rgb_image(scene_.ice.texture_file);
   if (scene_.camera) camera_ = scene_.camera;
   if (scene_.texture_filter == TextureFilter::kMipmap) {
     filtered_ = std::make_unique<FilteredTextures>();
     env_id_ = filtered_->add(env_, FilteredTextures::Kind::kLatLongEnvironment, "environment");
     ground_id_ = filtered_->add(ground_tex_, FilteredTextures::Kind::kTexture, "ground texture");
     if (scene_.ice.normal_map) normal_id_ = filtered_->add(normal_tex_, FilteredTextures::Kind::kTexture, "normal map");
+    if (!ice_tex_.rgb.empty()) ice_id_ = filtered_->add(ice_tex_, FilteredTextures::Kind::kTexture, "ice texture");
   }
 }
 IceRenderer::~IceRenderer() = default;
@@ -126,6 +131,7 @@ void IceRenderer::resolve_defaults() {
   object_size_ = std::max({ext.x(), ext.y(), ext.z(), 1e-9});
   if (!(scene_.ice.texture_scale > 0)) scene_.ice.texture_scale = 0.05 * object_size_;
   if (!(scene_.ice.normal_map_tile > 0)) scene_.ice.normal_map_tile = 0.2 * object_size_;
+  if (!(scene_.ice.texture_tile > 0)) scene_.ice.texture_tile = 0.2 * object_size_;
   if (!(scene_.ground.tile > 0)) scene_.ground.tile = 0.5 * object_size_;
   if (!scene_.ground.z) scene_.ground.z = bvh_.lower().z();
   if (!camera_) camera_ = auto_camera(bvh_.lower(), bvh_.upper(), scene_.width, scene_.height);
@@ -187,7 +193,7 @@ namespace {
 
 // The ids of the assets in FilteredTextures (texture_filter: mipmap).
 struct FilteredIds {
-  int environment = -1, ground = -1, normal = -1;
+  int environment = -1, ground = -1, normal = -1, ice = -1;
 };
 
 // A ray's footprint (texture_filter: mipmap): the change of a point or direction from this
@@ -221,6 +227,7 @@ struct FrameContext {
   const RgbImage& env;
   const RgbImage& ground_tex;
   const RgbImage& normal_tex;
+  const RgbImage& ice_tex;
   double ground_z;
   double eps;
   double ground_far;
@@ -258,12 +265,34 @@ struct FrameContext {
     return m >= p ? 1.0 : 0.0;
   }
 
+  // A tiled image at (s, t) in periods: bilinear, or filtered (`id`) with the footprint
+  // (d(s,t)/dx, d(s,t)/dy; nullptr: none, the finest level).
+  Rgb image_at(const RgbImage& img, int id, const Eigen::Vector2d& st, const Eigen::Vector2d* dx, const Eigen::Vector2d* dy) const {
+    if (!filtered) return img.bilinear(st.x() * img.width - 0.5, st.y() * img.height - 0.5, true);
+    return filtered->texture(id, st.x(), st.y(), dx ? *dx : Eigen::Vector2d::Zero(), dy ? *dy : Eigen::Vector2d::Zero());
+  }
+  // The same for an image projected along world axis `axis` with period `tile` at point x
+  // (the normal map and the ice texture); `dx` the footprint of x.
+  Rgb projected_image_at(const RgbImage& img, int id, const Vector3d& x, int axis, double tile, const Differential* dx) const {
+    auto uv = [&](const Vector3d& q) {
+      return Eigen::Vector2d((axis == 0 ? q.y() : q.x()) / tile, (axis == 2 ? q.y() : q.z()) / tile);
+    };
+    if (!dx) return image_at(img, id, uv(x), nullptr, nullptr);
+    const Eigen::Vector2d ddx = uv(dx->dx), ddy = uv(dx->dy);
+    return image_at(img, id, uv(x), &ddx, &ddy);
+  }
+
   // tdiff at (s, t) in texture periods; `dst` the footprint in periods (x, y components).
   Rgb ground_tdiff(double s, double t, const Differential* dst) const {
-    if (!filtered) return ground_tex.bilinear(s * ground_tex.width - 0.5, t * ground_tex.height - 0.5, true);
-    const Eigen::Vector2d dx = dst ? Eigen::Vector2d(dst->dx.head<2>()) : Eigen::Vector2d::Zero();
-    const Eigen::Vector2d dy = dst ? Eigen::Vector2d(dst->dy.head<2>()) : Eigen::Vector2d::Zero();
-    return filtered->texture(ids.ground, s, t, dx, dy);
+    if (!dst) return image_at(ground_tex, ids.ground, Eigen::Vector2d(s, t), nullptr, nullptr);
+    const Eigen::Vector2d dx = dst->dx.head<2>(), dy = dst->dy.head<2>();
+    return image_at(ground_tex, ids.ground, Eigen::Vector2d(s, t), &dx, &dy);
+  }
+
+  // The ice's tdiff at p: the milky ice, or the projected image.
+  Rgb ice_tdiff(const Vector3d& p, const MeshHit& h, const Differential* dp) const {
+    if (ice_tex.rgb.empty()) return Rgb::Constant(milky_ice(p, scene.ice.texture_scale));
+    return projected_image_at(ice_tex, ids.ice, p, dominant_axis(h.ng), scene.ice.texture_tile, dp);
   }
 
   // Eq. 7.17 (or plain Phong off the puddle) at ground point q seen along direction d;
@@ -370,15 +399,7 @@ struct FrameContext {
       Vector3d t, b;
       int axis = 2;
       tangent_frame(n, h.ng, t, b, axis);
-      const double tile = scene.ice.normal_map_tile;
-      auto uv = [&](const Vector3d& x) {
-        return Eigen::Vector2d((axis == 0 ? x.y() : x.x()) / tile, (axis == 2 ? x.y() : x.z()) / tile);
-      };
-      const Eigen::Vector2d st = uv(p);
-      Rgb enc;
-      if (!filtered) enc = normal_tex.bilinear(st.x() * normal_tex.width - 0.5, st.y() * normal_tex.height - 0.5, true);
-      else if (dp) enc = filtered->texture(ids.normal, st.x(), st.y(), uv(dp->dx), uv(dp->dy));
-      else enc = filtered->texture(ids.normal, st.x(), st.y(), Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero());
+      const Rgb enc = projected_image_at(normal_tex, ids.normal, p, axis, scene.ice.normal_map_tile, dp);
       const Vector3d nm = 2.0 * (enc - Rgb::Constant(0.5));  // Eq. 6.12
       n = (nm.x() * t + nm.y() * b + nm.z() * n).normalized();
     }
@@ -408,7 +429,7 @@ struct FrameContext {
           spec += Izr * m.cs * pow_pos(x, m.n_spec);
         }
       }
-      if (plan.ice_texture) I += diffuse * milky_ice(p, m.texture_scale);
+      if (plan.ice_texture) I += diffuse.cwiseProduct(ice_tdiff(p, h, rd ? &rd->o : nullptr));
       I += spec;
     }
     if (!plan.fresnel) return I;
@@ -551,8 +572,8 @@ RgbImage IceRenderer::render() {
     last_plan_log_ = log;
   }
   const double ground_z = scene_.ground.z.value_or(0.0);
-  FrameContext ctx{scene_,  p,  bvh_, mask_, env_, ground_tex_, normal_tex_, ground_z, 1e-4 * object_size_, 1e6 * object_size_,
-                   {},      {}, filtered_.get(), {env_id_, ground_id_, normal_id_}};
+  FrameContext ctx{scene_,  p,  bvh_, mask_, env_, ground_tex_, normal_tex_, ice_tex_, ground_z, 1e-4 * object_size_, 1e6 * object_size_,
+                   {},      {}, filtered_.get(), {env_id_, ground_id_, normal_id_, ice_id_}};
   for (const auto& l : scene_.lights) ctx.to_light.push_back(l.to_light.normalized());
   if (p.liquid && mask_->threshold_texture().empty() && mask_->params().threshold > 0) ctx.wet_window = wet_windows(*mask_);
   const Camera& cam = *camera_;

@@ -135,7 +135,7 @@ RenderScene parse_render_scene(const YAML::Node& node, const std::string& source
   if (top.has("ice")) {
     const Section is(top.node("ice"), where(top.node("ice"), source, "ice"),
                      {"model", "ca", "cd", "cs", "n_spec", "cr", "ct", "fresnel", "specular", "dispersion", "eta", "eta_rgb",
-                      "texture_scale", "normal_map", "normal_map_tile", "normal_map_bump", "normal_map_file", "absorption",
+                      "texture_scale", "texture_file", "texture_tile", "normal_map", "normal_map_tile", "normal_map_bump", "normal_map_file", "absorption",
                       "max_internal_bounces"});
     IceMaterial& m = s.ice;
     m.model = is.choice("model", "monograph", {"monograph", "physical"}) == "physical" ? IceModel::kPhysical : IceModel::kMonograph;
@@ -155,6 +155,8 @@ RenderScene parse_render_scene(const YAML::Node& node, const std::string& source
       m.eta_rgb[static_cast<std::size_t>(c)] = e[c];
     }
     m.texture_scale = is.number("texture_scale", m.texture_scale, 0, INFINITY);
+    m.texture_file = is.file("texture_file", base);
+    m.texture_tile = is.number("texture_tile", m.texture_tile, 0, INFINITY);
     m.normal_map = is.flag("normal_map", m.normal_map);
     m.normal_map_tile = is.number("normal_map_tile", m.normal_map_tile, 0, INFINITY);
     m.normal_map_bump = is.number("normal_map_bump", m.normal_map_bump, 0, 100);
@@ -254,7 +256,8 @@ std::string describe_render_scene_json(const RenderScene& s) {
       "{{\"camera\": {}, \"texture_filter\": \"{}\", \"lights\": [{}], "
       "\"ice\": {{\"model\": \"{}\", \"ca\": {}, \"cd\": {}, \"cs\": {}, \"n_spec\": {}, \"cr\": {}, \"ct\": {}, "
       "\"fresnel\": \"{}\", \"specular\": \"{}\", \"dispersion\": {}, \"eta\": {}, \"eta_rgb\": [{}, {}, {}], "
-      "\"eta_convention\": \"air to ice eta_i/eta_t = 1/eta\", \"texture_scale\": {}, \"normal_map\": {}, "
+      "\"eta_convention\": \"air to ice eta_i/eta_t = 1/eta\", \"texture_scale\": {}, \"texture_source\": {}, "
+      "\"texture_tile\": {}, \"normal_map\": {}, "
       "\"normal_map_space\": \"tangent, projected along the dominant axis\", \"normal_map_tile\": {}, \"normal_map_bump\": {}, "
       "\"normal_map_source\": {}, "
       "\"absorption\": [{}, {}, {}], \"max_internal_bounces\": {}}}, "
@@ -266,7 +269,7 @@ std::string describe_render_scene_json(const RenderScene& s) {
       s.texture_filter == TextureFilter::kMipmap ? "mipmap (OpenImageIO TextureSystem, ray differentials)" : "bilinear", lights,
       m.model == IceModel::kMonograph ? "monograph" : "physical", m.ca, m.cd, m.cs, m.n_spec, m.cr, m.ct,
       m.fresnel == FresnelMode::kFull ? "full" : "schlick", m.specular == SpecularTerm::kRsV ? "RsV" : "RsL", m.dispersion,
-      m.eta, m.eta_rgb[0], m.eta_rgb[1], m.eta_rgb[2], m.texture_scale, m.normal_map, m.normal_map_tile, m.normal_map_bump,
+      m.eta, m.eta_rgb[0], m.eta_rgb[1], m.eta_rgb[2], m.texture_scale, source_of(m.texture_file, "procedural milky ice"), m.texture_tile, m.normal_map, m.normal_map_tile, m.normal_map_bump,
       source_of(m.normal_map_file, "procedural"), m.absorption[0], m.absorption[1], m.absorption[2], m.max_internal_bounces,
       g.z ? fmt::format("{}", *g.z) : std::string("null"), g.tile, g.textured, source_of(g.texture_file, "procedural"), g.ca, g.cd, g.cs, g.n_spec, g.a, g.cr, g.tilt_s, g.tilt_t, g.d,
       g.rs_uses_n_star, g.liquid, source_of(s.environment.file, "procedural"), environment_layout_name(s.environment.layout), s.environment.width, s.environment.height, s.environment.to_sun.x(), s.environment.to_sun.y(),

@@ -183,15 +183,21 @@ RgbImage cube_image(const Layout& l, int F, const std::function<Vector3d(int, co
   return img;
 }
 
-class CubeMaps : public ::testing::Test {
+// A private temporary folder for the image files a test writes.
+class TextureFiles : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() / ("meltlab_cube_maps_" + std::to_string(::getpid()));
+    dir_ = std::filesystem::temp_directory_path() /
+           ("meltlab_texture_files_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
     std::filesystem::create_directories(dir_);
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
   std::filesystem::path dir_;
 };
+class CubeMaps : public TextureFiles {};
+class IceTexture : public TextureFiles {};
+class FilteredFrames : public TextureFiles {};
 
 TEST_F(CubeMaps, EveryLayoutGivesTheSameEnvironment) {
   constexpr int F = 48;
@@ -251,6 +257,48 @@ TEST_F(CubeMaps, SizesThatFitNoLayoutAreRefused) {
 
 // ---- frames ----------------------------------------------------------------------------
 
+// The ice texture from an image: ambient only (ca = 1, every other term 0), so an ice pixel
+// is tdiff itself. A ramp in u (red = u) projected along z with period 4 on the top of a
+// sphere centred at (2, 2): red = x / 4 where the normal is mostly vertical.
+TEST_F(IceTexture, FileIsProjectedAlongTheDominantAxis) {
+  RgbImage ramp(64, 64);
+  for (int j = 0; j < 64; ++j)
+    for (int i = 0; i < 64; ++i) ramp.set(i, j, Vector3d((i + 0.5) / 64, 0.0, 0.5));
+  const auto file = dir_ / "ramp.exr";
+  write_exr(file, ramp);
+  for (auto filter : {TextureFilter::kBilinear, TextureFilter::kMipmap}) {
+    RenderScene s;
+    s.texture_filter = filter;
+    OrthographicTopDown cam;
+    cam.width = cam.height = 64;
+    cam.pixels_per_unit = 20;
+    cam.centre = Eigen::Vector2d(2, 2);
+    s.camera = cam;
+    s.ice.ca = 1.0;
+    s.ice.cd = s.ice.cs = s.ice.cr = s.ice.ct = 0.0;
+    s.ice.texture_file = file;
+    s.ice.texture_tile = 4.0;
+    s.ground.z = -1.0;
+    IceRenderer r(s);
+    auto m = datasets::icosphere(4, 1.0);
+    for (auto& v : m.V) v += Vector3d(2, 2, 0);
+    r.set_mesh(m);
+    const RgbImage img = r.render();
+    int checked = 0;
+    for (int j = 0; j < 64; ++j)
+      for (int i = 0; i < 64; ++i) {
+        const double x = 2 + (i - 31.5) / 20, y = 2 - (j - 31.5) / 20;
+        if (std::hypot(x - 2, y - 2) > 0.5) continue;  // the top cap: z is the dominant axis
+        const Vector3d c = img.at(i, j);
+        // Half-float texels (1e-3) and, for mipmap, a footprint of 1/20 unit = 0.8 texel.
+        EXPECT_NEAR(c.x(), x / 4, 2e-3) << i << "," << j;
+        EXPECT_NEAR(c.z(), 0.5, 1e-3);
+        ++checked;
+      }
+    EXPECT_GT(checked, 250);
+  }
+}
+
 // The ground seen at a grazing angle: a checkerboard (16 squares per 2-unit period) that is
 // resolved near the camera recedes to the horizon, where many squares fall into a pixel. Rendered at 1 sample per pixel with bilinear and with MIP-mapped lookups, and at
 // 8x8 samples per pixel (an 8x larger frame, box-filtered down) as the reference.
@@ -289,8 +337,6 @@ double rmse(const RgbImage& a, const RgbImage& b) {
   for (std::size_t k = 0; k < a.rgb.size(); ++k) s += std::pow(static_cast<double>(a.rgb[k] - b.rgb[k]), 2);
   return std::sqrt(s / static_cast<double>(a.rgb.size()));
 }
-
-class FilteredFrames : public CubeMaps {};  // the same temporary directory
 
 TEST_F(FilteredFrames, MipMappingBringsOneSampleCloserToSupersampling) {
   RgbImage stripes(128, 128);

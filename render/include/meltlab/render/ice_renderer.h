@@ -11,7 +11,8 @@
 //   per channel with η_R, η_G, η_B when dispersion is on (Eq. 6.8); F from Eq. 6.9 or 6.10 at
 //   cos Θi = N·V, air → ice (1 → η_G, or η without dispersion). The ambient ca is white and added
 //   once; Izr is each light's colour; `specular: RsL` uses the printed (Rs·L)^n. tdiff = milky_ice(p) (solid
-//   procedural texture). The refracted ray is NOT traced: as in the monograph it only looks
+//   procedural texture), or the image `ice.texture_file` projected along the dominant axis of
+//   the geometric normal with period `ice.texture_tile`. The refracted ray is NOT traced: as in the monograph it only looks
 //   the environment up (one refraction at front faces).
 //   Normal map (Eq. 6.12): N = 2(rgb - ½) in a tangent frame; the map is projected along the
 //   dominant axis of the geometric normal (triplanar, `normal_map_space` = tangent, projected
@@ -109,9 +110,9 @@ class IceRenderer {
   std::optional<Camera> camera_;
   MeshBvh bvh_;
   const sim::LiquidMask* mask_ = nullptr;
-  RgbImage env_, ground_tex_, normal_tex_;
+  RgbImage env_, ground_tex_, normal_tex_, ice_tex_;  ///< ice_tex_: empty = the procedural milky ice
   std::unique_ptr<FilteredTextures> filtered_;  ///< texture_filter: mipmap
-  int env_id_ = -1, ground_id_ = -1, normal_id_ = -1;
+  int env_id_ = -1, ground_id_ = -1, normal_id_ = -1, ice_id_ = -1;
   bool sized_ = false;
   double object_size_ = 1.0;
   std::string last_plan_log_;

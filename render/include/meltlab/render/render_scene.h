@@ -53,6 +53,10 @@ struct IceMaterial {
   double eta = kIceEta;                                  ///< used when dispersion is off
   std::array<double, 3> eta_rgb = kIceEtaRgb;            ///< ice indices per channel
   double texture_scale = 0.0;     ///< milky-ice feature size, mesh units; 0 = 5 % of the object's size
+  /// Non-empty: tdiff from this image instead of the milky ice, projected along the dominant
+  /// axis of the geometric normal (as the normal map) with period `texture_tile`.
+  std::filesystem::path texture_file;
+  double texture_tile = 0.0;      ///< ice texture image period, mesh units; 0 = 20 % of the object's size
   bool normal_map = false;        ///< Eq. 6.12 (replaces the normal; triplanar, see ice_renderer.h)
   double normal_map_tile = 0.0;   ///< normal-map period, mesh units; 0 = 20 % of the object's size
   double normal_map_bump = 1.0;
