@@ -218,6 +218,11 @@ Differential plane_footprint(const Vector3d& o, const Vector3d& d, const RayDiff
   return {at(rd.o.dx, rd.d.dx), at(rd.o.dy, rd.d.dy)};
 }
 
+// The footprint of reflect(V, N) from that of the ray direction dd (= -dV) and of N.
+Differential reflected_footprint(const Vector3d& V, const Differential& dd, const Vector3d& N, const Differential& dN) {
+  return {reflect_differential(V, -dd.dx, N, dN.dx), reflect_differential(V, -dd.dy, N, dN.dy)};
+}
+
 // Everything a frame needs, read-only while the tiles run.
 struct FrameContext {
   const RenderScene& scene;
@@ -329,12 +334,8 @@ struct FrameContext {
     }
     Rgb tdiff(1, 1, 1);
     if (g.textured) {
-      if (dq) {
-        const Differential dst{dq->dx / g.tile, dq->dy / g.tile};
-        tdiff = ground_tdiff(s, t, &dst);
-      } else {
-        tdiff = ground_tdiff(s, t, nullptr);
-      }
+      const Differential dst = dq ? Differential{dq->dx / g.tile, dq->dy / g.tile} : Differential{};
+      tdiff = ground_tdiff(s, t, dq ? &dst : nullptr);
     }
     const Vector3d ns = g.rs_uses_n_star ? n : Vector3d(0, 0, 1);
     Rgb diffuse = Rgb::Constant(g.ca), spec = Rgb::Zero();
@@ -351,14 +352,8 @@ struct FrameContext {
     if (w > 0) {
       I = pow_rgb(I, 1.0 + g.a * w);
       if (plan.liquid_reflection) {
-        const Vector3d R = reflect(V, n);
-        if (dd) {
-          const Differential dR{reflect_differential(V, -dd->dx, n, Vector3d::Zero()),
-                                reflect_differential(V, -dd->dy, n, Vector3d::Zero())};
-          I += g.cr * w * env_at(R, &dR);
-        } else {
-          I += g.cr * w * env_at(R);
-        }
+        const Differential dR = dd ? reflected_footprint(V, *dd, n, Differential{}) : Differential{};
+        I += g.cr * w * env_at(reflect(V, n), dd ? &dR : nullptr);
       }
     }
     return I;
@@ -372,9 +367,8 @@ struct FrameContext {
       const double t = (ground_z - o.z()) / d.z();
       if (t < ground_far) {
         const Vector3d q = o + t * d;
-        if (!rd) return shade_ground(q, d, nullptr, nullptr);
-        const Differential dq = plane_footprint(o, d, *rd, q, Vector3d::UnitZ(), ground_far);
-        return shade_ground(q, d, &dq, &rd->d);
+        const Differential dq = rd ? plane_footprint(o, d, *rd, q, Vector3d::UnitZ(), ground_far) : Differential{};
+        return shade_ground(q, d, rd ? &dq : nullptr, rd ? &rd->d : nullptr);
       }
     }
     return env_at(d, rd ? &rd->d : nullptr);
@@ -437,12 +431,8 @@ struct FrameContext {
     const double eta_ice = plan.dispersion ? m.eta_rgb[1] : m.eta;
     const double F = fresnel(m.fresnel, cos_i, 1.0, eta_ice);
     if (plan.ice_reflection) {
-      if (rd) {
-        const Differential dR{reflect_differential(V, -rd->d.dx, N, dN.dx), reflect_differential(V, -rd->d.dy, N, dN.dy)};
-        I += m.cr * F * env_at(reflect(V, N), &dR);
-      } else {
-        I += m.cr * F * env_at(reflect(V, N));
-      }
+      const Differential dR = rd ? reflected_footprint(V, rd->d, N, dN) : Differential{};
+      I += m.cr * F * env_at(reflect(V, N), rd ? &dR : nullptr);
     }
     if (plan.ice_transmission) {
       auto seen_through = [&](double eta_rel) -> std::optional<Rgb> {
@@ -474,13 +464,8 @@ struct FrameContext {
     // Reflection with each channel's own Fresnel weight, so that reflected + transmitted = 1
     // per channel (the white-furnace test checks this bookkeeping). Only the mirrored ray
     // carries a footprint; the paths through the ice look up the finest level.
-    Rgb from_mirror;
-    if (rd) {
-      const RayDifferential mirror{rd->o, {reflect_differential(V, -rd->d.dx, N, dN.dx), reflect_differential(V, -rd->d.dy, N, dN.dy)}};
-      from_mirror = trace_secondary(p + eps * N, reflect(V, N), &mirror);
-    } else {
-      from_mirror = trace_secondary(p + eps * N, reflect(V, N), nullptr);
-    }
+    const RayDifferential mirror = rd ? RayDifferential{rd->o, reflected_footprint(V, rd->d, N, dN)} : RayDifferential{};
+    const Rgb from_mirror = trace_secondary(p + eps * N, reflect(V, N), rd ? &mirror : nullptr);
     if (!plan.dispersion) I += fresnel(m.fresnel, cos_i, 1.0, m.eta) * from_mirror;
     for (int c = 0; c < channels; ++c) {
       const double eta = plan.dispersion ? m.eta_rgb[static_cast<std::size_t>(c)] : m.eta;
@@ -525,10 +510,9 @@ struct FrameContext {
     const double t_ground = (d.z() < 0 && o.z() > ground_z) ? (ground_z - o.z()) / d.z() : kInf;
     if (bvh.intersect(o, d, 0.0, t_ground, h)) {
       const Vector3d p = o + h.t * d;
-      const bool monograph = scene.ice.model == IceModel::kMonograph;
-      if (!rd) return monograph ? shade_ice_monograph(p, h, d, nullptr) : shade_ice_physical(p, h, d, nullptr);
-      const RayDifferential at_hit{plane_footprint(o, d, *rd, p, h.ng, ground_far), rd->d};
-      return monograph ? shade_ice_monograph(p, h, d, &at_hit) : shade_ice_physical(p, h, d, &at_hit);
+      const RayDifferential at_hit = rd ? RayDifferential{plane_footprint(o, d, *rd, p, h.ng, ground_far), rd->d} : RayDifferential{};
+      const RayDifferential* hit_rd = rd ? &at_hit : nullptr;
+      return scene.ice.model == IceModel::kMonograph ? shade_ice_monograph(p, h, d, hit_rd) : shade_ice_physical(p, h, d, hit_rd);
     }
     return background(o, d, rd);
   }

@@ -84,6 +84,14 @@ double value_noise3(const Vector3d& p, std::uint64_t seed) {
   return s;
 }
 
+// The direction through the centre of texel (i, j) of a w x h lat-long map (the inverse of
+// sample_latlong's mapping).
+Vector3d latlong_texel_direction(int i, int j, int w, int h) {
+  const double theta = (j + 0.5) / h * std::numbers::pi;  // from the zenith
+  const double phi = ((i + 0.5) / w - 0.5) * 2 * std::numbers::pi;
+  return {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+}
+
 }  // namespace
 
 RgbImage latlong_environment(const EnvironmentOptions& o) {
@@ -95,10 +103,9 @@ RgbImage latlong_environment(const EnvironmentOptions& o) {
   const Vector3d sun = o.to_sun.normalized();
   const double sun_cos = std::cos(1.5 * std::numbers::pi / 180.0);
   for (int j = 0; j < o.height; ++j) {
-    const double theta = (j + 0.5) / o.height * std::numbers::pi;  // from the zenith
     for (int i = 0; i < o.width; ++i) {
-      const double phi = ((i + 0.5) / o.width - 0.5) * 2 * std::numbers::pi;
-      const Vector3d d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+      const Vector3d d = latlong_texel_direction(i, j, o.width, o.height);
+      const double phi = ((i + 0.5) / o.width - 0.5) * 2 * std::numbers::pi;  // d's longitude, as computed there
       Vector3d c;
       if (d.z() >= 0) {
         const double t = std::pow(1.0 - d.z(), 3.0);
@@ -302,10 +309,8 @@ RgbImage latlong_from_cube(const RgbImage& img, EnvironmentLayout layout, const 
   };
   RgbImage out(4 * F, 2 * F);
   for (int j = 0; j < out.height; ++j) {
-    const double theta = (j + 0.5) / out.height * std::numbers::pi;
     for (int i = 0; i < out.width; ++i) {
-      const double phi = ((i + 0.5) / out.width - 0.5) * 2 * std::numbers::pi;
-      const Vector3d d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+      const Vector3d d = latlong_texel_direction(i, j, out.width, out.height);
       int face = 0;
       double s = 0, t = 0;
       cube_face(Vector3d(-d.y(), d.z(), d.x()), face, s, t);  // world -> the cube's y-up frame

@@ -170,44 +170,47 @@ bool MeshBvh::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, doub
   hit.u = static_cast<double>(rh.hit.u);
   hit.v = static_cast<double>(rh.hit.v);
   // Our own outward normal (b - a) x (c - a), independent of Embree's Ng sign convention.
-  auto P = [&](std::uint32_t k) {
-    const std::uint32_t v = index_[3 * hit.prim + k];
-    return Eigen::Vector3d(static_cast<double>(vertex_[3 * v]), static_cast<double>(vertex_[3 * v + 1]),
-                           static_cast<double>(vertex_[3 * v + 2]));
-  };
-  const Eigen::Vector3d a = P(0);
-  const Eigen::Vector3d n = (P(1) - a).cross(P(2) - a);
+  const Eigen::Vector3d a = corner_position(hit.prim, 0);
+  const Eigen::Vector3d n = (corner_position(hit.prim, 1) - a).cross(corner_position(hit.prim, 2) - a);
   const double len = n.norm();
   hit.ng = len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d(-d.normalized());
   return true;
 }
 
+Eigen::Vector3d MeshBvh::corner_position(std::uint32_t prim, int k) const {
+  const std::uint32_t v = index_[3 * prim + static_cast<std::uint32_t>(k)];
+  return {static_cast<double>(vertex_[3 * v]), static_cast<double>(vertex_[3 * v + 1]), static_cast<double>(vertex_[3 * v + 2])};
+}
+
+Eigen::Vector3d MeshBvh::corner_normal(std::uint32_t prim, int k) const {
+  return normal_[index_[3 * prim + static_cast<std::uint32_t>(k)]].cast<double>();
+}
+
+Eigen::Vector3d MeshBvh::interpolated_normal(const MeshHit& hit) const {
+  return (1.0 - hit.u - hit.v) * corner_normal(hit.prim, 0) + hit.u * corner_normal(hit.prim, 1) +
+         hit.v * corner_normal(hit.prim, 2);
+}
+
 Eigen::Vector3d MeshBvh::shading_normal(const MeshHit& hit) const {
-  const std::uint32_t a = index_[3 * hit.prim], b = index_[3 * hit.prim + 1], c = index_[3 * hit.prim + 2];
-  const Eigen::Vector3d n = (1.0 - hit.u - hit.v) * normal_[a].cast<double>() + hit.u * normal_[b].cast<double>() +
-                            hit.v * normal_[c].cast<double>();
+  const Eigen::Vector3d n = interpolated_normal(hit);
   const double len = n.norm();
   return len > 1e-12 ? Eigen::Vector3d(n / len) : hit.ng;
 }
 
 Eigen::Vector3d MeshBvh::shading_normal_differential(const MeshHit& hit, const Eigen::Vector3d& dp) const {
-  const std::uint32_t a = index_[3 * hit.prim], b = index_[3 * hit.prim + 1], c = index_[3 * hit.prim + 2];
-  auto position = [&](std::uint32_t k) {
-    return Eigen::Vector3d(static_cast<double>(vertex_[3 * k]), static_cast<double>(vertex_[3 * k + 1]),
-                           static_cast<double>(vertex_[3 * k + 2]));
-  };
-  const Eigen::Vector3d p0 = position(a), e1 = position(b) - p0, e2 = position(c) - p0;
+  const Eigen::Vector3d p0 = corner_position(hit.prim, 0);
+  const Eigen::Vector3d e1 = corner_position(hit.prim, 1) - p0, e2 = corner_position(hit.prim, 2) - p0;
   // dp = du·e1 + dv·e2 in the least-squares sense (normal equations of the 3x2 system).
   const double a11 = e1.dot(e1), a12 = e1.dot(e2), a22 = e2.dot(e2);
   const double det = a11 * a22 - a12 * a12;
   if (!(std::abs(det) > 1e-30 * a11 * a22)) return Eigen::Vector3d::Zero();
   const double b1 = e1.dot(dp), b2 = e2.dot(dp);
   const double du = (a22 * b1 - a12 * b2) / det, dv = (a11 * b2 - a12 * b1) / det;
-  const Eigen::Vector3d n0 = normal_[a].cast<double>();
-  const Eigen::Vector3d n = (1.0 - hit.u - hit.v) * n0 + hit.u * normal_[b].cast<double>() + hit.v * normal_[c].cast<double>();
+  const Eigen::Vector3d n = interpolated_normal(hit);
   const double len = n.norm();
   if (!(len > 1e-12)) return Eigen::Vector3d::Zero();
-  const Eigen::Vector3d dn = du * (normal_[b].cast<double>() - n0) + dv * (normal_[c].cast<double>() - n0);
+  const Eigen::Vector3d n0 = corner_normal(hit.prim, 0);
+  const Eigen::Vector3d dn = du * (corner_normal(hit.prim, 1) - n0) + dv * (corner_normal(hit.prim, 2) - n0);
   const Eigen::Vector3d unit = n / len;
   return (dn - unit * unit.dot(dn)) / len;  // d(n/|n|)
 }

@@ -62,6 +62,9 @@ class MeshBvh {
 
  private:
   BvhUpdate load(std::vector<float> positions, std::vector<std::uint32_t> index);
+  Eigen::Vector3d corner_position(std::uint32_t prim, int k) const;  ///< vertex k (0..2) of triangle prim
+  Eigen::Vector3d corner_normal(std::uint32_t prim, int k) const;
+  Eigen::Vector3d interpolated_normal(const MeshHit& hit) const;     ///< not normalised
 
   struct Embree;
   std::unique_ptr<Embree> rtc_;
