@@ -21,7 +21,7 @@ Run add_render(CLI::App& app, const std::string& command_line) {
   auto blend = std::make_shared<std::string>("overwrite");
   o->command_line = command_line;
   sub->add_option("--mesh", o->melt.mesh, "Mesh file (.off .ply .obj .stl) or a dataset name (meltlab dataset list)")->required();
-  sub->add_option("--scene", o->scene_file, "YAML scene: camera, lights, ice, ground, environment, outputs (default: built in)");
+  sub->add_option("--scene", o->scene_file, "YAML scene: camera, texture_filter, lights, ice, ground, environment (lat-long or cube map), outputs; every key in experiments/configs/render_ice.yaml (default: built in)");
   sub->add_option("--cycles", o->cycles, "Melt cycles to run")->default_val(200);
   sub->add_option("--every", o->every, "Render a frame every K cycles (and the last)")->default_val(50);
   sub->add_option("--out", o->out_dir, "Output folder (frames/, frames.csv, render.json)")->required();

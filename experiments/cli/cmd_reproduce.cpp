@@ -36,7 +36,7 @@ Run add_reproduce(CLI::App& app) {
   auto no_report = std::make_shared<bool>(false);
   sub->add_option("--out", o->out_dir, "Output folder: one subfolder per experiment, summary.json, report/index.html")
       ->required();
-  sub->add_flag("--quick", o->quick, "Reduced sizes (the default of ./scripts/reproduce; < 10 min on 2 cores)");
+  sub->add_flag("--quick", o->quick, "Reduced sizes (the default of ./scripts/reproduce; < 10 min on 2 cores); experiments with modes: [full] are left out");
   sub->add_option("--only", o->only, "Run only these experiments (repeatable)")->delimiter(',');
   sub->add_option("--jobs", o->jobs, "Experiments run in parallel")->default_val(2)->check(CLI::Range(1, 64));
   sub->add_option("--configs", *configs,
