@@ -3,11 +3,13 @@
 // Every triangle contributes its unit face normal (Eq. 2.9) and, at each corner, the unit
 // edge vector to the next corner; every vertex sums them, normalises N (Eq. 2.10), takes
 // the mean M_E (Eq. 3.5) and moves by kg·kl(P)·M (Eq. 3.6, 3.8).
-// Serial: one sweep over the triangles scatters into the corners (sequential reads of the
-// triangle array). Parallel: triangles compute their terms, then each vertex gathers from
-// its triangle list. Lists are kept in ascending triangle order, so every vertex adds the
-// same numbers in the same order in both modes: bitwise-identical meshes (with
-// -ffp-contract=off, see cmake/flags.cmake).
+// Serial: one sweep over the triangles scatters into the corners' sum records (sequential
+// reads of the triangle array, one SIMD addition per corner). Parallel: triangles compute
+// their terms, then each vertex gathers from its triangle list. Lists are kept in ascending
+// triangle order, so every vertex adds the same numbers in the same order in both modes:
+// bitwise-identical meshes (with -ffp-contract=off, see cmake/flags.cmake). The vertex
+// moves then run in blocks of plain arrays (vectorised); a vertex's triangle count is the
+// length of its list.
 
 #include "triangle_kernels.h"
 #include "workspace.h"
@@ -15,22 +17,18 @@
 #include <meltlab/sim/error.h>
 
 #include <algorithm>
+#include <stdexcept>
 
 namespace meltlab::sim {
 
 namespace {
 
-// Serial: blocks of triangles compute their terms, then scatter into the corners in
-// ascending triangle order; the sums are left in normal/displacement, the counts in
-// triangle_count.
+// Serial: blocks of triangles compute their terms, then scatter into the corners' sum
+// records in ascending triangle order.
 template <class Real>
-void accumulate_serial(TriMesh<Real>& m) {
-  const std::size_t nv = m.vertex_slots(), nt = m.triangle_slots();
-  for (std::size_t v = 0; v < nv; ++v) {
-    m.normal[v].setZero();
-    m.displacement[v].setZero();
-    m.triangle_count[v] = 0;
-  }
+void accumulate_serial(TriMesh<Real>& m, std::vector<VertexSums<Real>>& sums) {
+  const std::size_t nt = m.triangle_slots();
+  sums.assign(m.vertex_slots(), VertexSums<Real>{});
   TriangleBlockTerms<Real> b;
   for (std::size_t first = 0; first < nt; first += kTriangleBlock) {
     const std::size_t count = std::min(kTriangleBlock, nt - first);
@@ -38,15 +36,11 @@ void accumulate_serial(TriMesh<Real>& m) {
     for (std::size_t i = 0; i < count; ++i) {
       const std::size_t t = first + i;
       if (!m.triangle_alive[t]) continue;
-      const Vec3<Real> n(b.nx[i], b.ny[i], b.nz[i]);
-      m.face_normal[t] = n;
+      m.face_normal[t] = Vec3<Real>(b.nx[i], b.ny[i], b.nz[i]);
       const Triangle& tri = m.triangle[t];
-      for (std::size_t k = 0; k < 3; ++k) {
-        const auto v = static_cast<std::size_t>(tri[k]);
-        m.normal[v] += n;
-        m.displacement[v] += Vec3<Real>(b.ex[k][i], b.ey[k][i], b.ez[k][i]);
-        ++m.triangle_count[v];
-      }
+      for (std::size_t k = 0; k < 3; ++k)
+        sums[static_cast<std::size_t>(tri[k])].lane +=
+            typename VertexSums<Real>::Lanes{b.nx[i], b.ny[i], b.nz[i], b.ex[k][i], b.ey[k][i], b.ez[k][i], 0, 0};
     }
   }
 }
@@ -55,9 +49,10 @@ void accumulate_serial(TriMesh<Real>& m) {
 // from its (ascending) list — the same additions in the same order as above.
 template <class Real>
 void accumulate_parallel(TriMesh<Real>& m, Execution exec, const VertexTriangles& adj,
-                         std::vector<TriangleTerms<Real>>& terms) {
+                         std::vector<TriangleTerms<Real>>& terms, std::vector<VertexSums<Real>>& sums) {
   const std::size_t nt = m.triangle_slots();
   terms.resize(nt);
+  sums.resize(m.vertex_slots());
   const std::size_t blocks = (nt + kTriangleBlock - 1) / kTriangleBlock;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, kParallelGrain / kTriangleBlock),
                     [&](const tbb::blocked_range<std::size_t>& r) {
@@ -76,27 +71,112 @@ void accumulate_parallel(TriMesh<Real>& m, Execution exec, const VertexTriangles
                     });
   for_range(exec, m.vertex_slots(), [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v) {
-      if (!m.vertex_alive[v]) continue;
       Vec3<Real> N = Vec3<Real>::Zero();
       Vec3<Real> M = Vec3<Real>::Zero();
-      const auto tris = adj.of(static_cast<Index>(v));
-      for (Index t : tris) {
-        const auto ts = static_cast<std::size_t>(t);
-        N += terms[ts].normal;
-        M += terms[ts].edge[corner_of(m.triangle[ts], static_cast<Index>(v))];
+      if (m.vertex_alive[v]) {
+        for (Index t : adj.of(static_cast<Index>(v))) {
+          const auto ts = static_cast<std::size_t>(t);
+          N += terms[ts].normal;
+          M += terms[ts].edge[corner_of(m.triangle[ts], static_cast<Index>(v))];
+        }
       }
-      m.normal[v] = N;
-      m.displacement[v] = M;
-      m.triangle_count[v] = static_cast<Index>(tris.size());
+      sums[v].lane = typename VertexSums<Real>::Lanes{N.x(), N.y(), N.z(), M.x(), M.y(), M.z(), 0, 0};
     }
   });
 }
 
+inline constexpr std::size_t kVertexBlock = 64;
+
+// Moves the vertices [first, first + n) from their sums (Eq. 2.10, 3.5, 3.6, 3.8): the sums
+// and positions are read into plain arrays, the arithmetic runs as loops the compiler
+// vectorises (the same operations in the same order as a scalar evaluation, see
+// triangle_kernels.h), then live vertices are written back. Returns the block's largest
+// move component and position component (after the move) over vertices that moved.
+// `scale_at` is kg·kl: one number for a constant kl, else a function of the vertex slot.
+template <class Real, DeformMode kMode, class ScaleAt>
+std::pair<Real, Real> move_vertex_block(TriMesh<Real>& m, const MeltParams& p, const VertexTriangles& adj,
+                                        const std::vector<VertexSums<Real>>& sums, const ScaleAt& scale_at,
+                                        std::size_t first, std::size_t n) {
+  const Real kE = static_cast<Real>(p.kE), kN = static_cast<Real>(p.kN);
+  const bool mean = p.edge_sum == EdgeSumMode::kMean;
+  const bool less_equal = p.tie == TieRule::kLessEqual;
+  Real nx[kVertexBlock], ny[kVertexBlock], nz[kVertexBlock];
+  Real mx[kVertexBlock], my[kVertexBlock], mz[kVertexBlock];
+  Real px[kVertexBlock], py[kVertexBlock], pz[kVertexBlock];
+  Real scale[kVertexBlock];
+  Index count[kVertexBlock];
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t v = first + i;
+    const auto& s = sums[v].lane;
+    nx[i] = s[0], ny[i] = s[1], nz[i] = s[2];
+    mx[i] = s[3], my[i] = s[4], mz[i] = s[5];
+    const Vec3<Real>& P = m.position[v];
+    px[i] = P.x(), py[i] = P.y(), pz[i] = P.z();
+    // orphan_vertex_policy: a vertex without triangles does not move (deleted by Alg. 3).
+    count[i] = m.vertex_alive[v] ? adj.count(static_cast<Index>(v)) : 0;
+  }
+  // kg · kl(P), P before the move: one number for a constant kl, else a lookup per vertex.
+  if constexpr (!std::is_arithmetic_v<ScaleAt>)
+    for (std::size_t i = 0; i < n; ++i) scale[i] = count[i] > 0 ? scale_at(first + i) : Real(0);
+  Real move_max[kVertexBlock], coord_max[kVertexBlock];
+  for (std::size_t i = 0; i < n; ++i) {
+    const Real inv = inverse_length(nx[i] * nx[i] + ny[i] * ny[i] + nz[i] * nz[i]);  // Eq. 2.10
+    nx[i] *= inv, ny[i] *= inv, nz[i] *= inv;
+    // Eq. 3.5: M_E, the mean (or sum) of the unit edges.
+    const Real divisor = mean ? static_cast<Real>(std::max<Index>(count[i], 1)) : Real(1);
+    const Real ex = mx[i] / divisor, ey = my[i] / divisor, ez = mz[i] / divisor;
+    Real s;
+    if constexpr (std::is_arithmetic_v<ScaleAt>)
+      s = count[i] > 0 ? scale_at : Real(0);
+    else
+      s = scale[i];
+    Real dx, dy, dz;
+    if constexpr (kMode == DeformMode::kCombined) {
+      // M_N = -N, so Eq. 3.6's agreement test M_N·M_E > 0 is N·M_E < 0 (Alg. 1: <=).
+      const Real d = nx[i] * ex + ny[i] * ey + nz[i] * ez;
+      const bool combined = less_equal ? d <= Real(0) : d < Real(0);
+      dx = combined ? (kE * ex - kN * nx[i]) * s : (-kN * nx[i]) * s;
+      dy = combined ? (kE * ey - kN * ny[i]) * s : (-kN * ny[i]) * s;
+      dz = combined ? (kE * ez - kN * nz[i]) * s : (-kN * nz[i]) * s;
+    } else if constexpr (kMode == DeformMode::kNormalOnly) {
+      dx = (-kN * nx[i]) * s, dy = (-kN * ny[i]) * s, dz = (-kN * nz[i]) * s;
+    } else {
+      dx = (kE * ex) * s, dy = (kE * ey) * s, dz = (kE * ez) * s;
+    }
+    mx[i] = dx, my[i] = dy, mz[i] = dz;  // from here on: the move
+    px[i] += dx, py[i] += dy, pz[i] += dz;
+    const bool moves = count[i] > 0;
+    move_max[i] = moves ? std::max(std::max(std::abs(dx), std::abs(dy)), std::abs(dz)) : Real(0);
+    coord_max[i] = moves ? std::max(std::max(std::abs(px[i]), std::abs(py[i])), std::abs(pz[i])) : Real(0);
+  }
+  // A separate reduction: GCC vectorises a floating-point max reduction only under
+  // -ffast-math, and would keep the loop above scalar for it.
+  Real block_move = 0, block_coord = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    block_move = std::max(block_move, move_max[i]);
+    block_coord = std::max(block_coord, coord_max[i]);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t v = first + i;
+    if (!m.vertex_alive[v]) continue;
+    m.triangle_count[v] = count[i];
+    if (count[i] == 0) {
+      m.normal[v].setZero();
+      m.displacement[v].setZero();
+      continue;
+    }
+    m.normal[v] = Vec3<Real>(nx[i], ny[i], nz[i]);
+    m.displacement[v] = Vec3<Real>(mx[i], my[i], mz[i]);
+    m.position[v] = Vec3<Real>(px[i], py[i], pz[i]);
+  }
+  return {block_move, block_coord};
+}
+
 // Moves every vertex; returns a bound on how far any vertex moved: the largest |move| plus
 // the rounding of P + move (half an ulp of the largest coordinate per component).
-template <class Real, class ScaleAt>
-double move_vertices(TriMesh<Real>& m, const MeltParams& p, Execution exec, const ScaleAt& scale_at) {
-  const Real kE = static_cast<Real>(p.kE), kN = static_cast<Real>(p.kN);
+template <class Real, DeformMode kMode, class ScaleAt>
+double move_vertices(TriMesh<Real>& m, const MeltParams& p, Execution exec, const VertexTriangles& adj,
+                     const std::vector<VertexSums<Real>>& sums, const ScaleAt& scale_at) {
   std::atomic<double> max_move{0.0}, max_coord{0.0};
   auto atomic_max = [](std::atomic<double>& a, double x) {
     double cur = a.load(std::memory_order_relaxed);
@@ -105,39 +185,11 @@ double move_vertices(TriMesh<Real>& m, const MeltParams& p, Execution exec, cons
   };
   for_range(exec, m.vertex_slots(), [&](std::size_t begin, std::size_t end) {
     Real local_move = 0, local_coord = 0;
-    for (std::size_t v = begin; v < end; ++v) {
-      if (!m.vertex_alive[v]) continue;
-      const Index count = m.triangle_count[v];
-      if (count == 0) {  // orphan_vertex_policy: no triangles, no move (deleted by Alg. 3)
-        m.normal[v].setZero();
-        m.displacement[v].setZero();
-        continue;
-      }
-      const Vec3<Real> N = m.normal[v] * inverse_length(m.normal[v].squaredNorm());  // Eq. 2.10
-      m.normal[v] = N;
-      const Vec3<Real>& Msum = m.displacement[v];
-      const Vec3<Real> ME = p.edge_sum == EdgeSumMode::kMean ? Vec3<Real>(Msum / static_cast<Real>(count)) : Msum;
-      const Real s = scale_at(v);  // kg · kl(P), P before the move
-      Vec3<Real> move = Vec3<Real>::Zero();
-      switch (p.deform) {
-        case DeformMode::kCombined: {
-          // M_N = -N, so Eq. 3.6's agreement test M_N·M_E > 0 is N·M_E < 0 (Alg. 1: <=).
-          const Real d = N.dot(ME);
-          const bool combined = p.tie == TieRule::kLessEqual ? d <= Real(0) : d < Real(0);
-          move = combined ? Vec3<Real>((kE * ME - kN * N) * s) : Vec3<Real>((-kN * N) * s);
-          break;
-        }
-        case DeformMode::kNormalOnly:
-          move = (-kN * N) * s;
-          break;
-        case DeformMode::kEdgeOnly:
-          move = (kE * ME) * s;
-          break;
-      }
-      m.displacement[v] = move;
-      m.position[v] += move;
-      local_move = std::max(local_move, move.cwiseAbs().maxCoeff());
-      local_coord = std::max(local_coord, m.position[v].cwiseAbs().maxCoeff());
+    for (std::size_t first = begin; first < end; first += kVertexBlock) {
+      const auto [block_move, block_coord] =
+          move_vertex_block<Real, kMode>(m, p, adj, sums, scale_at, first, std::min(kVertexBlock, end - first));
+      local_move = std::max(local_move, block_move);
+      local_coord = std::max(local_coord, block_coord);
     }
     atomic_max(max_move, static_cast<double>(local_move));
     atomic_max(max_coord, static_cast<double>(local_coord));
@@ -147,21 +199,36 @@ double move_vertices(TriMesh<Real>& m, const MeltParams& p, Execution exec, cons
   return kSqrt3 * (max_move.load() + static_cast<double>(std::numeric_limits<Real>::epsilon()) * max_coord.load());
 }
 
+template <class Real, class ScaleAt>
+double move_vertices(TriMesh<Real>& m, const MeltParams& p, Execution exec, const VertexTriangles& adj,
+                     const std::vector<VertexSums<Real>>& sums, const ScaleAt& scale_at) {
+  switch (p.deform) {
+    case DeformMode::kCombined:
+      return move_vertices<Real, DeformMode::kCombined>(m, p, exec, adj, sums, scale_at);
+    case DeformMode::kNormalOnly:
+      return move_vertices<Real, DeformMode::kNormalOnly>(m, p, exec, adj, sums, scale_at);
+    case DeformMode::kEdgeOnly:
+      return move_vertices<Real, DeformMode::kEdgeOnly>(m, p, exec, adj, sums, scale_at);
+  }
+  throw std::logic_error("deform: unknown DeformMode");
+}
+
 }  // namespace
 
 template <class Real>
 void deform_pass(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execution exec, MeltWorkspace& ws) {
   prepare_workspace(ws, m);
+  std::vector<VertexSums<Real>>& sums = ws.vertex_sums<Real>();
   if (exec == Execution::kSerial || m.triangle_slots() < 2 * kParallelGrain)
-    accumulate_serial(m);
+    accumulate_serial(m, sums);
   else
-    accumulate_parallel(m, exec, ws.adj, ws.triangle_terms<Real>());
+    accumulate_parallel(m, exec, ws.adj, ws.triangle_terms<Real>(), sums);
   // A constant kl costs nothing per vertex: s = kg·kl is folded into one number.
   if (kl.is_constant()) {
     const auto s = static_cast<Real>(p.kg * kl.value(Vec3<double>::Zero()));
-    ws.cycle_move_bound = move_vertices(m, p, exec, [s](std::size_t) { return s; });
+    ws.cycle_move_bound = move_vertices(m, p, exec, ws.adj, sums, s);
   } else {
-    ws.cycle_move_bound = move_vertices(m, p, exec, [&](std::size_t v) {
+    ws.cycle_move_bound = move_vertices(m, p, exec, ws.adj, sums, [&](std::size_t v) {
       return static_cast<Real>(p.kg * kl.value(m.position[v].template cast<double>()));
     });
   }

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 namespace meltlab::sim {
@@ -28,6 +29,17 @@ struct TriangleTerms {
   Vec3<Real> edge[3];
 };
 
+/// A vertex's sums in Alg. 1 as one record: the face normals (lanes 0-2) and the unit edges
+/// from the vertex (lanes 3-5) of its triangles; lanes 6-7 stay 0. One record per vertex, so
+/// the serial scatter adds a corner's terms with one SIMD addition (lane by lane: the same
+/// additions in the same order as three-component sums). GCC/Clang vector extension: the
+/// compiler does not merge the scalar read-modify-writes of a plain array into one.
+template <class Real>
+struct VertexSums {
+  using Lanes [[gnu::vector_size(8 * sizeof(Real))]] = Real;
+  Lanes lane = {};
+};
+
 struct MeltWorkspace {
   VertexTriangles adj;  ///< triangles of every vertex, ascending; kept up to date by every pass
 
@@ -35,6 +47,9 @@ struct MeltWorkspace {
   // so a vertex's gather touches one cache line per triangle.
   std::vector<TriangleTerms<float>> terms_f;
   std::vector<TriangleTerms<double>> terms_d;
+  // Deform: per-vertex sums (serial scatter or parallel gather), read by the vertex moves.
+  std::vector<VertexSums<float>> sums_f;
+  std::vector<VertexSums<double>> sums_d;
 
 
   // Conservative skip of the short-edge test. An edge shrinks per cycle by at most twice the
@@ -60,6 +75,11 @@ struct MeltWorkspace {
   std::vector<TriangleTerms<Real>>& triangle_terms() {
     if constexpr (std::is_same_v<Real, float>) return terms_f;
     else return terms_d;
+  }
+  template <class Real>
+  std::vector<VertexSums<Real>>& vertex_sums() {
+    if constexpr (std::is_same_v<Real, float>) return sums_f;
+    else return sums_d;
   }
   void mark_dirty(Index v) {
     auto& d = dirty[static_cast<std::size_t>(v)];
