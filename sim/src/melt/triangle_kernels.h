@@ -1,5 +1,5 @@
 #pragma once
-// Private to the melt cycle: the per-triangle arithmetic of Alg. 1 and Alg. 2, computed a
+// Private to the melt cycle: the per-triangle arithmetic of Alg. 1, computed a
 // block of triangles at a time. Positions are first gathered into structure-of-arrays
 // buffers, then plain loops over them do the arithmetic (the compiler turns these into
 // SIMD instructions: sqrt and division are exactly rounded in SIMD too, and contraction is
@@ -37,7 +37,8 @@ inline Real inverse_length(Real n2) {
   return n2 > Real(0) ? inv : Real(0);
 }
 
-/// Triangles [first, first + count) of `m` (dead slots give zero terms).
+/// Triangles [first, first + count) of `m`. A dead slot reads vertex 0 at all three corners:
+/// a point, whose normal and edges inverse_length() turns into zero terms.
 template <class Real>
 inline void triangle_block_terms(const TriMesh<Real>& m, std::size_t first, std::size_t count,
                                  TriangleBlockTerms<Real>& out) {
@@ -48,9 +49,9 @@ inline void triangle_block_terms(const TriMesh<Real>& m, std::size_t first, std:
     const bool alive = m.triangle_alive[t] != 0;
     for (int k = 0; k < 3; ++k) {
       const Vec3<Real>& p = m.position[alive ? static_cast<std::size_t>(m.triangle[t][static_cast<std::size_t>(k)]) : 0];
-      px[k][i] = alive ? p.x() : Real(0);
-      py[k][i] = alive ? p.y() : Real(0);
-      pz[k][i] = alive ? p.z() : Real(0);
+      px[k][i] = p.x();
+      py[k][i] = p.y();
+      pz[k][i] = p.z();
     }
   }
   for (std::size_t i = 0; i < count; ++i) {
@@ -72,31 +73,6 @@ inline void triangle_block_terms(const TriMesh<Real>& m, std::size_t first, std:
     out.ex[0][i] = abx * i0, out.ey[0][i] = aby * i0, out.ez[0][i] = abz * i0;
     out.ex[1][i] = bcx * i1, out.ey[1][i] = bcy * i1, out.ez[1][i] = bcz * i1;
     out.ex[2][i] = cax * i2, out.ey[2][i] = cay * i2, out.ez[2][i] = caz * i2;
-  }
-}
-
-/// Squared lengths of the edges ab, bc, ca of triangles [first, first + count).
-template <class Real>
-inline void triangle_block_edge_lengths2(const TriMesh<Real>& m, std::size_t first, std::size_t count,
-                                         Real (&l2)[3][kTriangleBlock]) {
-  Real px[3][kTriangleBlock], py[3][kTriangleBlock], pz[3][kTriangleBlock];
-  for (std::size_t i = 0; i < count; ++i) {
-    const std::size_t t = first + i;
-    const bool alive = m.triangle_alive[t] != 0;
-    for (int k = 0; k < 3; ++k) {
-      const Vec3<Real>& p = m.position[alive ? static_cast<std::size_t>(m.triangle[t][static_cast<std::size_t>(k)]) : 0];
-      px[k][i] = p.x();
-      py[k][i] = p.y();
-      pz[k][i] = p.z();
-    }
-  }
-  for (std::size_t i = 0; i < count; ++i) {
-    const Real abx = px[1][i] - px[0][i], aby = py[1][i] - py[0][i], abz = pz[1][i] - pz[0][i];
-    const Real bcx = px[2][i] - px[1][i], bcy = py[2][i] - py[1][i], bcz = pz[2][i] - pz[1][i];
-    const Real cax = px[0][i] - px[2][i], cay = py[0][i] - py[2][i], caz = pz[0][i] - pz[2][i];
-    l2[0][i] = abx * abx + aby * aby + abz * abz;
-    l2[1][i] = bcx * bcx + bcy * bcy + bcz * bcz;
-    l2[2][i] = cax * cax + cay * cay + caz * caz;
   }
 }
 
