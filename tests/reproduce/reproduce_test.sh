@@ -3,7 +3,8 @@
 # Usage: reproduce_test.sh <meltlab> <test configs dir> <experiments/reproduce dir>
 # Runs tab_2_3 (a real experiment), tiny_melt (test-only) and always_fails (its mesh does
 # not exist) in quick mode; checks the summary, the reuse of finished experiments on a second
-# run, that a changed config is run again, and the report in headless Chromium.
+# run, that a changed config is run again, and the report in headless Chromium; then the
+# stress_summary report kind on tiny_stress (two small meshes in float and double).
 set -uo pipefail
 M=$1
 TEST_CONFIGS=$2
@@ -135,4 +136,31 @@ grep -Eq "^1 ran, 0 reused, 0 failed" run3.out || fail "changed config not rerun
 [ "$($PY -c "import json; print(json.load(open('out/tiny_melt/run/run.json'))['cycles_requested'])")" = 30 ] || fail "not rerun with 30 cycles"
 "$M" reproduce --quick --configs tc --only tiny_melt --out out --no-report --force >run4.out 2>&1 || fail "--force"
 grep -Eq "^1 ran, 0 reused" run4.out || fail "--force did not run again: $(cat run4.out)"
+echo "ok [$CASE]"
+
+# --- the stress_summary report kind: two small meshes melted away in float and double
+CASE=stress_summary
+"$M" reproduce --quick --configs tc --only tiny_stress --out out_stress --no-report >s.out 2>s.err || fail "tiny_stress: $(cat s.err)"
+$PY - <<'PY' || fail "stress_summary.csv / report.json"
+import csv, json
+rows = list(csv.DictReader(open("out_stress/tiny_stress/stress_summary.csv")))
+assert len(rows) == 4, rows
+for r in rows:
+    assert r["status"] == "melted" and int(r["cycles survived"]) > 0, r
+    # --check-every 10 until the mesh is gone: one check per 10 cycles survived (and cycle 0)
+    assert int(r["topology checks passed"]) >= int(r["cycles survived"]) // 10, r
+by = {(r["mesh"], r["precision"]): r for r in rows}
+assert int(by[("torus", "float")]["self-intersection checks"]) > 1, by
+for mesh in ("torus", "icosphere_3"):
+    f, d = by[(mesh, "float")], by[(mesh, "double")]
+    drift = float(f["max |V_float - V_double| / V0 (while V >= 0.1 V0)"])
+    # Float and double differ (else the precision flag did nothing) by rounding only: these
+    # meshes keep the same triangle counts in both precisions, so the volumes differ by the
+    # float rounding of a few hundred cycles (measured 1e-7 .. 4e-7 of V0), far below 1e-4.
+    assert f["first cycle with different triangle counts"] == "never", f
+    assert 0 < drift < 1e-4, (mesh, drift)
+    assert f["cycles survived"] == d["cycles survived"], (f, d)
+j = json.load(open("out_stress/tiny_stress/report.json"))
+assert j["matches"] is True and j["verdict"].startswith("4 of 4 runs"), j
+PY
 echo "ok [$CASE]"
