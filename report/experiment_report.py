@@ -6,7 +6,8 @@ report/build_report.py puts into the HTML report.
 
 usage: experiment_report.py KIND EXP_DIR [ARGS...]
 KIND: tab_2_3 | cycle_time CYCLES | deform_variants | split | kl_field | chapter8 MOLD | fit | physics_fit MOLD |
-      melt_away | liquid_figure | melt_scene | texture_filter FACTOR | stress_summary | runs (generic: every simulate run folder in EXP_DIR)
+      melt_away | liquid_figure | melt_scene | texture_filter FACTOR | stress_summary |
+      module_studies | runs (generic: every simulate run folder in EXP_DIR)
 
 report.json: {"tables": [{"caption", "csv"}], "figures": [{"caption", "png", "data"}],
 "verdict": str, "matches": bool|null, "notes": [str], "source_hardware": str, "extra": {...}}
@@ -649,6 +650,90 @@ def stress_summary(exp: Path, _args):
     })
 
 
+# ------------------------------------------------------------------ module studies
+def module_studies(exp: Path, _args):
+    """Time against error of the verification loop (P measure, silhouettes) and of the
+    reference solver, from the benchmark JSONs the earlier steps wrote."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    import physics_bench_summary
+    import verify_bench_summary
+    sil, peer, p = verify_bench_summary.tables(str(exp / "silhouette.json"), str(exp / "p_measure.json"))
+    if not p or not sil:
+        raise SystemExit(f"experiment_report.py: {exp}: no medians in silhouette.json / p_measure.json")
+    methods = (("RasterP", "raster pixels"), ("CoverageP", "4x4 coverage"), ("ContourExactP", "exact polygons (CGAL)"))
+    widths = sorted({w for (_, w) in p})
+    p_rows = [[f"{w}x{w * 3 // 4}", label, p[(kind, w)][0], p[(kind, w)][1]]
+              for w in widths for kind, label in methods if (kind, w) in p]
+    write_csv(exp / "p_measure.csv", ["image", "P computed from", "median ms", "|P - P exact (closed form)|"], p_rows)
+    s_widths = sorted({w for (w, _, _) in sil})
+    s_rows = []
+    for w in s_widths:
+        for k in (1, 4):
+            ours, ours2, pe = sil.get((w, k, False)), sil.get((w, k, True)), peer.get((w, k))
+            s_rows.append([f"{w}x{w * 3 // 4}", k, ours, ours2, pe, (pe / ours) if (pe and ours) else None])
+    write_csv(exp / "silhouette.csv", ["image", "supersampling k (k x k)", "meltlab serial ms", "meltlab 2 threads ms",
+                                       "cv::fillConvexPoly peer ms", "peer / meltlab serial"], s_rows)
+    phys = physics_bench_summary.rows(str(exp / "physics.json"))
+    for case in ("NeumannStefan", "ShrinkingSphere"):
+        sub = sorted((r for r in phys if r["case"] == case and r["rel_error"]), key=lambda r: -r["h_mm"])
+        for a, b in zip(sub, sub[1:]):
+            if a["rel_error"] > 0 and b["rel_error"] > 0:
+                b["order"] = math.log(a["rel_error"] / b["rel_error"]) / math.log(a["h_mm"] / b["h_mm"])
+    write_csv(exp / "physics.csv", ["case", "grid spacing h [mm]", "run time ms", "relative error", "observed order",
+                                    "cells"],
+              [[r["case"], r["h_mm"], r["time_ms"], r["rel_error"], r.get("order"), r["cells"]] for r in phys])
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.4))
+    for kind, label in methods:
+        pts = [(p[(kind, w)][0], p[(kind, w)][1], w) for w in widths if (kind, w) in p and p[(kind, w)][1]]
+        if pts:
+            ax1.loglog([t for t, _, _ in pts], [e for _, e, _ in pts], "o-", label=label)
+            for t, e, w in pts:
+                ax1.annotate(f"{w}", (t, e), fontsize=7)
+    ax1.set_xlabel("median ms per P (image width annotated)")
+    ax1.set_ylabel("|P - closed form|")
+    ax1.set_title("P measure (Eq. 8.1): time against error", fontsize=10)
+    ax1.grid(True, which="both", alpha=0.3)
+    ax1.legend(fontsize=8)
+    for case, marker in (("NeumannStefan", "o-"), ("ShrinkingSphere", "s-")):
+        sub = sorted((r for r in phys if r["case"] == case and r["rel_error"]), key=lambda r: -r["h_mm"])
+        if sub:
+            ax2.loglog([r["time_ms"] for r in sub], [r["rel_error"] for r in sub], marker, label=case)
+            for r in sub:
+                ax2.annotate(f"{r['h_mm']:g} mm", (r["time_ms"], r["rel_error"]), fontsize=7)
+    ax2.set_xlabel("run time [ms]")
+    ax2.set_ylabel("relative interface error")
+    ax2.set_title("Reference melt solver: time against error", fontsize=10)
+    ax2.grid(True, which="both", alpha=0.3)
+    ax2.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(exp / "module_studies.png", dpi=100)
+    plt.close(fig)
+    # Verdict: the cheapest method per target error, and the solver's convergence order.
+    big = widths[-1]
+    raster_t, raster_e = p.get(("RasterP", big), (None, None))
+    exact_t, exact_e = p.get(("ContourExactP", big), (None, None))
+    orders = {case: [r["order"] for r in phys if r["case"] == case and r.get("order") is not None]
+              for case in ("NeumannStefan", "ShrinkingSphere")}
+    order_txt = "; ".join(f"{case} observed order {statistics.median(o):.2f} (median over {len(o)} refinements)"
+                          for case, o in orders.items() if o)
+    ratios = [r[5] for r in s_rows if r[5] is not None and r[1] == 1]
+    write_fragment(exp, {
+        "tables": [{"caption": "P of two discs against its closed form, per image size and method", "csv": "p_measure.csv"},
+                   {"caption": "Silhouette of the giraffe mold (10.8k triangles): meltlab and the OpenCV peer",
+                    "csv": "silhouette.csv"},
+                   {"caption": "Reference solver: grid spacing, run time, error against the closed form",
+                    "csv": "physics.csv"}],
+        "figures": [{"caption": "Time against error: the P measure (left) and the reference solver (right)",
+                     "png": "module_studies.png", "data": "p_measure.csv"}],
+        "matches": bool(orders["NeumannStefan"] or orders["ShrinkingSphere"]),
+        "verdict": (f"At {big}x{big * 3 // 4}, P from raster pixels costs {raster_t:.2f} ms for an error of {raster_e:.1e}, "
+                    f"from exact polygons {exact_t:.1f} ms for {exact_e:.1e}; "
+                    + (f"silhouettes {min(ratios):.2f}-{max(ratios):.2f}x the speed of the OpenCV peer; " if ratios else "")
+                    + order_txt + ". An own study: the sources give no error budget."),
+        "source_hardware": MONOGRAPH_NONE,
+    })
+
+
 # ------------------------------------------------------------------ generic
 def runs(exp: Path, _args):
     rows, figs = [], []
@@ -670,7 +755,7 @@ def runs(exp: Path, _args):
 KINDS = {"tab_2_3": tab_2_3, "cycle_time": cycle_time, "deform_variants": deform_variants, "split": split,
          "kl_field": kl_field, "chapter8": chapter8, "fit": fit, "physics_fit": physics_fit, "melt_away": melt_away, "runs": runs,
          "liquid_figure": liquid_figure, "melt_scene": melt_scene, "texture_filter": texture_filter,
-         "stress_summary": stress_summary}
+         "stress_summary": stress_summary, "module_studies": module_studies}
 
 
 def main(argv):

@@ -18,12 +18,11 @@ def medians(path):
     return [b for b in doc["benchmarks"] if b.get("aggregate_name") == "median"]
 
 
-def main(argv):
-    if len(argv) != 3:
-        print(__doc__, file=sys.stderr)
-        return 2
+def tables(sil_json, p_json):
+    """(silhouette, p): silhouette[(width, k, parallel)] and peer[(width, k)] median ms;
+    p[(kind, width)] = (median ms, |P error|) for kind RasterP, CoverageP, ContourExactP."""
     sil, peer = {}, {}
-    for b in medians(argv[1]):
+    for b in medians(sil_json):
         label = b.get("label", "")
         m = re.search(r"(\d+)x(\d+) k(\d+)", label)
         if not m:
@@ -34,10 +33,18 @@ def main(argv):
         else:
             peer[(width, k)] = b["real_time"]
     p = {}
-    for b in medians(argv[2]):
+    for b in medians(p_json):
         m = re.match(r"BM_(\w+)/width:(\d+)_median", b["name"])
         if m:
             p[(m.group(1), int(m.group(2)))] = (b["real_time"], b.get("abs_error"))
+    return sil, peer, p
+
+
+def main(argv):
+    if len(argv) != 3:
+        print(__doc__, file=sys.stderr)
+        return 2
+    sil, peer, p = tables(argv[1], argv[2])
     widths = sorted({w for (w, _, _) in sil})
     print("Silhouette of the giraffe mold (10.8k triangles), median ms")
     print(f"{'image':>10} {'serial':>8} {'2 thr':>8} {'peer':>8} {'peer/ours':>9} {'k4 ser':>8} {'k4 2thr':>8} {'k4 peer':>8}")

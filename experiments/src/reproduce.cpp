@@ -145,6 +145,7 @@ ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) 
   std::map<std::string, std::string> vars{{"out", e.out_dir.string()},
                                           {"repo", o.source_dir.string()},
                                           {"config_dir", config.parent_path().string()},
+                                          {"bin", o.self_exe.parent_path().string()},
                                           {"mode", mode}};
   if (root["vars"]) {
     if (!root["vars"].IsMap()) throw InputError(fmt::format("{}: 'vars' must be a map", config.string()));

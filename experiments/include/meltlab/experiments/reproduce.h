@@ -7,8 +7,9 @@
 // its input files and the meltlab version (written atomically, last); a later run with the
 // same hash reuses the folder instead of running it again.
 //
-// Config format (every string may use ${out}, ${step}, ${repo}, ${config_dir}, ${mode} and
-// the config's own vars; a var is a scalar or {quick: ..., full: ...}):
+// Config format (every string may use ${out}, ${step}, ${repo}, ${config_dir}, ${mode}, ${bin}
+// (the folder of the meltlab binary, where the benchmark binaries are built) and the
+// config's own vars; a var is a scalar or {quick: ..., full: ...}):
 //
 //   name: tab_5_1                         # [a-z0-9_]+, unique; the folder under --out
 //   title: "Tab. 5.1, Figs. 5.6-5.7: ..."
