@@ -583,14 +583,15 @@ def stress_summary(exp: Path, _args):
         v0 = float(sd[0]["volume"])
         vol_f = {int(r["cycle"]): float(r["volume"]) for r in sf}
         vol_d = {int(r["cycle"]): float(r["volume"]) for r in sd}
+        tri_f = {int(r["cycle"]): int(r["triangles"]) for r in sf}
+        tri_d = {int(r["cycle"]): int(r["triangles"]) for r in sd}
         common = sorted(c for c in vol_f if c in vol_d)
         # Drift while the double run still has a tenth of its volume: near the end both are a
         # few triangles and the difference of two small numbers says little.
         alive = [c for c in common if vol_d[c] >= 0.1 * v0]
         drift = [abs(vol_f[c] - vol_d[c]) / v0 for c in alive]
         drift_curves[mesh] = (alive, drift)
-        first_diff = next((c for c in common if int(sf[c]["triangles"]) != int(sd[c]["triangles"])), None) \
-            if all(int(r["cycle"]) == i for i, r in enumerate(sf[:len(common)])) else None
+        first_diff = next((c for c in common if tri_f[c] != tri_d[c]), None)
         for prec, run in (("float", rf), ("double", rd)):
             ch = run["checks"]
             inter = ch.get("intersections", [])
@@ -674,11 +675,7 @@ def module_studies(exp: Path, _args):
     write_csv(exp / "silhouette.csv", ["image", "supersampling k (k x k)", "meltlab serial ms", "meltlab 2 threads ms",
                                        "cv::fillConvexPoly peer ms", "peer / meltlab serial"], s_rows)
     phys = physics_bench_summary.rows(str(exp / "physics.json"))
-    for case in ("NeumannStefan", "ShrinkingSphere"):
-        sub = sorted((r for r in phys if r["case"] == case and r["rel_error"]), key=lambda r: -r["h_mm"])
-        for a, b in zip(sub, sub[1:]):
-            if a["rel_error"] > 0 and b["rel_error"] > 0:
-                b["order"] = math.log(a["rel_error"] / b["rel_error"]) / math.log(a["h_mm"] / b["h_mm"])
+    physics_bench_summary.add_orders(phys)
     write_csv(exp / "physics.csv", ["case", "grid spacing h [mm]", "run time ms", "relative error", "observed order",
                                     "cells"],
               [[r["case"], r["h_mm"], r["time_ms"], r["rel_error"], r.get("order"), r["cells"]] for r in phys])
@@ -694,17 +691,7 @@ def module_studies(exp: Path, _args):
     ax1.set_title("P measure (Eq. 8.1): time against error", fontsize=10)
     ax1.grid(True, which="both", alpha=0.3)
     ax1.legend(fontsize=8)
-    for case, marker in (("NeumannStefan", "o-"), ("ShrinkingSphere", "s-")):
-        sub = sorted((r for r in phys if r["case"] == case and r["rel_error"]), key=lambda r: -r["h_mm"])
-        if sub:
-            ax2.loglog([r["time_ms"] for r in sub], [r["rel_error"] for r in sub], marker, label=case)
-            for r in sub:
-                ax2.annotate(f"{r['h_mm']:g} mm", (r["time_ms"], r["rel_error"]), fontsize=7)
-    ax2.set_xlabel("run time [ms]")
-    ax2.set_ylabel("relative interface error")
-    ax2.set_title("Reference melt solver: time against error", fontsize=10)
-    ax2.grid(True, which="both", alpha=0.3)
-    ax2.legend(fontsize=8)
+    physics_bench_summary.plot_time_error(ax2, phys)
     fig.tight_layout()
     fig.savefig(exp / "module_studies.png", dpi=100)
     plt.close(fig)

@@ -35,6 +35,30 @@ def rows(path):
     return out
 
 
+def add_orders(table):
+    """Observed order of convergence between successive grid spacings, as r["order"]."""
+    for case in ("NeumannStefan", "ShrinkingSphere"):
+        sub = sorted((r for r in table if r["case"] == case), key=lambda r: -r["h_mm"])
+        for a, b in zip(sub, sub[1:]):
+            if a["rel_error"] and b["rel_error"] and a["rel_error"] > 0 and b["rel_error"] > 0:
+                b["order"] = math.log(a["rel_error"] / b["rel_error"]) / math.log(a["h_mm"] / b["h_mm"])
+
+
+def plot_time_error(ax, table):
+    """Run time against relative error per case, log-log, points labelled with h."""
+    for case, marker in (("NeumannStefan", "o-"), ("ShrinkingSphere", "s-")):
+        sub = sorted((r for r in table if r["case"] == case and r["rel_error"]), key=lambda r: -r["h_mm"])
+        if sub:
+            ax.loglog([r["time_ms"] for r in sub], [r["rel_error"] for r in sub], marker, label=case)
+            for r in sub:
+                ax.annotate(f"{r['h_mm']:g} mm", (r["time_ms"], r["rel_error"]), fontsize=7)
+    ax.set_xlabel("run time [ms]")
+    ax.set_ylabel("relative interface error")
+    ax.set_title("Reference melt solver: time against error")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+
+
 def main(argv):
     if len(argv) != 2:
         print(__doc__, file=sys.stderr)
@@ -43,11 +67,7 @@ def main(argv):
     for r in table:
         if r["case"] == "GiraffeBlock":
             r["s_per_sim_hour"] = r["time_ms"] / 1e3 * 6.0  # 10 simulated minutes
-    for case in ("NeumannStefan", "ShrinkingSphere"):
-        sub = sorted((r for r in table if r["case"] == case), key=lambda r: -r["h_mm"])
-        for a, b in zip(sub, sub[1:]):
-            if a["rel_error"] and b["rel_error"] and a["rel_error"] > 0 and b["rel_error"] > 0:
-                b["order"] = math.log(a["rel_error"] / b["rel_error"]) / math.log(a["h_mm"] / b["h_mm"])
+    add_orders(table)
     print("Reference solver: grid spacing against run time and interface error")
     print(f"{'case':>16} {'h [mm]':>7} {'time [ms]':>10} {'rel. error':>11} {'order':>6} {'cells':>9} {'s/sim h':>8}")
     for r in table:
@@ -68,17 +88,7 @@ def main(argv):
     except ImportError:
         return 0
     fig, ax = plt.subplots(figsize=(6, 4))
-    for case, marker in (("NeumannStefan", "o-"), ("ShrinkingSphere", "s-")):
-        sub = sorted((r for r in table if r["case"] == case and r["rel_error"]), key=lambda r: -r["h_mm"])
-        if sub:
-            ax.loglog([r["time_ms"] for r in sub], [r["rel_error"] for r in sub], marker, label=case)
-            for r in sub:
-                ax.annotate(f"{r['h_mm']:g} mm", (r["time_ms"], r["rel_error"]), fontsize=7)
-    ax.set_xlabel("run time [ms]")
-    ax.set_ylabel("relative interface error")
-    ax.set_title("Reference melt solver: time against error")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
+    plot_time_error(ax, table)
     fig.tight_layout()
     fig.savefig(base + ".png", dpi=120)
     return 0
