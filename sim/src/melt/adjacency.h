@@ -26,8 +26,8 @@ class VertexTriangles {
     const auto vs = static_cast<std::size_t>(v);
     return {pool_.data() + begin_[vs], static_cast<std::size_t>(size_[vs])};
   }
-  /// Number of triangles of v.
-  Index count(Index v) const { return size_[static_cast<std::size_t>(v)]; }
+  /// Number of triangles of every vertex, indexed by vertex slot.
+  std::span<const Index> counts() const { return size_; }
   std::size_t vertex_count() const { return size_.size(); }
   /// Replaces v's list by `sorted` (ascending triangle indices, no duplicates).
   void assign(Index v, std::span<const Index> sorted);

@@ -3,6 +3,7 @@
 // per-triangle unit edges) and helpers shared by the passes. Not installed.
 
 #include "adjacency.h"
+#include "lanes.h"
 
 #include <meltlab/sim/melt.h>
 
@@ -32,13 +33,15 @@ struct TriangleTerms {
 /// A vertex's sums in Alg. 1 as one record: the face normals (lanes 0-2) and the unit edges
 /// from the vertex (lanes 3-5) of its triangles; lanes 6-7 stay 0. One record per vertex, so
 /// the serial scatter adds a corner's terms with one SIMD addition (lane by lane: the same
-/// additions in the same order as three-component sums). GCC/Clang vector extension: the
-/// compiler does not merge the scalar read-modify-writes of a plain array into one.
+/// additions in the same order as three-component sums; the compiler does not merge the
+/// scalar read-modify-writes of a plain array into one), and the vertex moves read eight
+/// records as one 8×8 block (transpose8).
 template <class Real>
 struct VertexSums {
-  using Lanes [[gnu::vector_size(8 * sizeof(Real))]] = Real;
-  Lanes lane = {};
+  Lanes<Real> lane = {};
 };
+static_assert(sizeof(VertexSums<float>) == kLanes * sizeof(float));
+static_assert(sizeof(VertexSums<double>) == kLanes * sizeof(double));
 
 struct MeltWorkspace {
   VertexTriangles adj;  ///< triangles of every vertex, ascending; kept up to date by every pass

@@ -1,0 +1,126 @@
+#pragma once
+// Private to the melt cycle: eight lanes of a real number as one SIMD value (GCC/Clang
+// vector extension; the compiler maps it to the machine's registers: one AVX register for
+// float, one AVX-512 register or two AVX registers for double) and the shuffles that move
+// data between per-element records and lanes:
+//   - transpose8: eight records of eight numbers <-> eight lanes of one number each;
+//   - deinterleave3 / interleave3: eight packed xyz triples (Vec3 arrays) <-> x, y, z lanes.
+// Arithmetic on lanes is element by element with the same IEEE operations as scalar code
+// (contraction is off), so a lane's result is bitwise the scalar result.
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <type_traits>
+
+namespace meltlab::sim {
+
+inline constexpr std::size_t kLanes = 8;
+
+template <class Real>
+struct LaneTypes {
+  using Value [[gnu::vector_size(kLanes * sizeof(Real))]] = Real;
+  using Int = std::conditional_t<sizeof(Real) == 4, std::int32_t, std::int64_t>;
+  /// What a comparison of two Values gives: all bits set (true) or zero, per lane.
+  using Mask [[gnu::vector_size(kLanes * sizeof(Real))]] = Int;
+};
+
+template <class Real>
+using Lanes = typename LaneTypes<Real>::Value;
+template <class Real>
+using LaneMask = typename LaneTypes<Real>::Mask;
+
+template <class Real>
+inline Lanes<Real> load_lanes(const Real* p) {
+  Lanes<Real> v;
+  std::memcpy(&v, p, sizeof(v));
+  return v;
+}
+template <class Real>
+inline void store_lanes(Real* p, const Lanes<Real>& v) {
+  std::memcpy(p, &v, sizeof(v));
+}
+template <class Real>
+inline Lanes<Real> broadcast(Real x) {
+  return Lanes<Real>{} + x;
+}
+
+/// Lane-wise sqrt (exactly rounded, like std::sqrt; compiles to one SIMD instruction).
+template <class Real>
+inline Lanes<Real> lane_sqrt(Lanes<Real> x) {
+  for (std::size_t i = 0; i < kLanes; ++i) x[i] = std::sqrt(x[i]);
+  return x;
+}
+
+/// 1/|v| for |v|² = n2, or 0 for a zero vector, lane by lane: the same operations as the
+/// scalar inverse_length() of triangle_kernels.h.
+template <class Real>
+inline Lanes<Real> lane_inverse_length(Lanes<Real> n2) {
+  const Lanes<Real> tiny = broadcast(std::numeric_limits<Real>::min());
+  const Lanes<Real> inv = Real(1) / lane_sqrt<Real>(n2 < tiny ? tiny : n2);
+  return n2 > Real(0) ? inv : Lanes<Real>{};
+}
+
+/// Lane-wise |x| and max(a, b) (as std::max: a unless a < b).
+template <class Real>
+inline Lanes<Real> lane_abs(Lanes<Real> x) {
+  return x < Real(0) ? -x : x;
+}
+template <class Real>
+inline Lanes<Real> lane_max(Lanes<Real> a, Lanes<Real> b) {
+  return a < b ? b : a;
+}
+
+/// Whether every lane of x is greater than y (false for a NaN lane).
+template <class Real>
+inline bool all_greater(const Lanes<Real>& x, Real y) {
+  const LaneMask<Real> greater = x > y;
+  bool all = true;
+  for (std::size_t i = 0; i < kLanes; ++i) all = all && greater[i] != 0;
+  return all;
+}
+
+/// Transposes an 8×8 block: out[j][i] = in[i][j] (records <-> lanes).
+template <class Real>
+inline void transpose8(const Lanes<Real> (&in)[kLanes], Lanes<Real> (&out)[kLanes]) {
+  // Three stages of two-input shuffles (the classic unpack / shuffle / 128-bit permute).
+  Lanes<Real> t[kLanes], u[kLanes];
+  for (std::size_t i = 0; i < kLanes; i += 2) {
+    t[i] = __builtin_shufflevector(in[i], in[i + 1], 0, 8, 1, 9, 4, 12, 5, 13);
+    t[i + 1] = __builtin_shufflevector(in[i], in[i + 1], 2, 10, 3, 11, 6, 14, 7, 15);
+  }
+  for (std::size_t i = 0; i < kLanes; i += 4) {
+    u[i] = __builtin_shufflevector(t[i], t[i + 2], 0, 1, 8, 9, 4, 5, 12, 13);
+    u[i + 1] = __builtin_shufflevector(t[i], t[i + 2], 2, 3, 10, 11, 6, 7, 14, 15);
+    u[i + 2] = __builtin_shufflevector(t[i + 1], t[i + 3], 0, 1, 8, 9, 4, 5, 12, 13);
+    u[i + 3] = __builtin_shufflevector(t[i + 1], t[i + 3], 2, 3, 10, 11, 6, 7, 14, 15);
+  }
+  for (std::size_t j = 0; j < 4; ++j) {
+    out[j] = __builtin_shufflevector(u[j], u[j + 4], 0, 1, 2, 3, 8, 9, 10, 11);
+    out[j + 4] = __builtin_shufflevector(u[j], u[j + 4], 4, 5, 6, 7, 12, 13, 14, 15);
+  }
+}
+
+/// Eight packed triples p[3i + c] (i < 8, c < 3) -> lanes x[i], y[i], z[i].
+template <class Real>
+inline void deinterleave3(const Real* p, Lanes<Real>& x, Lanes<Real>& y, Lanes<Real>& z) {
+  const Lanes<Real> a = load_lanes(p), b = load_lanes(p + kLanes), c = load_lanes(p + 2 * kLanes);
+  x = __builtin_shufflevector(__builtin_shufflevector(a, b, 0, 3, 6, 9, 12, 15, 0, 0), c, 0, 1, 2, 3, 4, 5, 10, 13);
+  y = __builtin_shufflevector(__builtin_shufflevector(a, b, 1, 4, 7, 10, 13, 0, 0, 0), c, 0, 1, 2, 3, 4, 8, 11, 14);
+  z = __builtin_shufflevector(__builtin_shufflevector(a, b, 2, 5, 8, 11, 14, 0, 0, 0), c, 0, 1, 2, 3, 4, 9, 12, 15);
+}
+
+/// Lanes x, y, z -> eight packed triples p[3i + c].
+template <class Real>
+inline void interleave3(Real* p, const Lanes<Real>& x, const Lanes<Real>& y, const Lanes<Real>& z) {
+  store_lanes(p, __builtin_shufflevector(__builtin_shufflevector(x, y, 0, 8, 0, 1, 9, 0, 2, 10), z,
+                                         0, 1, 8, 3, 4, 9, 6, 7));
+  store_lanes(p + kLanes, __builtin_shufflevector(__builtin_shufflevector(x, y, 0, 3, 11, 0, 4, 12, 0, 5), z,
+                                                  10, 1, 2, 11, 4, 5, 12, 7));
+  store_lanes(p + 2 * kLanes, __builtin_shufflevector(__builtin_shufflevector(x, y, 13, 0, 6, 14, 0, 7, 15, 0), z,
+                                                      0, 13, 2, 3, 14, 5, 6, 15));
+}
+
+}  // namespace meltlab::sim
