@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Summarise meltlab_bench_cycle's JSON: median ms per cycle for every mesh, mode and
-precision, the speed-up of the parallel cycle and the ratio to the OpenMesh peer measured
-in the same run; writes bench_cycle.png (time per cycle against triangles) beside the JSON.
+precision, the speed-up of the parallel cycle, the ratio to the OpenMesh peer measured
+in the same run and the share of the serial cycle spent in Alg. 1 / Alg. 2; writes
+bench_cycle.png (time per cycle against triangles) beside the JSON.
 
 Usage: report/bench_summary.py bench_cycle.json
 """
@@ -16,6 +17,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 MONOGRAPH_MS = {"A_192": ("<1", "4"), "B_16k": ("5.8", "4.6"), "C_32k": ("20", "6")}  # Tab. 5.1 CPU, GPU
+
+
+def share(row):
+    """'deform/collapse' percentages of a cycle's time, from the simulator's own clocks."""
+    ms, _, deform_ms, collapse_ms = row
+    if deform_ms is None or collapse_ms is None or ms <= 0:
+        return "-"
+    return f"{100 * deform_ms / ms:.0f}/{100 * collapse_ms / ms:.0f}"
 
 
 def main(argv):
@@ -36,14 +45,14 @@ def main(argv):
         mode = m.group(2) if m.group(2) != "openmesh-peer" else "openmesh"
         prec = m.group(4) if mode == "openmesh" else m.group(3)
         ms = b["real_time"] if b.get("time_unit") == "ms" else b["real_time"] / 1e6
-        rows[(mesh, mode, prec)] = (ms, b.get("triangles", 0.0))
+        rows[(mesh, mode, prec)] = (ms, b.get("triangles", 0.0), b.get("deform_ms"), b.get("collapse_ms"))
     meshes = []
     for (mesh, _, _) in rows:
         if mesh not in meshes:
             meshes.append(mesh)
     ctx = doc.get("context", {})
     print(f"machine: {ctx.get('num_cpus')} CPUs at {ctx.get('mhz_per_cpu')} MHz; median ms per cycle")
-    hdr = f"{'mesh':<12}{'prec':<7}{'triangles':>10}{'serial':>9}{'parallel':>9}{'speed-up':>9}{'OpenMesh':>10}{'peer/ours':>10}{'  monograph CPU/GPU (2009)'}"
+    hdr = f"{'mesh':<12}{'prec':<7}{'triangles':>10}{'serial':>9}{'parallel':>9}{'speed-up':>9}{'OpenMesh':>10}{'peer/ours':>10}{'Alg.1/2 %':>10}{'  monograph CPU/GPU (2009)'}"
     print(hdr)
     print("-" * len(hdr))
     for mesh in meshes:
@@ -57,6 +66,7 @@ def main(argv):
             print(f"{mesh:<12}{prec:<7}{s[1]:>10.0f}{s[0]:>9.3f}"
                   f"{(p[0] if p else float('nan')):>9.3f}{(s[0] / p[0] if p else float('nan')):>9.2f}"
                   f"{(o[0] if o else float('nan')):>10.3f}{(o[0] / s[0] if o else float('nan')):>10.2f}"
+                  f"{share(s):>10}"
                   f"  {mono[0]:>5} / {mono[1]}")
     fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
     for mode, style in (("serial", "o-"), ("parallel", "s-"), ("openmesh", "^--")):
