@@ -653,8 +653,9 @@ def stress_summary(exp: Path, _args):
 
 # ------------------------------------------------------------------ module studies
 def module_studies(exp: Path, _args):
-    """Time against error of the verification loop (P measure, silhouettes) and of the
-    reference solver, from the benchmark JSONs the earlier steps wrote."""
+    """Time against error of the verification loop (P measure, silhouettes), of the
+    reference solver and of the fit, from what the earlier steps wrote (benchmark JSONs,
+    fit/fit_bench.csv)."""
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import physics_bench_summary
     import verify_bench_summary
@@ -679,6 +680,14 @@ def module_studies(exp: Path, _args):
     write_csv(exp / "physics.csv", ["case", "grid spacing h [mm]", "run time ms", "relative error", "observed order",
                                     "cells"],
               [[r["case"], r["h_mm"], r["time_ms"], r["rel_error"], r.get("order"), r["cells"]] for r in phys])
+    with open(exp / "fit" / "fit_bench.csv") as f:
+        fit = list(csv.DictReader(f))
+    if not fit:
+        raise SystemExit(f"experiment_report.py: {exp}: fit/fit_bench.csv has no rows")
+    write_csv(exp / "fit.csv", ["image", "photos fitted", "cycles simulated", "wall s", "simulations", "kg",
+                                "kg standard error", "relative error of kg (true 0.8)", "P mean"],
+              [[f"{r['width']}x{r['height']}", int(r["photos"]), int(r["cycles"]), float(r["wall_s"]),
+                r["simulations"], float(r["kg"]), r["kg_se"], float(r["rel_error"]), r["P_mean"]] for r in fit])
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.4))
     for kind, label in methods:
         pts = [(p[(kind, w)][0], p[(kind, w)][1], w) for w in widths if (kind, w) in p and p[(kind, w)][1]]
@@ -704,19 +713,27 @@ def module_studies(exp: Path, _args):
     order_txt = "; ".join(f"{case} observed order {statistics.median(o):.2f} (median over {len(o)} refinements)"
                           for case, o in orders.items() if o)
     ratios = [r[5] for r in s_rows if r[5] is not None and r[1] == 1]
+    full_fits = [r for r in fit if int(r["photos"]) == max(int(x["photos"]) for x in fit)]
+    fit_txt = "fit of kg: " + ", ".join(
+        f"{float(r['rel_error']):.2%} error in {float(r['wall_s']):.0f} s at {r['width']}x{r['height']}"
+        for r in sorted(full_fits, key=lambda r: -int(r["width"])))
     write_fragment(exp, {
         "tables": [{"caption": "P of two discs against its closed form, per image size and method", "csv": "p_measure.csv"},
                    {"caption": "Silhouette of the giraffe mold (10.8k triangles): meltlab and the OpenCV peer",
                     "csv": "silhouette.csv"},
                    {"caption": "Reference solver: grid spacing, run time, error against the closed form",
-                    "csv": "physics.csv"}],
+                    "csv": "physics.csv"},
+                   {"caption": "meltlab fit of kg + registration (giraffe mold, inverse crime, true kg 0.8): "
+                               "photo resolution and simulated cycles against time and accuracy", "csv": "fit.csv"}],
         "figures": [{"caption": "Time against error: the P measure (left) and the reference solver (right)",
-                     "png": "module_studies.png", "data": "p_measure.csv"}],
+                     "png": "module_studies.png", "data": "p_measure.csv"},
+                    {"caption": "meltlab fit: wall time against the relative error of kg",
+                     "png": "fit/fit_bench.png", "data": "fit.csv"}],
         "matches": bool(orders["NeumannStefan"] or orders["ShrinkingSphere"]),
         "verdict": (f"At {big}x{big * 3 // 4}, P from raster pixels costs {raster_t:.2f} ms for an error of {raster_e:.1e}, "
                     f"from exact polygons {exact_t:.1f} ms for {exact_e:.1e}; "
                     + (f"silhouettes {min(ratios):.2f}-{max(ratios):.2f}x the speed of the OpenCV peer; " if ratios else "")
-                    + order_txt + ". An own study: the sources give no error budget."),
+                    + order_txt + "; " + fit_txt + ". An own study: the sources give no error budget."),
         "source_hardware": MONOGRAPH_NONE,
     })
 

@@ -11,7 +11,7 @@ fits kg and the registration:
     photos (350 or 175 of the 700 cycles; the rest is not simulated).
 Writes DIR/fit_bench.csv and DIR/fit_bench.png and prints the table.
 
-Usage: report/fit_bench.py MELTLAB_BINARY DIR [--quick]
+Usage: report/fit_bench.py MELTLAB_BINARY DIR [--quick | --full]   (--full: the default)
 """
 import csv
 import json
@@ -34,6 +34,10 @@ def main(argv):
         print(__doc__, file=sys.stderr)
         return 2
     meltlab, out = argv[1], argv[2]
+    unknown = [a for a in argv[3:] if a not in ("--quick", "--full")]
+    if unknown:
+        print(f"fit_bench.py: unknown argument {unknown[0]}", file=sys.stderr)
+        return 2
     quick = "--quick" in argv[3:]
     photos = 30 if quick else 100
     os.makedirs(out, exist_ok=True)
