@@ -713,7 +713,8 @@ def module_studies(exp: Path, _args):
     order_txt = "; ".join(f"{case} observed order {statistics.median(o):.2f} (median over {len(o)} refinements)"
                           for case, o in orders.items() if o)
     ratios = [r[5] for r in s_rows if r[5] is not None and r[1] == 1]
-    full_fits = [r for r in fit if int(r["photos"]) == max(int(x["photos"]) for x in fit)]
+    most_photos = max(int(r["photos"]) for r in fit)
+    full_fits = [r for r in fit if int(r["photos"]) == most_photos]
     fit_txt = "fit of kg: " + ", ".join(
         f"{float(r['rel_error']):.2%} error in {float(r['wall_s']):.0f} s at {r['width']}x{r['height']}"
         for r in sorted(full_fits, key=lambda r: -int(r["width"])))

@@ -120,9 +120,9 @@ inline void move_group(const MoveConstants<Real>& c, const VertexGroup<Real>& g,
   L rec[kLanes], col[kLanes];
   for (std::size_t i = 0; i < kLanes; ++i) rec[i] = g.sums[i].lane;
   transpose8<Real>(rec, col);
-  typename LaneTypes<std::int32_t>::Value count32;  // 8 x int32, converted below
-  std::memcpy(&count32, g.count, sizeof(count32));
-  const L count = __builtin_convertvector(count32, L);
+  typename LaneTypes<Index>::Value count8;  // 8 triangle counts, converted to Real below
+  std::memcpy(&count8, g.count, sizeof(count8));
+  const L count = __builtin_convertvector(count8, L);
   using Bytes [[gnu::vector_size(kLanes)]] = std::uint8_t;  // 8 flags, widened in registers
   Bytes alive8;
   std::memcpy(&alive8, g.alive, sizeof(alive8));
