@@ -2,7 +2,7 @@
 
 #include <meltlab/datasets/catalog.h>
 #include <meltlab/datasets/molds.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>

@@ -2,7 +2,7 @@
 // Argument checks shared by the generators: each throws meltlab::InputError with a one-line
 // message naming the function and the argument.
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <fmt/format.h>
 

@@ -1,12 +1,13 @@
 // Materialising datasets as files (catalog.h): generating procedural shapes and molds,
 // extracting CGAL's meshes from its data archive, caching both.
 
+#include <meltlab/core/hash.h>
 #include <meltlab/datasets/catalog.h>
 #include <meltlab/datasets/mesh_transforms.h>
 #include <meltlab/datasets/molds.h>
 #include <meltlab/datasets/procedural.h>
 #include <meltlab/datasets/refine.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/mesh_io.h>
 
 #include <fcntl.h>
@@ -146,19 +147,10 @@ IndexedMesh mold_entry_mesh(const DatasetEntry& entry, Params& p) {
 
 // ---- cache file names ----
 
-std::uint64_t fnv1a(const std::string& s) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : s) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  return h;
-}
-
 fs::path generated_file_name(const DatasetEntry& e) {
   std::string key = fmt::format("{}\n{}\nrevision={}\n", dataset_kind_name(e.kind), e.source, kGeneratorRevision);
   for (const auto& [k, v] : e.params) key += fmt::format("{}={}\n", k, v);
-  return fmt::format("{}-{:08x}.off", e.name, static_cast<std::uint32_t>(fnv1a(key) & 0xffffffffu));
+  return fmt::format("{}-{:08x}.off", e.name, static_cast<std::uint32_t>(ContentHash().add_bytes(key).value() & 0xffffffffu));
 }
 
 bool usable_file(const fs::path& p) {

@@ -1,5 +1,5 @@
 #include <meltlab/datasets/mesh_transforms.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <fmt/format.h>
 #include <Eigen/Geometry>

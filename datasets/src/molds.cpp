@@ -3,7 +3,7 @@
 // count is close to the target.
 
 #include <meltlab/datasets/molds.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <fmt/format.h>
 

@@ -6,7 +6,7 @@
 // system-header exemption does not cover. Switched off for the includes only.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wnull-dereference"
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Delaunay_mesh_face_base_2.h>

@@ -1,7 +1,7 @@
 // Loop subdivision through OpenMesh, then longest-edge midpoint splits to an exact budget.
 
 #include <meltlab/datasets/refine.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Tools/Subdivider/Uniform/LoopT.hh>

@@ -21,7 +21,7 @@
 
 #include "openmesh_peer.h"
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <fmt/format.h>

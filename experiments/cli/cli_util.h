@@ -1,19 +1,12 @@
 #pragma once
-// Shared pieces of the meltlab subcommands: exit codes, the progress line, error output.
+// Shared pieces of the meltlab subcommands: the progress line (exit codes: core/error.h).
+
+#include <meltlab/core/error.h>
 
 #include <cstdio>
 #include <string>
 
 namespace meltlab::cli {
-
-/// Exit codes of every subcommand.
-enum ExitCode : int {
-  kOk = 0,
-  kInvalid = 1,      ///< the command ran and found the input invalid (mesh-info)
-  kBadInput = 2,     ///< unreadable/invalid input or options: one-line error on stderr
-  kInternal = 3,     ///< a broken invariant during a run (a bug worth a report)
-  kInterrupted = 130,
-};
 
 /// A one-line progress display on stderr, drawn only if stderr is a terminal.
 class ProgressLine {

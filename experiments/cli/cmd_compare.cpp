@@ -75,7 +75,7 @@ Run add_compare(CLI::App& app, const std::string& command_line) {
     std::fprintf(stderr, "meltlab: compared %d photos (%d skipped): P first %s, last %s, max %s, mean %s; wrote %s\n",
                  s["frames_compared"].get<int>(), s["frames_skipped"].get<int>(), num(s["P_first"]).c_str(),
                  num(s["P_last"]).c_str(), num(s["P_max"]).c_str(), num(s["P_mean"]).c_str(), o->out_dir.string().c_str());
-    return s["frames_compared"].get<int>() > 0 ? static_cast<int>(kOk) : static_cast<int>(kInvalid);
+    return s["frames_compared"].get<int>() > 0 ? kExitOk : kExitInvalid;
   };
 }
 

@@ -2,7 +2,7 @@
 
 #include <meltlab/datasets/catalog.h>
 #include <meltlab/datasets/procedural.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/polygon_mesh.h>
 #include <meltlab/sim/topology.h>
 
@@ -53,7 +53,7 @@ Run add_dataset(CLI::App& app) {
         out[n] = {{"V", c.V}, {"E", c.E}, {"F", c.F}, {"H", c.H}, {"S", c.S}, {"G", c.G}, {"chi", c.chi}, {"consistent", c.genus_valid}};
       }
       std::printf("%s\n", out.dump(2).c_str());
-      return static_cast<int>(kOk);
+      return kExitOk;
     }
     if (list->parsed()) {
       const auto catalog = datasets::dataset_catalog();
@@ -71,7 +71,7 @@ Run add_dataset(CLI::App& app) {
                       static_cast<long long>(e.triangles), e.description.c_str(), e.need_repair ? " [needs --repair]" : "");
         std::printf("cache: %s\n", datasets::default_cache_dir().string().c_str());
       }
-      return static_cast<int>(kOk);
+      return kExitOk;
     }
     std::vector<std::string> wanted = *names;
     if (wanted.size() == 1 && wanted[0] == "all") {
@@ -79,7 +79,7 @@ Run add_dataset(CLI::App& app) {
       for (const auto& e : datasets::dataset_catalog()) wanted.push_back(e.name);
     }
     for (const auto& n : wanted) std::printf("%s\n", datasets::dataset_path(n).string().c_str());
-    return static_cast<int>(kOk);
+    return kExitOk;
   };
 }
 

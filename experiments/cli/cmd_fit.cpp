@@ -1,7 +1,7 @@
 // meltlab fit: the model's coefficients from observations (Ceres).
 
 #include <meltlab/experiments/fit_run.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <fmt/format.h>
 
@@ -123,7 +123,7 @@ Run add_fit(CLI::App& app, const std::string& command_line) {
                  j["simulations"].get<int>(), j["time_s"].get<double>(), values.c_str(),
                  j["comparison"]["P_mean"].is_null() ? 0.0 : j["comparison"]["P_mean"].get<double>(),
                  o->out_dir.string().c_str());
-    return static_cast<int>(kOk);
+    return kExitOk;
   };
 }
 

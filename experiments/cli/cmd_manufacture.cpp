@@ -45,7 +45,7 @@ Run add_manufacture(CLI::App& app, const std::string& command_line) {
     line.finish();
     std::fprintf(stderr, "meltlab: wrote %d photos, manifest.yaml, mass.csv and truth/ to %s\n", o->photos,
                  o->out_dir.string().c_str());
-    return static_cast<int>(kOk);
+    return kExitOk;
   };
 }
 

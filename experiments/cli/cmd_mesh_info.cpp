@@ -88,7 +88,7 @@ Run add_mesh_info(CLI::App& app) {
                                    {"note", "pairs capped at 1000; triangles are indices into the loaded mesh"}};
     }
     std::printf("%s\n", out.dump(2).c_str());
-    return static_cast<int>(topo.valid() && !intersects ? kOk : kInvalid);
+    return static_cast<int>(topo.valid() && !intersects ? kExitOk : kExitInvalid);
   };
 }
 

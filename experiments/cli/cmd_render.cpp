@@ -63,7 +63,7 @@ Run add_render(CLI::App& app, const std::string& command_line) {
       std::fprintf(stderr, "meltlab: %lld frames over %lld cycles; median %.1f ms/frame; wrote %s\n",
                    static_cast<long long>(r.frames), static_cast<long long>(r.cycles_run), r.median_trace_ms,
                    o->out_dir.string().c_str());
-    return static_cast<int>(kOk);
+    return kExitOk;
   };
 }
 

@@ -2,7 +2,7 @@
 // reusing finished ones, and build the HTML report.
 
 #include <meltlab/experiments/reproduce.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <fmt/format.h>
 
@@ -63,7 +63,7 @@ Run add_reproduce(CLI::App& app) {
       for (const auto& e : experiments) {
         std::printf("%-22s %zu steps  %s  %s\n", e.name.c_str(), e.steps.size(), e.hash.c_str(), e.title.c_str());
       }
-      return static_cast<int>(kOk);
+      return kExitOk;
     }
     std::fprintf(stderr, "meltlab reproduce: %zu experiment(s), %s mode, %d job(s), output %s\n", experiments.size(),
                  o->quick ? "quick" : "full", o->jobs, o->out_dir.string().c_str());
@@ -97,8 +97,8 @@ Run add_reproduce(CLI::App& app) {
                 (o->out_dir / "summary.json").string().c_str());
     std::printf("report: %s\n",
                 result.report_status == "built" ? result.report_file.string().c_str() : result.report_status.c_str());
-    if (result.interrupted) return static_cast<int>(kInterrupted);
-    return failed > 0 || result.report_status.rfind("failed", 0) == 0 ? static_cast<int>(kInvalid) : static_cast<int>(kOk);
+    if (result.interrupted) return kExitInterrupted;
+    return failed > 0 || result.report_status.rfind("failed", 0) == 0 ? kExitInvalid : kExitOk;
   };
 }
 

@@ -115,10 +115,10 @@ Run add_simulate(CLI::App& app, const std::string& command_line) {
                  o->out_dir.string().c_str());
     if (result.status == "failed") {
       std::fprintf(stderr, "meltlab: internal error: %s\n", result.error.c_str());
-      return static_cast<int>(kInternal);
+      return kExitInternal;
     }
-    if (result.status == "interrupted") return static_cast<int>(kInterrupted);
-    return static_cast<int>(kOk);
+    if (result.status == "interrupted") return kExitInterrupted;
+    return kExitOk;
   };
 }
 

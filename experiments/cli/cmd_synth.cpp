@@ -1,7 +1,7 @@
 // meltlab synth-sequence: a photo-like sequence made by the empirical model (known truth).
 
 #include <meltlab/experiments/synthetic_sequence.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <fmt/format.h>
 
@@ -85,7 +85,7 @@ Run add_synth_sequence(CLI::App& app) {
     line.finish();
     std::fprintf(stderr, "meltlab: wrote %d photos, manifest.yaml and truth/ to %s\n", o->photos,
                  o->out_dir.string().c_str());
-    return static_cast<int>(kOk);
+    return kExitOk;
   };
 }
 

@@ -1,7 +1,7 @@
 // meltlab: command-line entry point. Each subcommand lives in its own file and only parses
 // options and calls library functions.
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/version.h>
 
 #include <fmt/format.h>
@@ -43,20 +43,20 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     std::fprintf(stderr, "meltlab: %s\n", e.what());
-    return cli::kBadInput;
+    return kExitBadInput;
   }
   try {
     for (auto& [sub, run] : runs)
       if (sub->parsed()) return run();
   } catch (const InputError& e) {
     std::fprintf(stderr, "meltlab: %s\n", e.what());
-    return cli::kBadInput;
+    return kExitBadInput;
   } catch (const InvariantError& e) {
     std::fprintf(stderr, "meltlab: internal error: %s\n", e.what());
-    return cli::kInternal;
+    return kExitInternal;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "meltlab: %s\n", e.what());
-    return cli::kInternal;
+    return kExitInternal;
   }
-  return cli::kBadInput;
+  return kExitBadInput;
 }

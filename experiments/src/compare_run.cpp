@@ -1,7 +1,8 @@
+#include <meltlab/core/hash.h>
 #include <meltlab/experiments/compare_run.h>
 #include <meltlab/experiments/simulate_run.h>
-#include <meltlab/sim/atomic_file.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/atomic_file.h>
+#include <meltlab/core/error.h>
 #include <meltlab/version.h>
 
 #include <fmt/format.h>

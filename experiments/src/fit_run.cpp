@@ -1,7 +1,8 @@
+#include <meltlab/core/hash.h>
 #include <meltlab/experiments/compare_run.h>
 #include <meltlab/experiments/fit_run.h>
-#include <meltlab/sim/atomic_file.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/atomic_file.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/kl_field.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/version.h>

@@ -1,9 +1,10 @@
+#include <meltlab/core/hash.h>
 #include <meltlab/experiments/manufacture.h>
 #include <meltlab/experiments/sequence_manifest.h>
 #include <meltlab/experiments/simulate_run.h>
-#include <meltlab/sim/atomic_file.h>
+#include <meltlab/core/atomic_file.h>
 #include <meltlab/render/silhouette.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/mesh_io.h>
 #include <meltlab/sim/physics/isosurface.h>
 #include <meltlab/sim/physics/voxelize.h>
@@ -76,7 +77,7 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
   vo.h_m = o.voxel_mm / 1000.0;
   vo.margin_cells = 3;
   vo.floor_at_mesh_bottom = true;
-  const sim::physics::Grid3<float> fraction0 = sim::physics::voxelize_fraction(mesh, vo);
+  const Grid3<float> fraction0 = sim::physics::voxelize_fraction(mesh, vo);
   sim::physics::EnthalpySolver solver(fraction0, o.physics);
 
   // ---- camera: straight down from camera_height_m, object spanning `fill` of the image ----

@@ -3,8 +3,8 @@
 #include <meltlab/experiments/render_run.h>
 #include <meltlab/render/ice_renderer.h>
 #include <meltlab/render/render_assets.h>
-#include <meltlab/sim/atomic_file.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/atomic_file.h>
+#include <meltlab/core/error.h>
 #include <meltlab/version.h>
 
 #include <fmt/format.h>

@@ -1,6 +1,7 @@
+#include <meltlab/core/hash.h>
 #include <meltlab/experiments/reproduce.h>
-#include <meltlab/sim/atomic_file.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/atomic_file.h>
+#include <meltlab/core/error.h>
 #include <meltlab/version.h>
 
 #include <fcntl.h>
@@ -42,29 +43,6 @@ std::string read_file(const fs::path& p) {
   s << in.rdbuf();
   return s.str();
 }
-
-/// Two 64-bit FNV-1a streams with different offsets: a 128-bit content fingerprint (not a
-/// cryptographic hash; it detects changed inputs, not adversaries).
-class Fingerprint {
- public:
-  void add(const std::string& bytes) {
-    for (unsigned char c : bytes) {
-      a_ = (a_ ^ c) * 0x100000001b3ULL;
-      b_ = (b_ ^ static_cast<unsigned char>(c ^ 0x5a)) * 0x100000001b3ULL;
-    }
-    // Length-delimit every field so concatenations cannot collide.
-    const std::string len = fmt::format("|{}|", bytes.size());
-    for (unsigned char c : len) {
-      a_ = (a_ ^ c) * 0x100000001b3ULL;
-      b_ = (b_ ^ c) * 0x100000001b3ULL;
-    }
-  }
-  std::string hex() const { return fmt::format("{:016x}{:016x}", a_, b_); }
-
- private:
-  std::uint64_t a_ = 0xcbf29ce484222325ULL;
-  std::uint64_t b_ = 0x84222325cbf29ce4ULL;
-};
 
 bool valid_name(const std::string& s) {
   static const std::regex re("[a-z0-9_]+");
@@ -209,17 +187,17 @@ ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) 
     e.steps.push_back(std::move(step));
   }
 
-  Fingerprint f;
-  f.add("meltlab-reproduce-1");
-  f.add(kVersion);
-  f.add(kGitRevision);
-  f.add(mode);
-  f.add(text);
+  ContentHash f;
+  f.add_field("meltlab-reproduce-2");
+  f.add_field(kVersion);
+  f.add_field(kGitRevision);
+  f.add_field(mode);
+  f.add_field(text);
   for (const auto& step : e.steps)
-    for (const auto& a : step.args) f.add(a);
+    for (const auto& a : step.args) f.add_field(a);
   for (const auto& p : e.hashed_files) {
-    f.add(p.string());
-    f.add(read_file(p));
+    f.add_field(p.string());
+    f.add_field(read_file(p));
   }
   e.hash = f.hex();
   return e;

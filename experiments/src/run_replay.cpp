@@ -2,8 +2,9 @@
 // for any thread count, so rebuilding the simulation from run.json's options reproduces the
 // run's meshes bit for bit.
 
+#include <meltlab/core/hash.h>
 #include <meltlab/experiments/simulate_run.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <fmt/format.h>
 

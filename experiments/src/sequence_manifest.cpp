@@ -1,5 +1,5 @@
 #include <meltlab/experiments/sequence_manifest.h>
-#include <meltlab/sim/atomic_file.h>
+#include <meltlab/core/atomic_file.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>

@@ -1,8 +1,9 @@
+#include <meltlab/core/hash.h>
 #include <meltlab/datasets/catalog.h>
 #include <meltlab/experiments/simulate_run.h>
-#include <meltlab/sim/atomic_file.h>
+#include <meltlab/core/atomic_file.h>
 #include <meltlab/sim/cgal/self_intersection.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/mesh_order.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/sim/topology.h>
@@ -59,21 +60,6 @@ void require(bool ok, const std::string& what) {
 }
 
 }  // namespace
-
-std::string file_hash(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(fmt::format("{}: cannot open for reading", file.string()));
-  std::uint64_t h = 1469598103934665603ULL;
-  char buf[1 << 16];
-  while (in) {
-    in.read(buf, sizeof buf);
-    for (std::streamsize i = 0; i < in.gcount(); ++i) {
-      h ^= static_cast<unsigned char>(buf[i]);
-      h *= 1099511628211ULL;
-    }
-  }
-  return fmt::format("{:016x}", h);
-}
 
 namespace {
 template <class E>

@@ -1,8 +1,9 @@
+#include <meltlab/core/hash.h>
 #include <meltlab/experiments/sequence_manifest.h>
 #include <meltlab/experiments/synthetic_sequence.h>
 #include <meltlab/render/silhouette.h>
-#include <meltlab/sim/atomic_file.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/atomic_file.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/verify/observations.h>
 #include <meltlab/version.h>

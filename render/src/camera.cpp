@@ -2,8 +2,8 @@
 // JSON description (see camera.h).
 
 #include <meltlab/render/camera.h>
-#include <meltlab/sim/yaml_keys.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/yaml_keys.h>
+#include <meltlab/core/error.h>
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
@@ -86,6 +86,32 @@ std::pair<Vec2d, bool> project(const Camera& c, const Vec3d& p_world) {
   const double xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
   const double yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
   return {Vec2d(p.fx * xd + p.cx, p.fy * yd + p.cy), true};
+}
+
+RayGenerator::RayGenerator(const Camera& camera, double ortho_start_z) : camera_(camera), ortho_start_z_(ortho_start_z) {
+  if (const auto* p = std::get_if<Pinhole>(&camera_)) world_from_camera_ = p->camera_from_world.inverse();
+}
+
+CameraRay RayGenerator::generate_ray(double u_px, double v_px) const {
+  CameraRay r;
+  if (const auto* ortho = std::get_if<OrthographicTopDown>(&camera_)) {
+    const double x = ortho->centre.x() + (u_px - 0.5 * (ortho->width - 1)) / ortho->pixels_per_unit;
+    const double y = ortho->centre.y() - (v_px - 0.5 * (ortho->height - 1)) / ortho->pixels_per_unit;
+    r.origin = Vec3d(x, y, ortho_start_z_);
+    r.direction = Vec3d(0, 0, -1);
+    return r;
+  }
+  const auto& pin = std::get<Pinhole>(camera_);
+  double x = (u_px - pin.cx) / pin.fx, y = (v_px - pin.cy) / pin.fy;
+  if (pin.distorted()) {
+    double ux = x, uy = y;
+    r.ok = undistort_normalized(pin.distortion, x, y, ux, uy);
+    x = ux;
+    y = uy;
+  }
+  r.origin = world_from_camera_.translation();
+  r.direction = (world_from_camera_.linear() * Vec3d(x, y, 1.0)).normalized();
+  return r;
 }
 
 // ---- YAML -----------------------------------------------------------------------------

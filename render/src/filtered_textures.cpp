@@ -1,7 +1,7 @@
 // Filtered lookups through OpenImageIO's TextureSystem (filtered_textures.h).
 
 #include <meltlab/render/filtered_textures.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>

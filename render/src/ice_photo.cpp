@@ -1,8 +1,8 @@
 // Photo-like rendering of voxel ice on a textured ground (see ice_photo.h).
 
 #include <meltlab/render/ice_photo.h>
-#include <meltlab/sim/atomic_file.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/atomic_file.h>
+#include <meltlab/core/error.h>
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -20,7 +20,7 @@
 
 namespace meltlab::render {
 
-using sim::physics::Grid3;
+using meltlab::Grid3;
 using sim::physics::IceFraction;
 
 namespace {
@@ -206,39 +206,6 @@ std::vector<std::uint8_t> dilated_nonzero(const IceFraction& g) {
   pass(a, b, sz, g.nz);
   return b;
 }
-
-// ---- camera rays -----------------------------------------------------------------------------
-
-
-struct RayGen {
-  const Camera& camera;
-  double ortho_z = 0;  // orthographic rays start at this height
-  Eigen::Matrix3d world_from_camera_R = Eigen::Matrix3d::Identity();
-  Vec3d eye = Vec3d::Zero();
-
-  RayGen(const Camera& c, double top_z) : camera(c), ortho_z(top_z) {
-    if (const auto* p = std::get_if<Pinhole>(&c)) {
-      const Eigen::Isometry3d inv = p->camera_from_world.inverse();
-      world_from_camera_R = inv.linear();
-      eye = inv.translation();
-    }
-  }
-  /// Ray through image point (u, v); false if it does not exist (undistortion diverges).
-  bool ray(double u, double v, Vec3d& o, Vec3d& d) const {
-    if (const auto* q = std::get_if<OrthographicTopDown>(&camera)) {
-      o = Vec3d(q->centre.x() + (u - 0.5 * (q->width - 1)) / q->pixels_per_unit,
-                q->centre.y() - (v - 0.5 * (q->height - 1)) / q->pixels_per_unit, ortho_z);
-      d = Vec3d(0, 0, -1);
-      return true;
-    }
-    const auto& p = std::get<Pinhole>(camera);
-    double x = (u - p.cx) / p.fx, y = (v - p.cy) / p.fy;
-    if (p.distorted() && !undistort_normalized(p.distortion, x, y, x, y)) return false;
-    o = eye;
-    d = (world_from_camera_R * Vec3d(x, y, 1.0)).normalized();
-    return true;
-  }
-};
 
 // ---- ground texture ----------------------------------------------------------------------------
 
@@ -609,7 +576,7 @@ cv::Mat render_ice_radiance(const IceFraction& ice_in, const Camera& camera, con
   const IceFraction& ice = options.interface_width > 0 ? sharpened : ice_in;
   const Scene scene(ice, options);
   const int W = camera_width(camera), H = camera_height(camera);
-  const RayGen gen(camera, top_of_scene(ice, options.ground_z_m));
+  const RayGenerator gen(camera, top_of_scene(ice, options.ground_z_m));
   const int k = options.supersample;
   if (!only.empty() && (only.type() != CV_8UC1 || only.cols != W || only.rows != H))
     throw InputError("render_ice_radiance: the pixel selection must be CV_8UC1 of the image size");
@@ -623,9 +590,9 @@ cv::Mat render_ice_radiance(const IceFraction& ice_in, const Camera& camera, con
       std::array<double, 3> acc{0, 0, 0};
       for (int t = 0; t < k; ++t)
         for (int s = 0; s < k; ++s) {
-          Vec3d o, d;
-          if (!gen.ray(u - 0.5 + (s + 0.5) / k, v - 0.5 + (t + 0.5) / k, o, d)) continue;
-          const auto r = scene.trace(o, d, texture);
+          const CameraRay ray = gen.generate_ray(u - 0.5 + (s + 0.5) / k, v - 0.5 + (t + 0.5) / k);
+          if (!ray.ok) continue;
+          const auto r = scene.trace(ray.origin, ray.direction, texture);
           for (std::size_t c = 0; c < 3; ++c) acc[c] += r[c];
         }
       const double inv = 1.0 / (k * k);
@@ -672,13 +639,15 @@ cv::Mat ice_true_mask(const IceFraction& ice, const Camera& camera, double thres
   cv::Mat mask(H, W, CV_8UC1, cv::Scalar(0));
   const Box box = support_box(ice, threshold, threshold <= 0.0);
   if (box.empty) return mask;
-  const RayGen gen(camera, top_of_scene(ice, ground_z_m));
+  const RayGenerator gen(camera, top_of_scene(ice, ground_z_m));
   const double step = ice.h_m / 8.0;
   for_rows(H, true, [&](int v) {
     auto* row = mask.ptr<std::uint8_t>(v);
     for (int u = 0; u < W; ++u) {
-      Vec3d o, d;
-      if (!gen.ray(u, v, o, d)) continue;
+      const CameraRay ray = gen.generate_ray(u, v);
+      if (!ray.ok) continue;
+      const Vec3d& o = ray.origin;
+      const Vec3d& d = ray.direction;
       double t0 = 0, t1 = 0;
       if (!slab(box, o, d, t0, t1)) continue;
       t0 = std::max(t0, 0.0);

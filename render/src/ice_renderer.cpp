@@ -3,7 +3,7 @@
 #include <meltlab/render/ice_renderer.h>
 #include <meltlab/render/filtered_textures.h>
 #include <meltlab/render/optics.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -91,11 +91,6 @@ void tangent_frame(const Vector3d& n, const Vector3d& ng, Vector3d& t, Vector3d&
   t = (u - n * n.dot(u)).normalized();
   b = n.cross(t);
 }
-
-struct Primary {
-  Vector3d o, d;
-  bool ok = true;
-};
 
 }  // namespace
 
@@ -518,29 +513,6 @@ struct FrameContext {
   }
 };
 
-// `world_from_camera`: the pinhole's inverse pose (computed once per frame).
-Primary primary_ray(const Camera& cam, const Eigen::Isometry3d& world_from_camera, int i, int j, double z_top) {
-  Primary r;
-  if (const auto* ortho = std::get_if<OrthographicTopDown>(&cam)) {
-    const double x = ortho->centre.x() + (i - 0.5 * (ortho->width - 1)) / ortho->pixels_per_unit;
-    const double y = ortho->centre.y() - (j - 0.5 * (ortho->height - 1)) / ortho->pixels_per_unit;
-    r.o = Vector3d(x, y, z_top);
-    r.d = Vector3d(0, 0, -1);
-    return r;
-  }
-  const auto& pin = std::get<Pinhole>(cam);
-  double x = (i - pin.cx) / pin.fx, y = (j - pin.cy) / pin.fy;
-  if (pin.distorted()) {
-    double ux = x, uy = y;
-    r.ok = undistort_normalized(pin.distortion, x, y, ux, uy);
-    x = ux;
-    y = uy;
-  }
-  r.o = world_from_camera.translation();
-  r.d = (world_from_camera.linear() * Vector3d(x, y, 1.0)).normalized();
-  return r;
-}
-
 }  // namespace
 
 RgbImage IceRenderer::render() {
@@ -563,23 +535,23 @@ RgbImage IceRenderer::render() {
   const Camera& cam = *camera_;
   const int w = camera_width(cam), h = camera_height(cam);
   const double z_top = std::max(bvh_.upper().z(), ground_z) + object_size_;
-  const Eigen::Isometry3d world_from_camera =
-      std::holds_alternative<Pinhole>(cam) ? std::get<Pinhole>(cam).camera_from_world.inverse() : Eigen::Isometry3d::Identity();
+  const RayGenerator rays(cam, z_top);
   RgbImage img(w, h);
   tbb::parallel_for(tbb::blocked_range2d<int>(0, h, 16, 0, w, 16), [&](const tbb::blocked_range2d<int>& r) {
     for (int j = r.rows().begin(); j < r.rows().end(); ++j)
       for (int i = r.cols().begin(); i < r.cols().end(); ++i) {
-        const Primary ray = primary_ray(cam, world_from_camera, i, j, z_top);
+        const CameraRay ray = rays.generate_ray(i, j);
         if (!ray.ok) {
           img.set(i, j, Rgb::Zero());
         } else if (!ctx.filtered) {
-          img.set(i, j, ctx.shade(ray.o, ray.d, nullptr));
+          img.set(i, j, ctx.shade(ray.origin, ray.direction, nullptr));
         } else {  // the footprint: the rays through the next pixel to the right and below
-          const Primary rx = primary_ray(cam, world_from_camera, i + 1, j, z_top);
-          const Primary ry = primary_ray(cam, world_from_camera, i, j + 1, z_top);
-          const RayDifferential rd{{rx.o - ray.o, ry.o - ray.o}, {rx.d - ray.d, ry.d - ray.d}};
+          const CameraRay rx = rays.generate_ray(i + 1, j);
+          const CameraRay ry = rays.generate_ray(i, j + 1);
+          const RayDifferential rd{{rx.origin - ray.origin, ry.origin - ray.origin},
+                                   {rx.direction - ray.direction, ry.direction - ray.direction}};
           // A neighbour whose undistortion did not converge gives no footprint (finest level).
-          img.set(i, j, ctx.shade(ray.o, ray.d, rx.ok && ry.ok ? &rd : nullptr));
+          img.set(i, j, ctx.shade(ray.origin, ray.direction, rx.ok && ry.ok ? &rd : nullptr));
         }
       }
   });

@@ -1,8 +1,8 @@
 // Procedural assets and image files of the ice/liquid renderer (render_assets.h).
 
 #include <meltlab/render/render_assets.h>
-#include <meltlab/sim/atomic_file.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/atomic_file.h>
+#include <meltlab/core/error.h>
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>

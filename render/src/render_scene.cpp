@@ -1,8 +1,8 @@
 // Scene description of the ice/liquid ray tracer (render_scene.h).
 
 #include <meltlab/render/render_scene.h>
-#include <meltlab/sim/yaml_keys.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/yaml_keys.h>
+#include <meltlab/core/error.h>
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>

@@ -18,7 +18,7 @@
 //     built once per renderer.
 
 #include <meltlab/render/silhouette.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>

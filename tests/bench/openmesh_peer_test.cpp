@@ -3,7 +3,7 @@
 // MeltSimulator's until the two collapse passes make different choices.
 
 #include <meltlab/datasets/procedural.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/melt.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/sim/topology.h>

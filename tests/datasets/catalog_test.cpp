@@ -3,7 +3,7 @@
 
 #include <meltlab/datasets/catalog.h>
 #include <meltlab/datasets/molds.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/mesh_io.h>
 
 #include <gmock/gmock.h>

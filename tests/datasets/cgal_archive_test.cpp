@@ -5,7 +5,7 @@
 // libcgal-demo is not installed. The cache persists in the build folder between runs.
 
 #include <meltlab/datasets/catalog.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/mesh_io.h>
 
 #include <gtest/gtest.h>

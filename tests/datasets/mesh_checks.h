@@ -3,7 +3,7 @@
 // not shared with the library, so a bug in the generators cannot hide behind the same bug
 // in the check.
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/mesh.h>
 #include <meltlab/sim/polygon_mesh.h>
 #include <meltlab/sim/topology.h>

@@ -2,7 +2,7 @@
 // ice, simple outlines.
 
 #include <meltlab/datasets/molds.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 
 #include <meltlab/datasets/mesh_transforms.h>
 #include <meltlab/datasets/procedural.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/sim/topology.h>
 

@@ -5,7 +5,7 @@
 
 #include <meltlab/datasets/procedural.h>
 #include <meltlab/datasets/refine.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

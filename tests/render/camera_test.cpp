@@ -2,7 +2,7 @@
 // JSON round trip.
 
 #include <meltlab/render/camera.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>

@@ -4,7 +4,7 @@
 #include <meltlab/datasets/molds.h>
 #include <meltlab/datasets/procedural.h>
 #include <meltlab/render/silhouette.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>

@@ -8,7 +8,7 @@
 #include <meltlab/render/ice_renderer.h>
 #include <meltlab/render/optics.h>
 #include <meltlab/render/render_assets.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <gtest/gtest.h>
 #include <unistd.h>

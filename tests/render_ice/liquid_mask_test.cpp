@@ -2,7 +2,7 @@
 // its 4-sample form (Eq. 7.13), the deposit pass, monotonic growth under a standing object,
 // fading once the object is gone, thresholds, serial == parallel.
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/liquid_mask.h>
 
 #include <gtest/gtest.h>

@@ -5,7 +5,7 @@
 #include <meltlab/datasets/procedural.h>
 #include <meltlab/render/ice_photo.h>
 #include <meltlab/render/silhouette.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/verify/metrics.h>
 #include <meltlab/verify/observations.h>
 

@@ -1,4 +1,4 @@
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/kl_field.h>
 
 #include <gmock/gmock.h>

@@ -3,7 +3,7 @@
 
 #include <meltlab/sim/cgal/repair.h>
 #include <meltlab/sim/cgal/self_intersection.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/topology.h>
 
 #include <gmock/gmock.h>

@@ -2,7 +2,7 @@
 // slots, broken (non-manifold) input, and the cost on a stress-test-sized mesh.
 
 #include <meltlab/sim/cgal/self_intersection.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/polygon_mesh.h>
 
 // CGAL's exact-constructions kernel, used here as an independent referee of the pairs.

@@ -3,7 +3,7 @@
 
 #include <meltlab/datasets/procedural.h>
 #include <meltlab/render/silhouette.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/verify/compare.h>
 
 #include <fmt/format.h>

@@ -2,7 +2,7 @@
 
 #include <meltlab/datasets/molds.h>
 #include <meltlab/render/silhouette.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/verify/metrics.h>
 #include <meltlab/verify/registration.h>
 

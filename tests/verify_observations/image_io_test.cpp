@@ -2,7 +2,7 @@
 
 #include "../../verify/src/obs_detail.h"
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/verify/observations.h>
 
 #include <OpenImageIO/imageio.h>

@@ -2,7 +2,7 @@
 // (every message names the manifest, the line and the key).
 
 #include <meltlab/render/camera.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/verify/observations.h>
 
 #include <gmock/gmock.h>

@@ -12,7 +12,7 @@
 // leaves margin for noise but is far below what a wrong threshold (a whole pixel ring,
 // ~0.025) or a lost hole (0.09) would give.
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/verify/observations.h>
 #include <meltlab/verify/region.h>
 

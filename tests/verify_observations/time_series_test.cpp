@@ -1,6 +1,6 @@
 // read_time_series: valid files in several units, and every kind of bad file.
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/verify/observations.h>
 
 #include <gmock/gmock.h>

@@ -1,5 +1,5 @@
-#include <meltlab/sim/atomic_file.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/atomic_file.h>
+#include <meltlab/core/error.h>
 #include <meltlab/verify/compare.h>
 
 #include <fmt/format.h>

@@ -1,4 +1,4 @@
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/verify/fit.h>
 #include <meltlab/verify/metrics.h>

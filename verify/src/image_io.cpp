@@ -7,8 +7,8 @@
 
 #include "obs_detail.h"
 
-#include <meltlab/sim/atomic_file.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/atomic_file.h>
+#include <meltlab/core/error.h>
 #include <meltlab/verify/observations.h>
 
 #include <OpenImageIO/imageio.h>

@@ -21,7 +21,7 @@
 #include "obs_detail.h"
 
 #include <meltlab/render/camera.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/verify/observations.h>
 
 #include <fmt/format.h>

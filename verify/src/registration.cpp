@@ -1,4 +1,4 @@
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/verify/metrics.h>
 #include <meltlab/verify/registration.h>
 

@@ -17,7 +17,7 @@
 
 #include "obs_detail.h"
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/verify/observations.h>
 
 #include <fmt/format.h>

@@ -9,7 +9,7 @@
 // increases; at least one row. Values are not range-checked (a tared scale can read a
 // little below zero).
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/verify/observations.h>
 
 #include <fmt/format.h>

@@ -1,7 +1,7 @@
 // Embree BVH over a melting mesh (embree/mesh_bvh.h).
 
 #include <meltlab/render/embree/mesh_bvh.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <embree3/rtcore.h>
 #include <fmt/format.h>

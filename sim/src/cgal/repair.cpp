@@ -40,7 +40,7 @@
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wnull-dereference"
 #include <meltlab/sim/cgal/repair.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/topology.h>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>

@@ -12,7 +12,7 @@
 // tests as PMP's do_faces_intersect, with "shared vertex" meaning the same vertex slot.
 
 #include <meltlab/sim/cgal/self_intersection.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <CGAL/Bbox_3.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>

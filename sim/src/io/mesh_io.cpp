@@ -2,9 +2,9 @@
 // raw polygons (OpenMesh's own mesh types would build half-edges and silently drop faces
 // that make the surface non-manifold, which is exactly what we must report).
 
-#include <meltlab/sim/atomic_file.h>
+#include <meltlab/core/atomic_file.h>
 #include <meltlab/sim/cgal/repair.h>
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/mesh_io.h>
 #include <meltlab/sim/quality.h>
 

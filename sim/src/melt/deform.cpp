@@ -14,7 +14,7 @@
 #include "triangle_kernels.h"
 #include "workspace.h"
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <algorithm>
 #include <cstring>

@@ -1,8 +1,8 @@
 // kl fields (monograph §3.4, Figs. 3.9–3.10): constant, point heat source with a falloff,
 // pressure from a ground plane, a trilinear 3-D grid, and products / maxima / minima.
 
-#include <meltlab/sim/error.h>
-#include <meltlab/sim/yaml_keys.h>
+#include <meltlab/core/error.h>
+#include <meltlab/core/yaml_keys.h>
 #include <meltlab/sim/kl_field.h>
 
 #include <fmt/format.h>

@@ -1,6 +1,6 @@
 // The liquid mask (liquid_mask.h): spreading filter (Eq. 7.12/7.13) and deposit pass (§7.3.2).
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/liquid_mask.h>
 
 #include <fmt/format.h>

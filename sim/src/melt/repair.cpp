@@ -20,7 +20,7 @@
 
 #include "workspace.h"
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <fmt/format.h>
 

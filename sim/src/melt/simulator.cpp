@@ -2,7 +2,7 @@
 
 #include "workspace.h"
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/quality.h>
 
 #include <fmt/format.h>

@@ -1,4 +1,4 @@
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 #include <meltlab/sim/polygon_mesh.h>
 
 #include <fmt/format.h>

@@ -89,9 +89,6 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& op
 nlohmann::json options_to_json(const SimulateOptions& options);
 SimulateOptions options_from_json(const nlohmann::json& j, const std::string& source);
 
-/// FNV-1a 64-bit hash of a file's bytes, as 16 hex digits (recorded to detect a changed input).
-std::string file_hash(const std::filesystem::path& file);
-
 /// Replays a finished `meltlab simulate` run: rebuilds its simulation from run.json (the
 /// cycle is deterministic for any thread count) and steps it forward on request. Refuses a
 /// run whose input mesh or kl file changed since (content hash).

@@ -61,6 +61,31 @@ int camera_height(const Camera& c);
 /// false for a point behind a pinhole camera (z_camera <= 0).
 std::pair<Vec2d, bool> project(const Camera& c, const Vec3d& p_world);
 
+/// A ray from the camera in the world frame.
+struct CameraRay {
+  Vec3d origin = Vec3d::Zero();
+  Vec3d direction = Vec3d(0, 0, -1);  ///< unit length
+  bool ok = true;  ///< false where a distorted pinhole's undistortion does not converge
+};
+
+/// Rays through image points, with the camera's pose inverted once (build it per frame and
+/// query it per pixel from any thread).
+///   orthographic: origin (x, y, start_z) under image point (u, v), direction -z;
+///   pinhole: origin at the eye, direction through the undistorted image point.
+class RayGenerator {
+ public:
+  /// `ortho_start_z`: the height at which orthographic rays start (above the scene).
+  explicit RayGenerator(const Camera& camera, double ortho_start_z = 0.0);
+  /// The ray through image point (u_px, v_px) (pixel centres at integers).
+  CameraRay generate_ray(double u_px, double v_px) const;
+  const Camera& camera() const { return camera_; }
+
+ private:
+  Camera camera_;
+  double ortho_start_z_ = 0.0;
+  Eigen::Isometry3d world_from_camera_ = Eigen::Isometry3d::Identity();
+};
+
 /// Ideal normalized coordinates (x, y) whose OpenCV distortion (k1 k2 p1 p2 k3) is (xd, yd),
 /// by Newton's method from (xd, yd). False if it does not converge to a regular solution.
 bool undistort_normalized(const std::array<double, 5>& distortion, double xd, double yd, double& x_out, double& y_out);

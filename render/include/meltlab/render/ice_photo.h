@@ -41,7 +41,7 @@
 // the options; images are BGR (OpenCV order).
 
 #include <meltlab/render/camera.h>
-#include <meltlab/sim/physics/voxel_grid.h>
+#include <meltlab/sim/physics/ice_fraction.h>
 
 #include <opencv2/core.hpp>
 

@@ -1,6 +1,6 @@
 #pragma once
 // Physically based reference melt of an ice body (issue 4 §1): the enthalpy method on a
-// voxel grid (Grid3, voxel_grid.h), explicit in time for conduction, point-implicit for the
+// voxel grid (Grid3, core/grid3.h), explicit in time for conduction, point-implicit for the
 // boundary exchange.
 //
 // Model
@@ -83,7 +83,7 @@
 //   Ground contact conductance: an assumed order of magnitude for ice on a damp absorbent
 //   cloth/paper (a thin water film): 30 W/m²/K; a parameter to fit, not a measured value.
 
-#include <meltlab/sim/physics/voxel_grid.h>
+#include <meltlab/sim/physics/ice_fraction.h>
 
 #include <Eigen/Core>
 

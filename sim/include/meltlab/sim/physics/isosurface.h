@@ -14,7 +14,7 @@
 // per connected region of the inside cells (>= level), possibly of genus > 0.
 
 #include <meltlab/sim/mesh.h>
-#include <meltlab/sim/physics/voxel_grid.h>
+#include <meltlab/sim/physics/ice_fraction.h>
 
 namespace meltlab::sim::physics {
 

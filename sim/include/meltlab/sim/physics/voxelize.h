@@ -10,7 +10,7 @@
 // closed (a watertight solid); its orientation does not matter.
 
 #include <meltlab/sim/mesh.h>
-#include <meltlab/sim/physics/voxel_grid.h>
+#include <meltlab/sim/physics/ice_fraction.h>
 
 #include <cstdint>
 

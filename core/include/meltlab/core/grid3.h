@@ -1,9 +1,10 @@
 #pragma once
-// A regular grid of cell-centred values: the state of the physically based reference melt
-// (sim/physics) and the medium the photo-like renderer (render/) traces rays through.
+// A regular grid of cell-centred values: the one dense 3-D grid of meltlab. The state of the
+// physically based reference melt (sim/physics), the medium the photo-like renderer traces
+// rays through, and the scalar volumes of the volume renderers are all Grid3s.
 //
-// Frame and units: world frame in metres, z up, the ground plane at z = 0 (the molds'
-// convention). Cell (i, j, k) is the cube origin_m + [i, i+1] x [j, j+1] x [k, k+1] * h_m;
+// Frame and units: world frame (metres for the melt; scene units for the volume renderers), z up.
+// Cell (i, j, k) is the cube origin_m + [i, i+1] x [j, j+1] x [k, k+1] * h_m;
 // its value is the cell average (sampled at the centre origin_m + (i+½, j+½, k+½) h_m).
 // Storage is x fastest: index = i + nx * (j + ny * k).
 
@@ -14,7 +15,7 @@
 #include <cstddef>
 #include <vector>
 
-namespace meltlab::sim::physics {
+namespace meltlab {
 
 template <class T>
 struct Grid3 {
@@ -61,8 +62,4 @@ struct Grid3 {
   }
 };
 
-/// What the renderer needs of a melting ice body: the solid (ice) volume fraction per cell,
-/// in [0, 1]; 0 is air (or drained meltwater).
-using IceFraction = Grid3<float>;
-
-}  // namespace meltlab::sim::physics
+}  // namespace meltlab

@@ -2,7 +2,7 @@
 // Refusing unknown keys of a YAML mapping (a typo in a config must not pass silently).
 // Header-only: used by the .cpp files that already read YAML (kl fields, cameras, scenes).
 
-#include <meltlab/sim/error.h>
+#include <meltlab/core/error.h>
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>

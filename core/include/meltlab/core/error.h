@@ -1,11 +1,20 @@
 #pragma once
-// Error types of meltlab. Every error is one line that names the input (file, option or
-// field) and the problem, so the CLI can print `meltlab: <message>` and exit non-zero.
+// Error types and exit codes of meltlab. Every error is one line that names the input (file,
+// option or field) and the problem, so the CLI can print `meltlab: <message>` and exit non-zero.
 
 #include <stdexcept>
 #include <string>
 
 namespace meltlab {
+
+/// Exit codes of every subcommand.
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitInvalid = 1,       ///< the command ran and found the input invalid (mesh-info)
+  kExitBadInput = 2,      ///< unreadable/invalid input or options: one-line error on stderr
+  kExitInternal = 3,      ///< a broken invariant during a run (a bug worth a report)
+  kExitInterrupted = 130,
+};
 
 /// Base of all meltlab errors.
 class Error : public std::runtime_error {
