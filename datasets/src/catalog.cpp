@@ -1,5 +1,6 @@
 // Reading datasets/catalog.yaml (catalog.h) and the folders datasets live in.
 
+#include <meltlab/core/input_file.h>
 #include <meltlab/datasets/catalog.h>
 #include <meltlab/datasets/molds.h>
 #include <meltlab/core/error.h>
@@ -128,9 +129,10 @@ CatalogFile read_catalog(const fs::path& yaml_file) {
         fmt::format("{}: dataset catalog not found (set MELTLAB_DATASETS_DIR to the folder holding "
                     "catalog.yaml)",
                     file));
+  const std::string text = read_text_file(file, "dataset catalog");
   YAML::Node root;
   try {
-    root = YAML::LoadFile(file);
+    root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw InputError(fmt::format("{}: line {}: {}", file, e.mark.line + 1, e.msg));
   }

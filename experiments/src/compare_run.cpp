@@ -1,3 +1,4 @@
+#include <meltlab/core/run_folder.h>
 #include <meltlab/core/hash.h>
 #include <meltlab/experiments/compare_run.h>
 #include <meltlab/experiments/simulate_run.h>
@@ -55,8 +56,8 @@ verify::CompareResult compare_and_write(const verify::ObservationSequence& obs, 
                                         const verify::CompareOptions& options, const fs::path& out_dir, int overlay_every,
                                         const std::function<void(const CompareRunProgress&)>& progress,
                                         std::vector<double>* frame_ms) {
-  fs::create_directories(out_dir);
-  if (overlay_every > 0) fs::create_directories(out_dir / "overlays");
+  create_output_directories(out_dir, "--out");
+  if (overlay_every > 0) create_output_directories(out_dir / "overlays", "--out");
   CompareRunProgress prog;
   prog.total = static_cast<int>(obs.frames.size());
   int compared = 0;
@@ -140,14 +141,7 @@ CompareRunResult run_compare(const CompareRunOptions& o, const std::function<voi
   require(o.compare.supersample >= 1 && o.compare.supersample <= 16,
           fmt::format("--supersample: must be in [1, 16] (got {})", o.compare.supersample));
   require(o.overlay_every >= 0, "--overlay-every: must be >= 0");
-  require(!o.out_dir.empty(), "--out: an output folder is required");
-  std::error_code ec;
-  if (fs::exists(o.out_dir, ec)) {
-    require(fs::is_directory(o.out_dir, ec), fmt::format("{}: exists and is not a folder", o.out_dir.string()));
-    require(o.overwrite || !fs::exists(o.out_dir / "compare.json", ec),
-            fmt::format("{}: already holds a comparison (compare.json); choose another --out or pass --overwrite",
-                        o.out_dir.string()));
-  }
+  RunFolder folder(o.out_dir, {"--out", "compare.json", "comparison", o.overwrite});
 
   const verify::ObservationSequence obs = verify::load_observations(o.observations);
   RunReplay replay(o.run_dir);
@@ -158,7 +152,7 @@ CompareRunResult run_compare(const CompareRunOptions& o, const std::function<voi
 
   CompareRunResult out;
   std::vector<double> frame_ms;
-  out.compare = compare_and_write(obs, replay, copt, o.out_dir, o.overlay_every, progress, &frame_ms);
+  out.compare = compare_and_write(obs, replay, copt, folder.path(), o.overlay_every, progress, &frame_ms);
   out.summary = summarize_frames(out.compare.frames);
   json j;
   j["meltlab_version"] = kVersion;
@@ -200,7 +194,8 @@ CompareRunResult run_compare(const CompareRunOptions& o, const std::function<voi
                  {"frame_ms_median", sorted.empty() ? 0.0 : sorted[sorted.size() / 2]},
                  {"frame_ms_max", sorted.empty() ? 0.0 : sorted.back()}};
   j["hardware"] = hardware_json();
-  write_text_atomically(o.out_dir / "compare.json", j.dump(2) + "\n");
+  write_text_atomically(folder.path() / "compare.json", j.dump(2) + "\n");
+  folder.commit();
   return out;
 }
 

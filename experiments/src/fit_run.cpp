@@ -1,3 +1,5 @@
+#include <meltlab/core/run_folder.h>
+#include <meltlab/core/input_file.h>
 #include <meltlab/core/hash.h>
 #include <meltlab/experiments/compare_run.h>
 #include <meltlab/experiments/fit_run.h>
@@ -173,16 +175,10 @@ std::vector<verify::FitParameter> fit_parameters(const FitRunOptions& o, double 
 }
 
 json run_fit(const FitRunOptions& o, const std::function<void(const std::string&)>& log) {
-  require(!o.out_dir.empty(), "--out: an output folder is required");
   require(o.holdout >= 0 && o.holdout < 1, fmt::format("--holdout: must be in [0, 1) (got {})", o.holdout));
   require(o.volume_weight >= 0 && std::isfinite(o.volume_weight), "--volume-weight: must be >= 0");
   require(std::isfinite(o.first_cycle) && o.first_cycle >= 0, "--first-cycle: must be >= 0");
-  std::error_code ec;
-  if (fs::exists(o.out_dir, ec)) {
-    require(fs::is_directory(o.out_dir, ec), fmt::format("{}: exists and is not a folder", o.out_dir.string()));
-    require(o.overwrite || !fs::exists(o.out_dir / "fit.json", ec),
-            fmt::format("{}: already holds a fit (fit.json); choose another --out or pass --overwrite", o.out_dir.string()));
-  }
+  RunFolder folder(o.out_dir, {"--out", "fit.json", "fit", o.overwrite});
   const verify::ObservationSequence obs = verify::load_observations(o.observations);
   std::shared_ptr<const PreparedSimulation> prepared = prepare_simulation(o.simulation, /*check_output=*/false);
 
@@ -196,7 +192,7 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
     if (name.rfind("kl.", 0) != 0) continue;
     require(!o.simulation.kl_file.empty(), fmt::format("{}: fitting a kl parameter needs --kl FILE", name));
     // (A default YAML::Node is a defined null node, so `!kl_doc` would never be true.)
-    if (kl_doc.IsNull()) kl_doc = YAML::LoadFile(prepared->opt.kl_file.string());
+    if (kl_doc.IsNull()) kl_doc = YAML::Load(read_text_file(prepared->opt.kl_file, "kl field"));
     kl_values[name] = number_at(kl_doc, name, o.simulation.kl_file.string());
   }
   const std::vector<verify::FitParameter> params = fit_parameters(o, o.simulation.kg, kl_values);
@@ -245,7 +241,7 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
   copt.registration = verify::RegistrationMode::kGiven;
   copt.given_registration = fit.registration();
   if (log) log("comparing the fitted run with every photo");
-  const verify::CompareResult cmp = compare_and_write(obs, *meshes, copt, o.out_dir / "comparison", o.overlay_every, {});
+  const verify::CompareResult cmp = compare_and_write(obs, *meshes, copt, folder.path() / "comparison", o.overlay_every, {});
 
   json j;
   j["meltlab_version"] = kVersion;
@@ -298,8 +294,7 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
   // The truth, when the sequence was made by synth-sequence (inverse-crime data).
   if (obs.ground_truth) {
     try {
-      std::ifstream in(*obs.ground_truth);
-      const json truth = json::parse(in);
+      const json truth = json::parse(read_text_file(*obs.ground_truth, "ground truth"));
       json t;
       if (truth.contains("simulation") && truth["simulation"].contains("kg")) t["kg"] = truth["simulation"]["kg"];
       if (truth.contains("cycles_per_photo")) t["cycles_per_photo"] = truth["cycles_per_photo"];
@@ -312,8 +307,8 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
     }
   }
   j["hardware"] = hardware_json();
-  fs::create_directories(o.out_dir);
-  write_text_atomically(o.out_dir / "fit.json", j.dump(2) + "\n");
+  write_text_atomically(folder.path() / "fit.json", j.dump(2) + "\n");
+  folder.commit();
   return j;
 }
 

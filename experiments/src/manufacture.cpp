@@ -1,3 +1,4 @@
+#include <meltlab/core/run_folder.h>
 #include <meltlab/core/hash.h>
 #include <meltlab/experiments/manufacture.h>
 #include <meltlab/experiments/sequence_manifest.h>
@@ -47,14 +48,8 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
   require(std::isfinite(o.camera_height_m) && o.camera_height_m > 0.05, "--camera-height-m: must be > 0.05");
   require(std::isfinite(o.fill) && o.fill > 0 && o.fill <= 1, "--fill: must be in (0, 1]");
   require(o.jpeg_quality >= 1 && o.jpeg_quality <= 100, "--jpeg-quality: must be in [1, 100]");
-  require(!o.out_dir.empty(), "--out: an output folder is required");
-  std::error_code ec;
-  if (fs::exists(o.out_dir, ec)) {
-    require(fs::is_directory(o.out_dir, ec), fmt::format("{}: exists and is not a folder", o.out_dir.string()));
-    require(o.overwrite || !fs::exists(o.out_dir / "manifest.yaml", ec),
-            fmt::format("{}: already holds a sequence (manifest.yaml); choose another --out or pass --overwrite",
-                        o.out_dir.string()));
-  }
+  RunFolder folder(o.out_dir, {"--out", "manifest.yaml", "sequence", o.overwrite});
+  const fs::path& dir = folder.path();
 
   // ---- the object: scaled to the ice mass, standing on the ground, centred ----
   const fs::path mesh_path = resolve_mesh_argument(o.mesh);
@@ -85,10 +80,10 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
   const render::Pinhole camera = render::Pinhole::look_at(o.width, o.height, fx, Eigen::Vector3d(0, 0, o.camera_height_m),
                                                           Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 1, 0));
 
-  fs::create_directories(o.out_dir / "frames");
-  fs::create_directories(o.out_dir / "truth" / "masks");
-  if (o.mesh_every > 0) fs::create_directories(o.out_dir / "truth" / "meshes");
-  sim::save_mesh(mesh, o.out_dir / "truth" / "initial_mesh.ply");
+  create_output_directories(dir / "frames", "--out");
+  create_output_directories(dir / "truth" / "masks", "--out");
+  if (o.mesh_every > 0) create_output_directories(dir / "truth" / "meshes", "--out");
+  sim::save_mesh(mesh, dir / "truth" / "initial_mesh.ply");
 
   const verify::SegmentationSettings defaults;
   // The static ground (no ice), and renderers of the surface's coverage and true outline.
@@ -136,11 +131,11 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
     }
     const cv::Mat photo = render::develop_photo(radiance, po);
     const std::string name = fmt::format("frame_{:04d}.jpg", k + 1);
-    render::write_jpeg(o.out_dir / "frames" / name, photo, o.jpeg_quality);
-    verify::write_image(o.out_dir / "truth" / "masks" / fmt::format("frame_{:04d}.png", k + 1), truth);
+    render::write_jpeg(dir / "frames" / name, photo, o.jpeg_quality);
+    verify::write_image(dir / "truth" / "masks" / fmt::format("frame_{:04d}.png", k + 1), truth);
     // How well the verification loop's default segmentation recovers the true outline (of
     // the JPEG as written, so compression is included).
-    const cv::Mat decoded = verify::read_image(o.out_dir / "frames" / name);
+    const cv::Mat decoded = verify::read_image(dir / "frames" / name);
     const verify::Segmentation seg = verify::segment_image(decoded, defaults);
     const double true_area = cv::countNonZero(truth);
     const double p = true_area > 0 || seg.area_px > 0 ? verify::compare_masks(truth, seg.mask).P : 0.0;
@@ -156,11 +151,11 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
     mass_csv << fmt::format("{},{:.6f}\n", t, mass_g);
     images.push_back("frames/" + name);
     if (o.mesh_every > 0 && k % o.mesh_every == 0 && !surface.F.empty())
-      sim::save_mesh(surface, o.out_dir / "truth" / "meshes" / fmt::format("frame_{:04d}.ply", k + 1));
+      sim::save_mesh(surface, dir / "truth" / "meshes" / fmt::format("frame_{:04d}.ply", k + 1));
     if (progress) progress({k + 1, o.photos, t, mass_g});
   }
 
-  write_text_atomically(o.out_dir / "mass.csv", mass_csv.str());
+  write_text_atomically(dir / "mass.csv", mass_csv.str());
   const auto ledger = solver.ledger();
   json truth;
   truth["meltlab_version"] = kVersion;
@@ -187,7 +182,7 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
                     {"jpeg_quality", o.jpeg_quality}, {"seed", o.seed}};
   truth["interval_s"] = o.interval_s;
   truth["frames"] = frames;
-  write_text_atomically(o.out_dir / "truth" / "truth.json", truth.dump(2) + "\n");
+  write_text_atomically(dir / "truth" / "truth.json", truth.dump(2) + "\n");
 
   SequenceManifest manifest;
   manifest.comment = "Made by meltlab manufacture (physically based reference melt). Truth: truth/truth.json";
@@ -197,7 +192,8 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
   manifest.ground_truth = "truth/truth.json";
   manifest.mass_series = "mass.csv";
   manifest.images = images;
-  write_sequence_manifest(o.out_dir, manifest);
+  write_sequence_manifest(dir, manifest);
+  folder.commit();
 }
 
 }  // namespace meltlab::experiments

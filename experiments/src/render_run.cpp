@@ -1,5 +1,6 @@
 // `meltlab render` (render_run.h).
 
+#include <meltlab/core/run_folder.h>
 #include <meltlab/experiments/render_run.h>
 #include <meltlab/render/ice_renderer.h>
 #include <meltlab/render/render_assets.h>
@@ -75,7 +76,6 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   require(o.far_fraction > 0 && o.far_fraction <= 1, fmt::format("--far-fraction: must be in (0, 1] (got {})", o.far_fraction));
   require(o.mask_extent >= 1.0, fmt::format("--mask-extent: must be >= 1 (got {})", o.mask_extent));
   require(o.width >= 0 && o.height >= 0 && o.width <= 16384 && o.height <= 16384, "--width/--height: must be in [1, 16384]");
-  require(!o.out_dir.empty(), "--out: an output folder is required");
   require(o.up == 'x' || o.up == 'y' || o.up == 'z', fmt::format("--up: must be x, y or z (got '{}')", o.up));
   if (o.liquid_figure) {
     require(o.liquid, "--liquid-figure: needs the liquid stage (drop --no-liquid)");
@@ -86,12 +86,8 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   if (o.width > 0) scene.width = o.width;
   if (o.height > 0) scene.height = o.height;
   auto prepared = prepare_simulation(o.melt, /*check_output=*/false);
-  std::error_code ec;
-  if (fs::exists(o.out_dir, ec)) {
-    require(fs::is_directory(o.out_dir, ec), fmt::format("{}: exists and is not a folder", o.out_dir.string()));
-    require(o.overwrite || !fs::exists(o.out_dir / "render.json", ec),
-            fmt::format("{}: already holds a run (render.json); choose another --out or pass --overwrite", o.out_dir.string()));
-  }
+  RunFolder folder(o.out_dir, {"--out", "render.json", "run", o.overwrite});
+  const fs::path& dir = folder.path();
 
   // ---- set up ----
   sim::IndexedMesh mesh = prepared->mesh;
@@ -121,7 +117,7 @@ RenderRunResult run_render(const RenderRunOptions& o) {
     mask = std::make_unique<sim::LiquidMask>(mp);
     if (o.threshold_texture) mask->set_threshold_texture(relief_threshold(mp.width, mp.height, o.threshold));
   }
-  fs::create_directories(o.out_dir);
+  create_output_directories(dir, "--out");
 
   RenderRunResult result;
   json frames_json = json::array();
@@ -133,18 +129,18 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   const int width = std::max(6, static_cast<int>(std::to_string(last).size()));
   std::unique_ptr<render::IceRenderer> renderer;
   if (!figure) {
-    fs::create_directories(o.out_dir / "frames");
+    create_output_directories(dir / "frames", "--out");
     renderer = std::make_unique<render::IceRenderer>(scene);
     renderer->set_liquid(mask.get());
   }
-  if (figure) fs::create_directories(o.out_dir / "liquid");
+  if (figure) create_output_directories(dir / "liquid", "--out");
 
   for (std::int64_t cycle = 0;; ++cycle) {
     const auto& m = simulator.mesh();
     const auto triangles = static_cast<std::int64_t>(m.live_triangle_count());
     if (figure && figure_at.count(cycle)) {
       const std::string name = fmt::format("mask_{:0{}}.png", cycle, width);
-      render::write_gray_png(o.out_dir / "liquid" / name, mask->values(), mask->params().width, mask->params().height,
+      render::write_gray_png(dir / "liquid" / name, mask->values(), mask->params().width, mask->params().height,
                              mask->params().deposit_value);
       rows.push_back(fmt::format("{},{},{:.9g},{},{:.9g}", cycle, triangles, mask->total(), mask->wet_count(),
                                  static_cast<double>(mask->max_value())));
@@ -154,9 +150,9 @@ RenderRunResult run_render(const RenderRunOptions& o) {
       const render::RgbImage img = renderer->render();
       const auto& st = renderer->last_stats();
       const std::string stem = fmt::format("frame_{:0{}}", cycle, width);
-      if (renderer->scene().outputs.exr) render::write_exr(o.out_dir / "frames" / (stem + ".exr"), img);
+      if (renderer->scene().outputs.exr) render::write_exr(dir / "frames" / (stem + ".exr"), img);
       if (renderer->scene().outputs.png)
-        render::write_png(o.out_dir / "frames" / (stem + ".png"), img, renderer->scene().outputs.exposure,
+        render::write_png(dir / "frames" / (stem + ".png"), img, renderer->scene().outputs.exposure,
                           renderer->scene().outputs.gamma);
       const char* bvh = st.bvh == render::BvhUpdate::kRefit ? "refit" : st.bvh == render::BvhUpdate::kRebuild ? "rebuild" : "none";
       rows.push_back(fmt::format("{},{},{},{:.3f},{:.3f},{:.9g},{}", cycle, triangles, bvh, st.bvh_ms, st.trace_ms,
@@ -173,9 +169,9 @@ RenderRunResult run_render(const RenderRunOptions& o) {
 
   // ---- outputs ----
   if (figure) {
-    write_text_atomically(o.out_dir / "liquid" / "mask_sums.csv", csv_text(rows, "cycle,triangles,mask_sum,wet_texels,mask_max"));
+    write_text_atomically(dir / "liquid" / "mask_sums.csv", csv_text(rows, "cycle,triangles,mask_sum,wet_texels,mask_max"));
   } else {
-    write_text_atomically(o.out_dir / "frames.csv",
+    write_text_atomically(dir / "frames.csv",
                           csv_text(rows, "cycle,triangles,bvh_update,bvh_ms,trace_ms,mask_sum,wet_texels"));
   }
   result.median_trace_ms = median(trace_ms);
@@ -217,7 +213,8 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   j["threads"] = threads;
   j["hardware"] = hardware_json();
   result.run_json = j;
-  write_text_atomically(o.out_dir / "render.json", j.dump(2) + "\n");
+  write_text_atomically(dir / "render.json", j.dump(2) + "\n");
+  folder.commit();
   return result;
 }
 

@@ -1,3 +1,4 @@
+#include <meltlab/core/input_file.h>
 #include <meltlab/core/hash.h>
 #include <meltlab/experiments/reproduce.h>
 #include <meltlab/core/atomic_file.h>
@@ -36,13 +37,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  if (!in) throw InputError(fmt::format("{}: cannot read", p.string()));
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+std::string read_file(const fs::path& p) { return read_text_file(p, "experiment"); }
 
 bool valid_name(const std::string& s) {
   static const std::regex re("[a-z0-9_]+");

@@ -2,6 +2,7 @@
 // for any thread count, so rebuilding the simulation from run.json's options reproduces the
 // run's meshes bit for bit.
 
+#include <meltlab/core/input_file.h>
 #include <meltlab/core/hash.h>
 #include <meltlab/experiments/simulate_run.h>
 #include <meltlab/core/error.h>
@@ -27,10 +28,12 @@ struct RunReplay::Impl {
 RunReplay::RunReplay(const fs::path& run_dir) : impl_(std::make_unique<Impl>()) {
   const fs::path file = run_dir / "run.json";
   const std::string name = file.string();
-  std::ifstream in(file);
-  if (!in) throw InputError(fmt::format("{}: no such file (is {} a simulate run folder?)", name, run_dir.string()));
+  std::error_code no_file;
+  if (!fs::exists(file, no_file))
+    throw InputError(fmt::format("{}: no such file (is {} a simulate run folder?)", name, run_dir.string()));
+  const std::string text = read_text_file(file, "run record");
   try {
-    run_ = json::parse(in);
+    run_ = json::parse(text);
   } catch (const json::exception& e) {
     throw InputError(fmt::format("{}: invalid JSON: {}", name, e.what()));
   }

@@ -179,14 +179,6 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o,
               (o.snapshot_format == "ply" || o.snapshot_format == "off" || o.snapshot_format == "obj" ||
                o.snapshot_format == "stl"),
           fmt::format("--snapshot-format: '{}' is not one of ply, off, obj, stl", o.snapshot_format));
-  require(!check_output || !o.out_dir.empty(), "--out: an output folder is required");
-  std::error_code ec;
-  if (check_output && fs::exists(o.out_dir, ec)) {
-    require(fs::is_directory(o.out_dir, ec), fmt::format("{}: exists and is not a folder", o.out_dir.string()));
-    require(o.overwrite || !fs::exists(o.out_dir / "run.json", ec),
-            fmt::format("{}: already holds a run (run.json); choose another --out or pass --overwrite", o.out_dir.string()));
-  }
-
   p->mesh_path = fs::absolute(resolve_mesh_argument(o.mesh));
   if (!o.kl_file.empty()) p->opt.kl_file = fs::absolute(o.kl_file);
   p->loaded = sim::load_mesh(p->mesh_path, o.load);
@@ -243,6 +235,8 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o,
       {"bbox_max", {q.bbox_max.x(), q.bbox_max.y(), q.bbox_max.z()}},
       {"order", o.morton_order ? "morton" : "file"},
   };
+  // The output folder last among the checks of the arguments, first before any work is written.
+  if (check_output) p->output.emplace(o.out_dir, RunFolderOptions{"--out", "run.json", "run", o.overwrite});
   return p;
 }
 
@@ -285,19 +279,21 @@ template <class Real>
 SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const SimulateProgress&)>& progress,
                          const std::atomic<bool>* stop) {
   const SimulateOptions& o = p.opt;
+  if (!p.output) throw InvariantError("run_simulation: the simulation was prepared without an output folder");
+  const fs::path dir = p.output->path();
   const std::string started = now_iso8601();
-  fs::create_directories(o.out_dir / "snapshots");
+  create_output_directories(dir / "snapshots", "--out");
   const int threads = o.threads == 0 ? tbb::info::default_concurrency() : o.threads;
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   const sim::Execution exec = threads == 1 ? sim::Execution::kSerial : sim::Execution::kParallel;
 
   sim::MeltSimulator<Real> simulator(sim::TriMesh<Real>::from_indexed(p.mesh), p.params, p.kl, exec);
-  StatsWriter stats(o.out_dir / "stats.csv");
+  StatsWriter stats(dir / "stats.csv");
   const int width = std::max(6, static_cast<int>(std::to_string(o.cycles).size()));
   std::vector<std::string> snapshots;
   auto snapshot = [&](std::int64_t cycle) {
     const std::string name = fmt::format("cycle_{:0{}}.{}", cycle, width, o.snapshot_format);
-    sim::save_mesh(simulator.mesh().to_indexed(), o.out_dir / "snapshots" / name);
+    sim::save_mesh(simulator.mesh().to_indexed(), dir / "snapshots" / name);
     snapshots.push_back("snapshots/" + name);
   };
 
@@ -449,7 +445,8 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
       {"hardware", hardware_json()},
   };
   if (!result.error.empty()) run["error"] = result.error;
-  write_text_atomically(o.out_dir / "run.json", run.dump(2) + "\n");
+  write_text_atomically(dir / "run.json", run.dump(2) + "\n");
+  p.output->commit();
   result.run_json = std::move(run);
   return result;
 }

@@ -1,3 +1,4 @@
+#include <meltlab/core/run_folder.h>
 #include <meltlab/core/hash.h>
 #include <meltlab/experiments/sequence_manifest.h>
 #include <meltlab/experiments/synthetic_sequence.h>
@@ -93,14 +94,8 @@ void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::funct
   const auto& mis = o.misalignment;
   require(std::isfinite(mis.scale) && mis.scale > 0 && std::isfinite(mis.angle_rad) && mis.translation.allFinite(),
           "--misalign: scale must be > 0 and all values finite");
-  require(!o.out_dir.empty(), "--out: an output folder is required");
-  std::error_code ec;
-  if (fs::exists(o.out_dir, ec)) {
-    require(fs::is_directory(o.out_dir, ec), fmt::format("{}: exists and is not a folder", o.out_dir.string()));
-    require(o.overwrite || !fs::exists(o.out_dir / "manifest.yaml", ec),
-            fmt::format("{}: already holds a sequence (manifest.yaml); choose another --out or pass --overwrite",
-                        o.out_dir.string()));
-  }
+  RunFolder folder(o.out_dir, {"--out", "manifest.yaml", "sequence", o.overwrite});
+  const fs::path& dir = folder.path();
 
   RunReplay simulation(o.simulation);
   const render::Camera camera =
@@ -108,8 +103,8 @@ void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::funct
   const int width = render::camera_width(camera), height = render::camera_height(camera);
   const cv::Size size(width, height);
 
-  fs::create_directories(o.out_dir / "frames");
-  fs::create_directories(o.out_dir / "truth" / "masks");
+  create_output_directories(dir / "frames", "--out");
+  create_output_directories(dir / "truth" / "masks", "--out");
 
   // Fixed scene: a dark absorbent ground with a fine texture, ice with a milky texture, and
   // light falling off across the table (as from a lamp at one side).
@@ -158,8 +153,8 @@ void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::funct
     blurred += noise;
     blurred.convertTo(out8, CV_8UC3);  // saturates to [0, 255]
     const std::string name = fmt::format("frame_{:04d}.{}", k + 1, o.jpeg_quality > 0 ? "jpg" : "png");
-    write_photo(o.out_dir / "frames" / name, out8, o.jpeg_quality);
-    verify::write_image(o.out_dir / "truth" / "masks" / fmt::format("frame_{:04d}.png", k + 1), truth_mask);
+    write_photo(dir / "frames" / name, out8, o.jpeg_quality);
+    verify::write_image(dir / "truth" / "masks" / fmt::format("frame_{:04d}.png", k + 1), truth_mask);
     const double volume = mesh.live_triangle_count() > 0 ? sim::mesh_volume(mesh) : 0.0;
     frames.push_back({{"frame", k + 1},
                       {"image", "frames/" + name},
@@ -174,7 +169,7 @@ void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::funct
     if (progress) progress({k + 1, o.photos});
   }
 
-  write_text_atomically(o.out_dir / "volume.csv", volume_csv.str());
+  write_text_atomically(dir / "volume.csv", volume_csv.str());
   json truth;
   truth["meltlab_version"] = kVersion;
   truth["generator"] = "meltlab synth-sequence (empirical model, inverse-crime data)";
@@ -194,7 +189,7 @@ void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::funct
   truth["seed"] = o.seed;
   truth["image_model"] = {{"noise_sigma", o.noise_sigma}, {"blur_sigma_px", o.blur_sigma_px}, {"jpeg_quality", o.jpeg_quality}};
   truth["frames"] = frames;
-  write_text_atomically(o.out_dir / "truth" / "truth.json", truth.dump(2) + "\n");
+  write_text_atomically(dir / "truth" / "truth.json", truth.dump(2) + "\n");
 
   SequenceManifest manifest;
   manifest.comment = "Made by meltlab synth-sequence (the empirical model: inverse-crime data). Truth: truth/truth.json";
@@ -204,7 +199,8 @@ void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::funct
   manifest.ground_truth = "truth/truth.json";
   manifest.mass_series = "volume.csv";
   manifest.images = images;
-  write_sequence_manifest(o.out_dir, manifest);
+  write_sequence_manifest(dir, manifest);
+  folder.commit();
 }
 
 }  // namespace meltlab::experiments

@@ -3,6 +3,8 @@
 #include <meltlab/render/render_assets.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
+#include <meltlab/core/input_file.h>
+#include <meltlab/core/limits.h>
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -221,11 +223,17 @@ void write_gray_png(const std::filesystem::path& file, const std::vector<float>&
 }
 
 RgbImage read_rgb_image(const std::filesystem::path& file) {
+  check_input_file(file, "image");
   auto in = OIIO::ImageInput::open(file.string());
   if (!in) throw InputError(fmt::format("{}: cannot read image: {}", file.string(), OIIO::geterror()));
   const OIIO::ImageSpec spec = in->spec();
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1)
     throw InputError(fmt::format("{}: the image holds no pixels", file.string()));
+  const std::int64_t pixels = static_cast<std::int64_t>(spec.width) * spec.height;
+  if (pixels > input_limits().image_pixels || spec.nchannels > 64)
+    throw InputError(fmt::format("{}: image of {}x{} pixels and {} channels exceeds the limit of {} pixels (raise it with "
+                                 "--limits image_pixels=N)",
+                                 file.string(), spec.width, spec.height, spec.nchannels, input_limits().image_pixels));
   std::vector<float> px(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data()))
     throw InputError(fmt::format("{}: cannot read image: {}", file.string(), in->geterror()));

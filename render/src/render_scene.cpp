@@ -1,5 +1,6 @@
 // Scene description of the ice/liquid ray tracer (render_scene.h).
 
+#include <meltlab/core/input_file.h>
 #include <meltlab/render/render_scene.h>
 #include <meltlab/core/yaml_keys.h>
 #include <meltlab/core/error.h>
@@ -213,11 +214,10 @@ RenderScene parse_render_scene(const YAML::Node& node, const std::string& source
 }
 
 RenderScene load_render_scene(const std::string& yaml_file) {
+  const std::string text = read_text_file(yaml_file, "scene");
   YAML::Node root;
   try {
-    root = YAML::LoadFile(yaml_file);
-  } catch (const YAML::BadFile&) {
-    throw InputError(fmt::format("{}: cannot read the scene file", yaml_file));
+    root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw InputError(fmt::format("{}:{}: YAML syntax error: {}", yaml_file, e.mark.line + 1, e.msg));
   }

@@ -73,7 +73,7 @@ TEST(TimeSeries, BadFilesNameFileAndLine) {
       {"empty_cell", "time_s,mass_g\n0,\n", ":2:", "empty cell"},
       {"missing_cell", "time_s,mass_g\n0,1\n1\n", ":3:", "cells"},
       {"trailing_junk", "time_s,mass_g\n0,1x\n", ":2:", "1x"},
-      {"empty", "", ":1:", "empty"},
+      {"empty", "", ": ", "file is empty"},  // 0 bytes: no line to name
       {"header_only", "time_s,mass_g\n", ":1:", "no data"},
   };
   test::TempDir dir;

@@ -9,6 +9,7 @@
 
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
+#include <meltlab/core/limits.h>
 #include <meltlab/verify/observations.h>
 
 #include <OpenImageIO/imageio.h>
@@ -24,9 +25,6 @@ namespace meltlab::verify {
 namespace fs = std::filesystem;
 
 namespace {
-
-/// Larger images are refused: a corrupt header must not make us allocate gigabytes.
-constexpr std::int64_t kMaxPixels = std::int64_t{1} << 28;
 
 /// OIIO messages may span several lines; our errors are one line.
 std::string one_line(std::string text) {
@@ -80,11 +78,15 @@ std::unique_ptr<OIIO::ImageInput> open_image(const fs::path& file) {
     pending_error(in.get());
     throw InputError(fmt::format("{}: image has zero size ({}x{})", file.string(), spec.width, spec.height));
   }
-  if (static_cast<std::int64_t>(spec.width) * spec.height > kMaxPixels) {
+  // Larger images are refused: a corrupt or hostile header must not make us allocate gigabytes.
+  const std::int64_t pixels = static_cast<std::int64_t>(spec.width) * spec.height;
+  if (pixels > input_limits().image_pixels) {
     pending_error(in.get());
-    throw InputError(fmt::format("{}: image too large ({}x{})", file.string(), spec.width, spec.height));
+    throw InputError(fmt::format("{}: image of {}x{} = {} pixels exceeds the limit of {} (raise it with --limits "
+                                 "image_pixels=N)",
+                                 file.string(), spec.width, spec.height, pixels, input_limits().image_pixels));
   }
-  if (spec.depth > 1 || spec.deep || spec.nchannels < 1) {
+  if (spec.depth > 1 || spec.deep || spec.nchannels < 1 || spec.nchannels > 64) {
     pending_error(in.get());
     throw InputError(fmt::format("{}: not a flat 2-D image (depth {}, {} channels{})", file.string(), spec.depth,
                                  spec.nchannels, spec.deep ? ", deep" : ""));

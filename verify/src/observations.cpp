@@ -20,6 +20,7 @@
 
 #include "obs_detail.h"
 
+#include <meltlab/core/input_file.h>
 #include <meltlab/render/camera.h>
 #include <meltlab/core/error.h>
 #include <meltlab/verify/observations.h>
@@ -144,13 +145,8 @@ fs::path existing_file(const Ctx& ctx, const YAML::Node& n, const std::string& k
 
 YAML::Node load_yaml(const fs::path& manifest, const std::string& file) {
   std::error_code ec;
-  if (!fs::exists(manifest, ec)) throw InputError(fmt::format("{}: no such file", file));
   if (fs::is_directory(manifest, ec)) throw InputError(fmt::format("{}: is a directory, not a manifest", file));
-  std::ifstream in(manifest, std::ios::binary);
-  if (!in) throw InputError(fmt::format("{}: cannot open", file));
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  std::string content = buffer.str();
+  std::string content = read_text_file(manifest, "manifest");
   if (content.find_first_not_of(" \t\r\n") == std::string::npos) throw InputError(fmt::format("{}: empty manifest", file));
 
   std::string ext = manifest.extension().string();

@@ -9,6 +9,7 @@
 // increases; at least one row. Values are not range-checked (a tared scale can read a
 // little below zero).
 
+#include <meltlab/core/input_file.h>
 #include <meltlab/core/error.h>
 #include <meltlab/verify/observations.h>
 
@@ -19,6 +20,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -58,10 +60,8 @@ bool skipped(std::string_view line) {
 TimeSeries read_time_series(const fs::path& csv) {
   const std::string file = csv.string();
   std::error_code ec;
-  if (!fs::exists(csv, ec)) throw InputError(fmt::format("{}: no such file", file));
   if (fs::is_directory(csv, ec)) throw InputError(fmt::format("{}: is a directory, not a CSV file", file));
-  std::ifstream in(csv, std::ios::binary);
-  if (!in) throw InputError(fmt::format("{}: cannot open", file));
+  std::istringstream in(read_text_file(csv, "CSV"));
 
   static const std::array<const char*, 4> kQuantities = {"mass_kg", "mass_g", "volume_m3", "volume_cm3"};
   TimeSeries ts;

@@ -2,7 +2,11 @@
 // raw polygons (OpenMesh's own mesh types would build half-edges and silently drop faces
 // that make the surface non-manifold, which is exactly what we must report).
 
+#include "mesh_prescan.h"
+
 #include <meltlab/core/atomic_file.h>
+#include <meltlab/core/input_file.h>
+#include <meltlab/core/limits.h>
 #include <meltlab/sim/cgal/repair.h>
 #include <meltlab/core/error.h>
 #include <meltlab/sim/mesh_io.h>
@@ -39,22 +43,33 @@ bool supported_format(const std::string& ext) {
 }
 
 // Collects vertices and polygons exactly as the reader delivers them.
+// Stops taking elements beyond `limit` (a guard behind the prescan: whatever a reader believes
+// about a file, it cannot make us store more than the limit allows).
 class SoupImporter final : public OpenMesh::IO::BaseImporter {
  public:
+  explicit SoupImporter(std::int64_t limit) : limit_(static_cast<std::size_t>(limit)) {}
   PolygonMesh mesh;
   std::size_t bad_index_faces = 0;
+  bool over_limit = false;
 
   OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3f& p) override {
-    mesh.V.emplace_back(static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2]));
-    return OpenMesh::VertexHandle(static_cast<int>(mesh.V.size() - 1));
+    return add_vertex(OpenMesh::Vec3d(static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2])));
   }
   OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3d& p) override {
+    if (mesh.V.size() >= limit_) {
+      over_limit = true;
+      return OpenMesh::VertexHandle();
+    }
     mesh.V.emplace_back(p[0], p[1], p[2]);
     return OpenMesh::VertexHandle(static_cast<int>(mesh.V.size() - 1));
   }
   OpenMesh::VertexHandle add_vertex() override { return add_vertex(OpenMesh::Vec3d(0, 0, 0)); }
   OpenMesh::HalfedgeHandle add_edge(OpenMesh::VertexHandle, OpenMesh::VertexHandle) override { return OpenMesh::HalfedgeHandle(); }
   OpenMesh::FaceHandle add_face(const VHandles& idx) override {
+    if (mesh.faces.size() >= limit_) {
+      over_limit = true;
+      return OpenMesh::FaceHandle();
+    }
     PolygonFace f;
     f.outer.reserve(idx.size());
     for (const auto& vh : idx) {
@@ -107,6 +122,9 @@ class SoupImporter final : public OpenMesh::IO::BaseImporter {
   std::size_t n_vertices() const override { return mesh.V.size(); }
   std::size_t n_faces() const override { return mesh.faces.size(); }
   std::size_t n_edges() const override { return 0; }
+
+ private:
+  std::size_t limit_;
 };
 
 // OpenMesh reports parse problems on its own log streams (omerr -> std::cerr, omlog ->
@@ -147,128 +165,20 @@ class CapturedOpenMeshLog {
   std::ostringstream* buffer_ = nullptr;
 };
 
-// An ASCII OFF file as declared by its header: the counts, and the first vertex line whose
-// coordinates are not finite numbers (OpenMesh's reader stops or misreads at "nan"/"inf"
-// and accepts a truncated file silently, keeping what it read).
-struct OffHeader {
-  bool ok = false;
-  std::size_t vertices = 0, faces = 0;
-  std::size_t faces_present = 0;  // face records actually in the file
-  std::string bad_vertex;  // "line L: ..." or empty (a bad vertex or face record)
-};
-OffHeader read_off_header(const fs::path& file) {
-  OffHeader h;
-  std::ifstream in(file);
-  std::string line;
-  int line_no = 0;
-  auto next_content_line = [&](std::string& out) {
-    while (std::getline(in, out)) {
-      ++line_no;
-      const auto hash = out.find('#');
-      if (hash != std::string::npos) out.erase(hash);
-      if (out.find_first_not_of(" \t\r") != std::string::npos) return true;
-    }
-    return false;
-  };
-  if (!next_content_line(line)) return h;
-  std::istringstream first(line);
-  std::string magic;
-  first >> magic;
-  if (magic != "OFF") return h;  // COFF, NOFF, binary OFF...: leave them to OpenMesh
-  std::vector<std::string> tokens;
-  for (std::string t; first >> t;) tokens.push_back(t);
-  while (tokens.size() < 3 && next_content_line(line)) {
-    std::istringstream ls(line);
-    for (std::string t; ls >> t;) tokens.push_back(t);
-  }
-  if (tokens.size() < 3) return h;
-  try {
-    h.vertices = static_cast<std::size_t>(std::stoull(tokens[0]));
-    h.faces = static_cast<std::size_t>(std::stoull(tokens[1]));
-  } catch (...) {
-    return h;
-  }
-  h.ok = true;
-  for (std::size_t v = 0; v < h.vertices && h.bad_vertex.empty(); ++v) {
-    if (!next_content_line(line)) break;  // truncation is reported by the count check
-    std::istringstream ls(line);
-    std::string tok;
-    for (int k = 0; k < 3; ++k) {
-      if (!(ls >> tok)) {
-        h.bad_vertex = fmt::format("line {}: vertex v{} has fewer than 3 coordinates", line_no, v);
-        break;
-      }
-      char* end = nullptr;
-      const double x = std::strtod(tok.c_str(), &end);
-      if (end == tok.c_str() || *end != '\0' || !std::isfinite(x)) {
-        h.bad_vertex = fmt::format("line {}: vertex v{} coordinate '{}' is not a finite number", line_no, v, tok);
-        break;
-      }
-    }
-  }
-  // Face records: "n i0 ... i(n-1)" with n >= 3. OpenMesh repeats the last face when the file
-  // ends early, so the records present are counted here.
-  for (std::size_t f = 0; f < h.faces && h.bad_vertex.empty(); ++f) {
-    if (!next_content_line(line)) {
-      h.faces_present = f;
-      return h;
-    }
-    std::istringstream ls(line);
-    long long n = 0;
-    if (!(ls >> n) || n < 3) {
-      h.bad_vertex = fmt::format("line {}: face f{} does not start with a corner count >= 3", line_no, f);
-      break;
-    }
-    for (long long k = 0; k < n; ++k) {
-      long long idx = 0;
-      if (!(ls >> idx)) {
-        h.bad_vertex = fmt::format("line {}: face f{} lists fewer than {} corners", line_no, f, n);
-        break;
-      }
-    }
-  }
-  h.faces_present = h.faces;
-  return h;
-}
-
-// OpenMesh's OBJ reader skips a vertex line it cannot parse ("v nan 1 0"), which shifts
-// every later index. Find the first such line so the error names it.
-std::string first_bad_obj_vertex(const fs::path& file) {
-  std::ifstream in(file);
-  std::string line;
-  int line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != '\t')) continue;
-    std::istringstream ls(line.substr(2));
-    std::string tok;
-    for (int k = 0; k < 3; ++k) {
-      if (!(ls >> tok)) return fmt::format("line {}: vertex has fewer than 3 coordinates", line_no);
-      char* end = nullptr;
-      const double x = std::strtod(tok.c_str(), &end);
-      if (end == tok.c_str() || *end != '\0' || !std::isfinite(x))
-        return fmt::format("line {}: vertex coordinate '{}' is not a finite number", line_no, tok);
-    }
-  }
-  return {};
-}
-
 }  // namespace
 
 PolygonMesh read_polygon_mesh(const fs::path& file) {
   const std::string name = file.string();
-  std::error_code ec;
-  if (!fs::exists(file, ec)) throw InputError(fmt::format("{}: no such file", name));
-  if (fs::is_directory(file, ec)) throw InputError(fmt::format("{}: is a folder, not a mesh file", name));
   const std::string ext = mesh_format_of(file);
+  std::error_code ec;
+  if (fs::exists(file, ec) && !fs::is_directory(file, ec) && !supported_format(ext))
+    throw InputError(fmt::format("{}: unknown mesh format '.{}' (use .obj, .ply, .off or .stl)", name, ext));
+  const std::int64_t size = check_input_file(file, "mesh");
   if (!supported_format(ext))
     throw InputError(fmt::format("{}: unknown mesh format '.{}' (use .obj, .ply, .off or .stl)", name, ext));
-  {
-    std::ifstream probe(file, std::ios::binary);
-    if (!probe) throw InputError(fmt::format("{}: cannot open for reading", name));
-    if (probe.peek() == std::ifstream::traits_type::eof()) throw InputError(fmt::format("{}: file is empty", name));
-  }
-  SoupImporter importer;
+  // Counts checked against the file's size and the limits before OpenMesh allocates anything.
+  const io::DeclaredCounts declared = io::prescan_mesh_file(file, ext, size);
+  SoupImporter importer(input_limits().mesh_elements);
   OpenMesh::IO::Options opt;
   bool ok = false;
   std::string reader_says;
@@ -276,29 +186,25 @@ PolygonMesh read_polygon_mesh(const fs::path& file) {
     CapturedOpenMeshLog capture;
     try {
       ok = OpenMesh::IO::IOManager().read(name, importer, opt);
+    } catch (const InputError&) {
+      throw;
     } catch (const std::exception& e) {
       ok = false;
       reader_says = e.what();
     }
     if (reader_says.empty()) reader_says = capture.first_error_line();
   }
-  if (ext == "obj") {
-    const std::string bad = first_bad_obj_vertex(file);
-    if (!bad.empty()) throw InputError(fmt::format("{}:{}", name, bad));
-  }
-  const OffHeader off = ext == "off" ? read_off_header(file) : OffHeader{};
-  if (!off.bad_vertex.empty()) throw InputError(fmt::format("{}:{}", name, off.bad_vertex));
+  if (importer.over_limit)
+    check_count(name, "element count", input_limits().mesh_elements + 1, input_limits().mesh_elements, "mesh_elements");
   if (!ok)
     throw InputError(fmt::format("{}: cannot parse as {}{}{}", name, ext, reader_says.empty() ? "" : ": ", reader_says));
   PolygonMesh& m = importer.mesh;
   if (importer.bad_index_faces > 0)
     throw InputError(fmt::format("{}: {} face(s) use vertex indices out of range", name, importer.bad_index_faces));
-  if (off.ok && off.faces_present < off.faces)
-    throw InputError(fmt::format("{}: truncated OFF: header declares {} faces, the file holds {}", name, off.faces,
-                                 off.faces_present));
-  if (off.ok && (m.V.size() != off.vertices || m.faces.size() != off.faces))
+  if (ext == "off" && (static_cast<std::int64_t>(m.V.size()) != declared.vertices ||
+                       static_cast<std::int64_t>(m.faces.size()) != declared.faces))
     throw InputError(fmt::format("{}: truncated or corrupt OFF: header declares {} vertices and {} faces, read {} and {}",
-                                 name, off.vertices, off.faces, m.V.size(), m.faces.size()));
+                                 name, declared.vertices, declared.faces, m.V.size(), m.faces.size()));
   if (m.V.empty() || m.faces.empty())
     throw InputError(fmt::format("{}: no {} in the file", name, m.V.empty() ? "vertices" : "faces"));
   for (std::size_t v = 0; v < m.V.size(); ++v)

@@ -1,6 +1,8 @@
 // kl fields (monograph §3.4, Figs. 3.9–3.10): constant, point heat source with a falloff,
 // pressure from a ground plane, a trilinear 3-D grid, and products / maxima / minima.
 
+#include <meltlab/core/input_file.h>
+#include <meltlab/core/limits.h>
 #include <meltlab/core/error.h>
 #include <meltlab/core/yaml_keys.h>
 #include <meltlab/sim/kl_field.h>
@@ -10,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -284,8 +287,8 @@ KlFieldPtr make_combined_kl(Combine op, std::vector<KlFieldPtr> parts) {
 //   values                (then NX*NY*NZ numbers in [0, 1], x fastest, then y, then z)
 KlGrid read_kl_grid(const std::filesystem::path& file) {
   const std::string name = file.string();
-  std::ifstream in(file);
-  if (!in) throw InputError(fmt::format("{}: cannot open kl grid file", name));
+  const std::string text = read_text_file(file, "kl grid");
+  std::istringstream in(text);
   KlGrid g;
   std::string line;
   int line_no = 0;
@@ -318,7 +321,14 @@ KlGrid read_kl_grid(const std::filesystem::path& file) {
     } else if (key == "dims") {
       if (!(ls >> g.dims[0] >> g.dims[1] >> g.dims[2]) || g.dims[0] < 1 || g.dims[1] < 1 || g.dims[2] < 1)
         throw InputError(fmt::format("{}:{}: 'dims' needs three integers >= 1", name, line_no));
-      expected = static_cast<std::size_t>(g.dims[0]) * static_cast<std::size_t>(g.dims[1]) * static_cast<std::size_t>(g.dims[2]);
+      const std::int64_t n = checked_mul(checked_mul(g.dims[0], g.dims[1]), g.dims[2]);
+      check_count(fmt::format("{}:{}", name, line_no), "grid sample count", n < 0 ? INT64_MAX : n,
+                  input_limits().volume_samples, "volume_samples");
+      // Every value takes at least two bytes ("0 "): a header claiming more is lying.
+      if (2 * n > static_cast<std::int64_t>(text.size()) + 1)
+        throw InputError(fmt::format("{}:{}: dims {}x{}x{} need {} values; the file has only {} bytes", name, line_no,
+                                     g.dims[0], g.dims[1], g.dims[2], n, text.size()));
+      expected = static_cast<std::size_t>(n);
       have_dims = true;
     } else if (key == "origin") {
       if (!(ls >> g.origin.x() >> g.origin.y() >> g.origin.z()) || !g.origin.allFinite())
@@ -423,11 +433,10 @@ KlFieldPtr parse_kl_field(const YAML::Node& node, const std::string& source, con
 
 KlFieldPtr load_kl_field(const std::filesystem::path& file, const KlContext& ctx) {
   const std::string name = file.string();
-  std::error_code ec;
-  if (!std::filesystem::exists(file, ec)) throw InputError(fmt::format("{}: no such file", name));
+  const std::string text = read_text_file(file, "kl field");
   YAML::Node root;
   try {
-    root = YAML::LoadFile(name);
+    root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw InputError(fmt::format("{}:{}: invalid YAML: {}", name, e.mark.line + 1, e.msg));
   }

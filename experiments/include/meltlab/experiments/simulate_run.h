@@ -5,6 +5,7 @@
 //   DIR/run.json          parameters (as given and resolved), versions, timings, result
 // Every input is validated before DIR is touched; every file is written atomically.
 
+#include <meltlab/core/run_folder.h>
 #include <meltlab/sim/melt.h>
 #include <meltlab/sim/mesh_io.h>
 #include <meltlab/verify/compare.h>
@@ -78,6 +79,7 @@ struct PreparedSimulation {
   sim::MeltParams params;    ///< absolute units
   sim::KlFieldPtr kl;
   nlohmann::json mesh_json;
+  std::optional<RunFolder> output;  ///< the run folder (prepared with check_output)
 };
 
 /// Validates everything (mesh, kl file, numbers, output folder) and throws InputError on
