@@ -18,6 +18,12 @@ endif()
 if(MELTLAB_WERROR)
   target_compile_options(meltlab_flags INTERFACE -Werror)
 endif()
+if(MELTLAB_FUZZ)
+  # libFuzzer builds (clang only, scripts/fuzz): every library is instrumented for coverage and
+  # built with ASan + UBSan; the fuzz_* programs add libFuzzer's main (tests/fuzz).
+  target_compile_options(meltlab_flags INTERFACE -fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer -g)
+  target_link_options(meltlab_flags INTERFACE -fsanitize=address,undefined)
+endif()
 if(MELTLAB_SANITIZE)
   target_compile_options(meltlab_flags INTERFACE
     -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer

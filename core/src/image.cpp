@@ -1,6 +1,7 @@
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
 #include <meltlab/core/image.h>
+#include <meltlab/core/stderr_capture.h>
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -41,14 +42,6 @@ std::string lower_extension(const fs::path& file) {
   std::string ext = file.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
   return ext;
-}
-
-/// OIIO messages may span several lines; our errors are one line.
-std::string one_line(std::string text) {
-  std::replace(text.begin(), text.end(), '\n', ' ');
-  std::erase(text, '\r');
-  while (!text.empty() && text.back() == ' ') text.pop_back();
-  return text.empty() ? std::string("unknown error") : text;
 }
 
 void check_shape(const fs::path& file, int width, int height, int channels) {

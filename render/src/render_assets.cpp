@@ -5,6 +5,7 @@
 #include <meltlab/core/error.h>
 #include <meltlab/core/input_file.h>
 #include <meltlab/core/limits.h>
+#include <meltlab/core/stderr_capture.h>
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -224,8 +225,9 @@ void write_gray_png(const std::filesystem::path& file, const std::vector<float>&
 
 RgbImage read_rgb_image(const std::filesystem::path& file) {
   check_input_file(file, "image");
+  const StderrCapture quiet;  // libpng prints its errors itself; ours is the one line
   auto in = OIIO::ImageInput::open(file.string());
-  if (!in) throw InputError(fmt::format("{}: cannot read image: {}", file.string(), OIIO::geterror()));
+  if (!in) throw InputError(fmt::format("{}: cannot read image: {}", file.string(), one_line(OIIO::geterror())));
   const OIIO::ImageSpec spec = in->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1)
     throw InputError(fmt::format("{}: the image holds no pixels", file.string()));
@@ -236,7 +238,7 @@ RgbImage read_rgb_image(const std::filesystem::path& file) {
                                  file.string(), spec.width, spec.height, spec.nchannels, input_limits().image_pixels));
   std::vector<float> px(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data()))
-    throw InputError(fmt::format("{}: cannot read image: {}", file.string(), in->geterror()));
+    throw InputError(fmt::format("{}: cannot read image: {}", file.string(), one_line(in->geterror())));
   in->close();
   RgbImage img(spec.width, spec.height);
   const int grey = spec.nchannels < 3;  // 1 or 2 channels: grey (+ alpha)

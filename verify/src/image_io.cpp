@@ -10,6 +10,7 @@
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
 #include <meltlab/core/limits.h>
+#include <meltlab/core/stderr_capture.h>
 #include <meltlab/verify/observations.h>
 
 #include <OpenImageIO/imageio.h>
@@ -25,21 +26,6 @@ namespace meltlab::verify {
 namespace fs = std::filesystem;
 
 namespace {
-
-/// OIIO messages may span several lines; our errors are one line.
-std::string one_line(std::string text) {
-  while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) text.pop_back();
-  std::string out;
-  out.reserve(text.size());
-  for (const char c : text) {
-    if (c == '\n') {
-      out += "; ";
-    } else if (c != '\r') {
-      out += c;
-    }
-  }
-  return out.empty() ? std::string("unknown error") : out;
-}
 
 /// The first error pending in `in` or, failing that, in OIIO's global state; both are
 /// cleared so that OIIO does not complain about unretrieved errors later.
@@ -99,6 +85,7 @@ std::unique_ptr<OIIO::ImageInput> open_image(const fs::path& file) {
 namespace detail {
 
 cv::Size read_image_size(const fs::path& file) {
+  const StderrCapture quiet;
   auto in = open_image(file);
   const cv::Size size(in->spec().width, in->spec().height);
   in->close();
@@ -109,6 +96,7 @@ cv::Size read_image_size(const fs::path& file) {
 }  // namespace detail
 
 cv::Mat read_image(const fs::path& file) {
+  const StderrCapture quiet;  // libpng prints its errors itself; ours is the one line
   auto in = open_image(file);
   const OIIO::ImageSpec spec = in->spec();
 

@@ -165,19 +165,10 @@ class CapturedOpenMeshLog {
   std::ostringstream* buffer_ = nullptr;
 };
 
-}  // namespace
-
-PolygonMesh read_polygon_mesh(const fs::path& file) {
+PolygonMesh read_with_openmesh(const fs::path& file, const std::string& ext, std::int64_t size) {
   const std::string name = file.string();
-  const std::string ext = mesh_format_of(file);
-  std::error_code ec;
-  if (fs::exists(file, ec) && !fs::is_directory(file, ec) && !supported_format(ext))
-    throw InputError(fmt::format("{}: unknown mesh format '.{}' (use .obj, .ply, .off or .stl)", name, ext));
-  const std::int64_t size = check_input_file(file, "mesh");
-  if (!supported_format(ext))
-    throw InputError(fmt::format("{}: unknown mesh format '.{}' (use .obj, .ply, .off or .stl)", name, ext));
   // Counts checked against the file's size and the limits before OpenMesh allocates anything.
-  const io::DeclaredCounts declared = io::prescan_mesh_file(file, ext, size);
+  io::prescan_mesh_file(file, ext, size);
   SoupImporter importer(input_limits().mesh_elements);
   OpenMesh::IO::Options opt;
   bool ok = false;
@@ -198,13 +189,28 @@ PolygonMesh read_polygon_mesh(const fs::path& file) {
     check_count(name, "element count", input_limits().mesh_elements + 1, input_limits().mesh_elements, "mesh_elements");
   if (!ok)
     throw InputError(fmt::format("{}: cannot parse as {}{}{}", name, ext, reader_says.empty() ? "" : ": ", reader_says));
-  PolygonMesh& m = importer.mesh;
   if (importer.bad_index_faces > 0)
     throw InputError(fmt::format("{}: {} face(s) use vertex indices out of range", name, importer.bad_index_faces));
-  if (ext == "off" && (static_cast<std::int64_t>(m.V.size()) != declared.vertices ||
-                       static_cast<std::int64_t>(m.faces.size()) != declared.faces))
-    throw InputError(fmt::format("{}: truncated or corrupt OFF: header declares {} vertices and {} faces, read {} and {}",
-                                 name, declared.vertices, declared.faces, m.V.size(), m.faces.size()));
+  return std::move(importer.mesh);
+}
+
+}  // namespace
+
+PolygonMesh read_polygon_mesh(const fs::path& file) {
+  const std::string name = file.string();
+  const std::string ext = mesh_format_of(file);
+  std::error_code ec;
+  if (fs::exists(file, ec) && !fs::is_directory(file, ec) && !supported_format(ext))
+    throw InputError(fmt::format("{}: unknown mesh format '.{}' (use .obj, .ply, .off or .stl)", name, ext));
+  const std::int64_t size = check_input_file(file, "mesh");
+  if (!supported_format(ext))
+    throw InputError(fmt::format("{}: unknown mesh format '.{}' (use .obj, .ply, .off or .stl)", name, ext));
+  PolygonMesh m;
+  if (ext == "off") {
+    m = io::read_off(file, size);
+  } else {
+    m = read_with_openmesh(file, ext, size);
+  }
   if (m.V.empty() || m.faces.empty())
     throw InputError(fmt::format("{}: no {} in the file", name, m.V.empty() ? "vertices" : "faces"));
   for (std::size_t v = 0; v < m.V.size(); ++v)
@@ -213,6 +219,7 @@ PolygonMesh read_polygon_mesh(const fs::path& file) {
                                    m.V[v].y(), m.V[v].z()));
   return m;
 }
+
 
 LoadedMesh load_mesh(const fs::path& file, const LoadOptions& options) {
   LoadedMesh out;

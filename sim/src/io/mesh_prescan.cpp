@@ -36,6 +36,15 @@ std::optional<std::int64_t> parse_int(std::string_view tok) {
   return v;
 }
 
+/// A coordinate as OpenMesh's readers store it (a float, widened): the meshes read before this
+/// reader existed stay bitwise the same.
+std::optional<double> parse_coordinate(const std::string& tok) {
+  char* end = nullptr;
+  const float x = std::strtof(tok.c_str(), &end);
+  if (end == tok.c_str() || *end != '\0' || !std::isfinite(x)) return std::nullopt;
+  return static_cast<double>(x);
+}
+
 bool finite_number(const std::string& tok) {
   char* end = nullptr;
   const double x = std::strtod(tok.c_str(), &end);
@@ -108,7 +117,7 @@ OffMagic parse_off_magic(std::string_view first_line) {
   return m;
 }
 
-DeclaredCounts prescan_off_ascii(const fs::path& file, std::int64_t file_size) {
+PolygonMesh read_off_ascii(const fs::path& file, std::int64_t file_size) {
   const std::string name = file.string();
   LineReader in(file, true);
   std::string line;
@@ -131,16 +140,24 @@ DeclaredCounts prescan_off_ascii(const fs::path& file, std::int64_t file_size) {
     throw InputError(fmt::format("{}: truncated OFF: header declares {} vertices and {} faces, which need at least {} bytes; "
                                  "the file has {}",
                                  at(name, header_line), *v, *f, need, file_size));
+  PolygonMesh mesh;
+  mesh.V.reserve(static_cast<std::size_t>(*v));  // bounded: 6 bytes of file per vertex
+  mesh.faces.reserve(static_cast<std::size_t>(*f));
   for (std::int64_t k = 0; k < *v; ++k) {
     if (!in.next(line))
       throw InputError(fmt::format("{}: truncated OFF: header declares {} vertices, the file holds {}", name, *v, k));
     const auto toks = tokens_of(line);
     if (toks.size() < 3)
       throw InputError(fmt::format("{}:line {}: vertex v{} has fewer than 3 coordinates", name, in.line(), k));
-    for (int c = 0; c < 3; ++c)
-      if (!finite_number(toks[static_cast<std::size_t>(c)]))
+    std::array<double, 3> p{};
+    for (std::size_t c = 0; c < 3; ++c) {
+      const auto x = parse_coordinate(toks[c]);
+      if (!x)
         throw InputError(fmt::format("{}:line {}: vertex v{} coordinate '{}' is not a finite number", name, in.line(), k,
-                                     toks[static_cast<std::size_t>(c)]));
+                                     toks[c]));
+      p[c] = *x;
+    }
+    mesh.V.emplace_back(p[0], p[1], p[2]);
   }
   for (std::int64_t k = 0; k < *f; ++k) {
     if (!in.next(line))
@@ -151,17 +168,21 @@ DeclaredCounts prescan_off_ascii(const fs::path& file, std::int64_t file_size) {
       throw InputError(fmt::format("{}:line {}: face f{} does not start with a corner count >= 3", name, in.line(), k));
     if (*n > static_cast<std::int64_t>(toks.size()) - 1)
       throw InputError(fmt::format("{}:line {}: face f{} lists fewer than {} corners", name, in.line(), k, *n));
+    PolygonFace face;
+    face.outer.reserve(static_cast<std::size_t>(*n));
     for (std::int64_t c = 1; c <= *n; ++c) {
       const auto idx = parse_int(toks[static_cast<std::size_t>(c)]);
       if (!idx || *idx < 0 || *idx >= *v)
         throw InputError(fmt::format("{}:line {}: face f{} corner '{}' is not a vertex index in [0, {})", name, in.line(),
                                      k, toks[static_cast<std::size_t>(c)], *v));
+      face.outer.push_back(static_cast<Index>(*idx));
     }
+    mesh.faces.push_back(std::move(face));
   }
-  return {*v, *f};
+  return mesh;
 }
 
-DeclaredCounts prescan_off_binary(const fs::path& file, const OffMagic& m, std::int64_t file_size) {
+PolygonMesh read_off_binary(const fs::path& file, const OffMagic& m, std::int64_t file_size) {
   const std::string name = file.string();
   if (m.colours)
     throw InputError(fmt::format("{}: binary OFF with colours is not supported (convert it to ASCII OFF or PLY)", name));
@@ -185,24 +206,42 @@ DeclaredCounts prescan_off_binary(const fs::path& file, const OffMagic& m, std::
     throw InputError(fmt::format("{}: truncated binary OFF: header declares {} vertices and {} faces, which need at least {} "
                                  "bytes; the file holds {} after the header",
                                  name, v, f, vertex_bytes * v + 16 * std::int64_t{f}, body));
-  in.seekg(vertex_bytes * v, std::ios::cur);
+  PolygonMesh mesh;
+  mesh.V.reserve(v);  // bounded by the size check above
+  mesh.faces.reserve(f);
+  for (std::uint32_t k = 0; k < v; ++k) {
+    std::array<double, 3> p{};
+    for (double& x : p) {
+      std::uint32_t bits = 0;
+      read_u32(bits);
+      x = static_cast<double>(std::bit_cast<float>(bits));
+    }
+    mesh.V.emplace_back(p[0], p[1], p[2]);
+    in.seekg(vertex_bytes - 12, std::ios::cur);
+  }
   for (std::uint32_t k = 0; k < f; ++k) {
     std::uint32_t n = 0;
     if (!read_u32(n)) throw InputError(fmt::format("{}: truncated binary OFF: face f{} is missing", name, k));
     const std::int64_t left = file_size - static_cast<std::int64_t>(in.tellg());
     if (n < 3 || 4 * std::int64_t{n} > left)
       throw InputError(fmt::format("{}: binary OFF face f{} declares {} corners ({} bytes are left)", name, k, n, left));
+    PolygonFace face;
+    face.outer.reserve(n);
     for (std::uint32_t c = 0; c < n; ++c) {
       std::uint32_t idx = 0;
       read_u32(idx);
       if (idx >= v)
         throw InputError(fmt::format("{}: binary OFF face f{} corner {} is not a vertex index in [0, {})", name, k, idx, v));
+      face.outer.push_back(static_cast<Index>(idx));
     }
+    mesh.faces.push_back(std::move(face));
   }
-  return {v, f};
+  return mesh;
 }
 
-DeclaredCounts prescan_off(const fs::path& file, std::int64_t file_size) {
+}  // namespace
+
+PolygonMesh read_off(const fs::path& file, std::int64_t file_size) {
   const std::string name = file.string();
   std::string first;
   {
@@ -212,8 +251,10 @@ DeclaredCounts prescan_off(const fs::path& file, std::int64_t file_size) {
   const OffMagic m = parse_off_magic(first);
   if (!m.ok) throw InputError(fmt::format("{}: not an OFF file (the first line is not an OFF header)", name));
   if (m.other_dimension) throw InputError(fmt::format("{}: OFF with a vertex dimension other than 3 is not supported", name));
-  return m.binary ? prescan_off_binary(file, m, file_size) : prescan_off_ascii(file, file_size);
+  return m.binary ? read_off_binary(file, m, file_size) : read_off_ascii(file, file_size);
 }
+
+namespace {
 
 // ---- PLY ------------------------------------------------------------------------------------
 
@@ -446,7 +487,6 @@ DeclaredCounts prescan_stl(const fs::path& file, std::int64_t file_size) {
 }  // namespace
 
 DeclaredCounts prescan_mesh_file(const fs::path& file, const std::string& ext, std::int64_t file_size) {
-  if (ext == "off") return prescan_off(file, file_size);
   if (ext == "ply") return prescan_ply(file, file_size);
   if (ext == "obj") return prescan_obj(file);
   if (ext == "stl") return prescan_stl(file, file_size);
