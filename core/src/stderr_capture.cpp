@@ -51,18 +51,5 @@ std::string StderrCapture::text() const {
   return out;
 }
 
-std::string one_line(std::string text) {
-  std::string out;
-  out.reserve(text.size());
-  for (const char c : text) {
-    if (c == '\n') {
-      if (!out.empty() && out.back() != ' ') out += "; ";
-    } else if (c != '\r') {
-      out += c;
-    }
-  }
-  while (!out.empty() && (out.back() == ' ' || out.back() == ';')) out.pop_back();
-  return out.empty() ? std::string("unknown error") : out;
-}
 
 }  // namespace meltlab

@@ -1,5 +1,6 @@
 // Reading datasets/catalog.yaml (catalog.h) and the folders datasets live in.
 
+#include <meltlab/core/yaml_keys.h>
 #include <meltlab/core/input_file.h>
 #include <meltlab/datasets/catalog.h>
 #include <meltlab/datasets/molds.h>
@@ -121,7 +122,17 @@ DatasetEntry parse_entry(const YAML::Node& node, const std::string& file) {
 
 namespace detail {
 
+CatalogFile read_catalog_checked(const fs::path& yaml_file);
+
 CatalogFile read_catalog(const fs::path& yaml_file) {
+  try {
+    return read_catalog_checked(yaml_file);
+  } catch (const YAML::Exception& e) {
+    throw yaml_error(yaml_file.string(), e, "bad value");
+  }
+}
+
+CatalogFile read_catalog_checked(const fs::path& yaml_file) {
   const std::string file = yaml_file.string();
   std::error_code ec;
   if (!fs::is_regular_file(yaml_file, ec))
@@ -134,7 +145,7 @@ CatalogFile read_catalog(const fs::path& yaml_file) {
   try {
     root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw InputError(fmt::format("{}: line {}: {}", file, e.mark.line + 1, e.msg));
+    throw yaml_error(file, e);
   }
   if (!root.IsMap()) throw InputError(fmt::format("{}: the catalog must be a map with 'archive' and 'datasets'", file));
   for (const auto& kv : root) {

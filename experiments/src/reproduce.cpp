@@ -1,3 +1,4 @@
+#include <meltlab/core/yaml_keys.h>
 #include <meltlab/core/input_file.h>
 #include <meltlab/core/hash.h>
 #include <meltlab/experiments/reproduce.h>
@@ -77,7 +78,7 @@ ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) 
   try {
     root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw InputError(fmt::format("{}: line {}: {}", config.string(), e.mark.line + 1, e.msg));
+    throw yaml_error(config.string(), e);
   }
   if (!root.IsMap()) throw InputError(fmt::format("{}: not a YAML map", config.string()));
   static const std::set<std::string> known{"name", "title", "sources", "inputs", "vars", "steps", "notes", "exclusive", "modes"};
@@ -261,7 +262,12 @@ std::vector<ReproduceExperiment> load_reproduce_experiments(const ReproduceOptio
   std::vector<ReproduceExperiment> all;
   std::set<std::string> names;
   for (const auto& f : files) {
-    auto e = load_one(f, o);
+    ReproduceExperiment e;
+    try {
+      e = load_one(f, o);
+    } catch (const YAML::Exception& ex) {
+      throw yaml_error(f.string(), ex, "bad value");
+    }
     if (!names.insert(e.name).second) throw InputError(fmt::format("{}: experiment name '{}' used twice", f.string(), e.name));
     all.push_back(std::move(e));
   }

@@ -1,5 +1,6 @@
 // Procedural assets and image files of the ice/liquid renderer (render_assets.h).
 
+#include <meltlab/core/image_header.h>
 #include <meltlab/render/render_assets.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
@@ -225,6 +226,7 @@ void write_gray_png(const std::filesystem::path& file, const std::vector<float>&
 
 RgbImage read_rgb_image(const std::filesystem::path& file) {
   check_input_file(file, "image");
+  check_declared_image_size(file);  // before OpenImageIO allocates anything from the header
   const StderrCapture quiet;  // libpng prints its errors itself; ours is the one line
   auto in = OIIO::ImageInput::open(file.string());
   if (!in) throw InputError(fmt::format("{}: cannot read image: {}", file.string(), one_line(OIIO::geterror())));

@@ -219,9 +219,13 @@ RenderScene load_render_scene(const std::string& yaml_file) {
   try {
     root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw InputError(fmt::format("{}:{}: YAML syntax error: {}", yaml_file, e.mark.line + 1, e.msg));
+    throw yaml_error(yaml_file, e, "YAML syntax error");
   }
-  return parse_render_scene(root, yaml_file);
+  try {
+    return parse_render_scene(root, yaml_file);
+  } catch (const YAML::Exception& e) {
+    throw yaml_error(yaml_file, e, "bad value");
+  }
 }
 
 Pinhole auto_camera(const Vec3d& lower, const Vec3d& upper, int width, int height) {

@@ -10,10 +10,20 @@
 #include <iterator>
 #include <vector>
 
+#include <sys/resource.h>
+
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size);
 
 int main(int argc, char** argv) {
   namespace fs = std::filesystem;
+#if !defined(__SANITIZE_ADDRESS__)
+  // Address space capped as libFuzzer's -rss_limit_mb does, so an input that makes a reader
+  // allocate without bound fails here too (AddressSanitizer reserves terabytes of address space
+  // and has its own allocation checks, so the cap is left out under it).
+  constexpr rlim_t kAddressSpaceBytes = rlim_t{3} << 30;
+  const rlimit cap{kAddressSpaceBytes, kAddressSpaceBytes};
+  setrlimit(RLIMIT_AS, &cap);
+#endif
   std::vector<fs::path> files;
   for (int i = 1; i < argc; ++i) {
     const fs::path p = argv[i];

@@ -7,6 +7,7 @@
 
 #include "obs_detail.h"
 
+#include <meltlab/core/image_header.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
 #include <meltlab/core/limits.h>
@@ -51,6 +52,7 @@ void check_file(const fs::path& file) {
 /// Opens `file` with OIIO and validates its header.
 std::unique_ptr<OIIO::ImageInput> open_image(const fs::path& file) {
   check_file(file);
+  check_declared_image_size(file);  // before OpenImageIO allocates anything from the header
   // Colours as stored: no premultiplication by alpha (OIIO associates alpha by default).
   OIIO::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);

@@ -20,6 +20,7 @@
 
 #include "obs_detail.h"
 
+#include <meltlab/core/yaml_keys.h>
 #include <meltlab/core/input_file.h>
 #include <meltlab/render/camera.h>
 #include <meltlab/core/error.h>
@@ -160,7 +161,9 @@ YAML::Node load_yaml(const fs::path& manifest, const std::string& file) {
       const auto line = 1 + std::count(content.begin(), content.begin() + static_cast<std::ptrdiff_t>(upto), '\n');
       std::string what = e.what();
       if (const auto pos = what.find("parse error"); pos != std::string::npos) what = what.substr(pos);
-      throw InputError(fmt::format("{}:{}: JSON syntax error: {}", file, line, what));
+      throw InputError(fmt::format("{}:{}: JSON syntax error: {}", file, line, one_line(what)));
+    } catch (const nlohmann::json::exception& e) {  // e.g. a number too large for a double
+      throw InputError(fmt::format("{}: JSON error: {}", file, one_line(e.what())));
     }
     // YAML refuses tabs in some places where JSON allows them; they are plain whitespace
     // in JSON outside strings, and inside strings JSON requires them escaped.
@@ -172,8 +175,7 @@ YAML::Node load_yaml(const fs::path& manifest, const std::string& file) {
     YAML::Node root = YAML::Load(content);
     return root;
   } catch (const YAML::Exception& e) {
-    throw InputError(fmt::format("{}: {} syntax error: {}", (e.mark.line >= 0 ? fmt::format("{}:{}", file, e.mark.line + 1) : file),
-                                 ext == ".json" ? "JSON" : "YAML", e.msg));
+    throw yaml_error(file, e, ext == ".json" ? "JSON syntax error" : "YAML syntax error");
   }
 }
 
@@ -312,7 +314,17 @@ std::vector<FrameEntry> parse_frames(const Ctx& ctx, const YAML::Node& n) {
 
 }  // namespace
 
+ObservationSequence load_observations_checked(const fs::path& manifest);
+
 ObservationSequence load_observations(const fs::path& manifest) {
+  try {
+    return load_observations_checked(manifest);
+  } catch (const YAML::Exception& e) {
+    throw yaml_error(manifest.string(), e, "bad value");
+  }
+}
+
+ObservationSequence load_observations_checked(const fs::path& manifest) {
   Ctx ctx;
   ctx.file = manifest.string();
   std::error_code ec;
@@ -359,7 +371,7 @@ ObservationSequence load_observations(const fs::path& manifest) {
       if (rest.rfind(": ", 0) == 0) rest = rest.substr(2);
       ctx.fail(cam, fmt::format("'camera': {}", rest));
     } catch (const YAML::Exception& e) {
-      ctx.fail(cam, fmt::format("'camera': {}", e.msg));
+      ctx.fail(cam, fmt::format("'camera': {}", one_line(e.msg)));
     }
   }
   if (root["roi"]) seq.roi = parse_roi(ctx, root["roi"]);

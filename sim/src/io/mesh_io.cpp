@@ -1,8 +1,7 @@
-// Mesh files through OpenMesh's IO layer. Reading uses a custom importer that records the
-// raw polygons (OpenMesh's own mesh types would build half-edges and silently drop faces
-// that make the surface non-manifold, which is exactly what we must report).
+// Mesh files: read by our own readers (mesh_readers.h says why not OpenMesh's), written through
+// OpenMesh's IO layer.
 
-#include "mesh_prescan.h"
+#include "mesh_readers.h"
 
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/input_file.h>
@@ -12,9 +11,7 @@
 #include <meltlab/sim/mesh_io.h>
 #include <meltlab/sim/quality.h>
 
-#include <OpenMesh/Core/IO/IOManager.hh>
 #include <OpenMesh/Core/IO/MeshIO.hh>
-#include <OpenMesh/Core/IO/importer/BaseImporter.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <fmt/format.h>
 
@@ -43,90 +40,6 @@ bool supported_format(const std::string& ext) {
 }
 
 // Collects vertices and polygons exactly as the reader delivers them.
-// Stops taking elements beyond `limit` (a guard behind the prescan: whatever a reader believes
-// about a file, it cannot make us store more than the limit allows).
-class SoupImporter final : public OpenMesh::IO::BaseImporter {
- public:
-  explicit SoupImporter(std::int64_t limit) : limit_(static_cast<std::size_t>(limit)) {}
-  PolygonMesh mesh;
-  std::size_t bad_index_faces = 0;
-  bool over_limit = false;
-
-  OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3f& p) override {
-    return add_vertex(OpenMesh::Vec3d(static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2])));
-  }
-  OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3d& p) override {
-    if (mesh.V.size() >= limit_) {
-      over_limit = true;
-      return OpenMesh::VertexHandle();
-    }
-    mesh.V.emplace_back(p[0], p[1], p[2]);
-    return OpenMesh::VertexHandle(static_cast<int>(mesh.V.size() - 1));
-  }
-  OpenMesh::VertexHandle add_vertex() override { return add_vertex(OpenMesh::Vec3d(0, 0, 0)); }
-  OpenMesh::HalfedgeHandle add_edge(OpenMesh::VertexHandle, OpenMesh::VertexHandle) override { return OpenMesh::HalfedgeHandle(); }
-  OpenMesh::FaceHandle add_face(const VHandles& idx) override {
-    if (mesh.faces.size() >= limit_) {
-      over_limit = true;
-      return OpenMesh::FaceHandle();
-    }
-    PolygonFace f;
-    f.outer.reserve(idx.size());
-    for (const auto& vh : idx) {
-      if (!vh.is_valid() || static_cast<std::size_t>(vh.idx()) >= mesh.V.size()) {
-        ++bad_index_faces;
-        return OpenMesh::FaceHandle();
-      }
-      f.outer.push_back(vh.idx());
-    }
-    mesh.faces.push_back(std::move(f));
-    return OpenMesh::FaceHandle(static_cast<int>(mesh.faces.size() - 1));
-  }
-  OpenMesh::FaceHandle add_face(OpenMesh::HalfedgeHandle) override { return OpenMesh::FaceHandle(); }
-  void add_face_texcoords(OpenMesh::FaceHandle, OpenMesh::VertexHandle, const std::vector<OpenMesh::Vec2f>&) override {}
-  void add_face_texcoords(OpenMesh::FaceHandle, OpenMesh::VertexHandle, const std::vector<OpenMesh::Vec3f>&) override {}
-  void set_face_texindex(OpenMesh::FaceHandle, int) override {}
-  void set_point(OpenMesh::VertexHandle vh, const OpenMesh::Vec3f& p) override {
-    if (vh.is_valid() && static_cast<std::size_t>(vh.idx()) < mesh.V.size())
-      mesh.V[static_cast<std::size_t>(vh.idx())] = Vec3<double>(p[0], p[1], p[2]);
-  }
-  void set_halfedge(OpenMesh::VertexHandle, OpenMesh::HalfedgeHandle) override {}
-  void set_normal(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
-  void set_normal(OpenMesh::VertexHandle, const OpenMesh::Vec3d&) override {}
-  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec3uc&) override {}
-  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec4uc&) override {}
-  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
-  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec4f&) override {}
-  void set_texcoord(OpenMesh::VertexHandle, const OpenMesh::Vec2f&) override {}
-  void set_status(OpenMesh::VertexHandle, const OpenMesh::Attributes::StatusInfo&) override {}
-  void set_next(OpenMesh::HalfedgeHandle, OpenMesh::HalfedgeHandle) override {}
-  void set_face(OpenMesh::HalfedgeHandle, OpenMesh::FaceHandle) override {}
-  void request_face_texcoords2D() override {}
-  void set_texcoord(OpenMesh::HalfedgeHandle, const OpenMesh::Vec2f&) override {}
-  void set_texcoord(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
-  void set_texcoord(OpenMesh::HalfedgeHandle, const OpenMesh::Vec3f&) override {}
-  void set_status(OpenMesh::HalfedgeHandle, const OpenMesh::Attributes::StatusInfo&) override {}
-  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec3uc&) override {}
-  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec4uc&) override {}
-  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec3f&) override {}
-  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec4f&) override {}
-  void set_status(OpenMesh::EdgeHandle, const OpenMesh::Attributes::StatusInfo&) override {}
-  void set_normal(OpenMesh::FaceHandle, const OpenMesh::Vec3f&) override {}
-  void set_normal(OpenMesh::FaceHandle, const OpenMesh::Vec3d&) override {}
-  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec3uc&) override {}
-  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec4uc&) override {}
-  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec3f&) override {}
-  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec4f&) override {}
-  void set_status(OpenMesh::FaceHandle, const OpenMesh::Attributes::StatusInfo&) override {}
-  void add_texture_information(int, std::string) override {}
-  std::size_t n_vertices() const override { return mesh.V.size(); }
-  std::size_t n_faces() const override { return mesh.faces.size(); }
-  std::size_t n_edges() const override { return 0; }
-
- private:
-  std::size_t limit_;
-};
-
 // OpenMesh reports parse problems on its own log streams (omerr -> std::cerr, omlog ->
 // std::clog, omout -> std::cout). They are redirected once, for the whole process, into a
 // buffer that each read or write clears and inspects, so our one-line error can say what
@@ -165,35 +78,6 @@ class CapturedOpenMeshLog {
   std::ostringstream* buffer_ = nullptr;
 };
 
-PolygonMesh read_with_openmesh(const fs::path& file, const std::string& ext, std::int64_t size) {
-  const std::string name = file.string();
-  // Counts checked against the file's size and the limits before OpenMesh allocates anything.
-  io::prescan_mesh_file(file, ext, size);
-  SoupImporter importer(input_limits().mesh_elements);
-  OpenMesh::IO::Options opt;
-  bool ok = false;
-  std::string reader_says;
-  {
-    CapturedOpenMeshLog capture;
-    try {
-      ok = OpenMesh::IO::IOManager().read(name, importer, opt);
-    } catch (const InputError&) {
-      throw;
-    } catch (const std::exception& e) {
-      ok = false;
-      reader_says = e.what();
-    }
-    if (reader_says.empty()) reader_says = capture.first_error_line();
-  }
-  if (importer.over_limit)
-    check_count(name, "element count", input_limits().mesh_elements + 1, input_limits().mesh_elements, "mesh_elements");
-  if (!ok)
-    throw InputError(fmt::format("{}: cannot parse as {}{}{}", name, ext, reader_says.empty() ? "" : ": ", reader_says));
-  if (importer.bad_index_faces > 0)
-    throw InputError(fmt::format("{}: {} face(s) use vertex indices out of range", name, importer.bad_index_faces));
-  return std::move(importer.mesh);
-}
-
 }  // namespace
 
 PolygonMesh read_polygon_mesh(const fs::path& file) {
@@ -205,12 +89,10 @@ PolygonMesh read_polygon_mesh(const fs::path& file) {
   const std::int64_t size = check_input_file(file, "mesh");
   if (!supported_format(ext))
     throw InputError(fmt::format("{}: unknown mesh format '.{}' (use .obj, .ply, .off or .stl)", name, ext));
-  PolygonMesh m;
-  if (ext == "off") {
-    m = io::read_off(file, size);
-  } else {
-    m = read_with_openmesh(file, ext, size);
-  }
+  PolygonMesh m = ext == "off"   ? io::read_off(file, size)
+                  : ext == "ply" ? io::read_ply(file, size)
+                  : ext == "obj" ? io::read_obj(file)
+                                 : io::read_stl(file, size);
   if (m.V.empty() || m.faces.empty())
     throw InputError(fmt::format("{}: no {} in the file", name, m.V.empty() ? "vertices" : "faces"));
   for (std::size_t v = 0; v < m.V.size(); ++v)

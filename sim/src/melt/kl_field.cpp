@@ -438,7 +438,7 @@ KlFieldPtr load_kl_field(const std::filesystem::path& file, const KlContext& ctx
   try {
     root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw InputError(fmt::format("{}:{}: invalid YAML: {}", name, e.mark.line + 1, e.msg));
+    throw yaml_error(name, e);
   }
   if (!root || !root.IsMap() || !root["kl"])
     throw InputError(fmt::format("{}: expected a top-level key 'kl'", name));
@@ -448,7 +448,11 @@ KlFieldPtr load_kl_field(const std::filesystem::path& file, const KlContext& ctx
   }
   KlContext c = ctx;
   if (c.base_dir.empty()) c.base_dir = file.parent_path();
-  return parse_kl_field(root["kl"], name, c);
+  try {
+    return parse_kl_field(root["kl"], name, c);
+  } catch (const YAML::Exception& e) {
+    throw yaml_error(name, e, "bad value");
+  }
 }
 
 }  // namespace meltlab::sim

@@ -36,4 +36,20 @@ class InvariantError : public Error {
   using Error::Error;
 };
 
+/// Joins the lines of a library's message into one ("a; b"), without trailing blanks: meltlab's
+/// errors are one line, whatever a library (or a hostile input echoed by it) puts in them.
+inline std::string one_line(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    if (c == '\n') {
+      if (!out.empty() && out.back() != ' ') out += "; ";
+    } else if (c != '\r') {
+      out += c;
+    }
+  }
+  while (!out.empty() && (out.back() == ' ' || out.back() == ';')) out.pop_back();
+  return out.empty() ? std::string("unknown error") : out;
+}
+
 }  // namespace meltlab

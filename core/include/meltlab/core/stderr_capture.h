@@ -29,7 +29,4 @@ class StderrCapture {
   int capture_fd_ = -1;
 };
 
-/// Joins the lines of a library's message into one ("a; b"), without trailing blanks.
-std::string one_line(std::string text);
-
 }  // namespace meltlab

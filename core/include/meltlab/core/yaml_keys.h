@@ -24,4 +24,11 @@ inline void refuse_unknown_keys(const YAML::Node& n, const std::string& at, cons
   }
 }
 
+/// The one-line InputError for a yaml-cpp exception while reading `file`: "FILE:LINE: WHAT: MSG"
+/// (yaml-cpp throws syntax errors while parsing, and BadConversion from any `as<T>()`).
+inline InputError yaml_error(const std::string& file, const YAML::Exception& e, const std::string& what = "invalid YAML") {
+  const std::string where = e.mark.line >= 0 ? fmt::format("{}:{}", file, e.mark.line + 1) : file;
+  return InputError(fmt::format("{}: {}: {}", where, what, one_line(e.msg)));
+}
+
 }  // namespace meltlab
