@@ -6,6 +6,7 @@
 #include <meltlab/sim/quality.h>
 #include <meltlab/sim/topology.h>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
@@ -41,6 +42,12 @@ Run add_mesh_info(CLI::App& app) {
     const sim::QualityReport q = sim::mesh_quality(tm);
     nlohmann::json problems = nlohmann::json::array();
     for (const auto& p : topo.problems) problems.push_back(p.describe());
+    // A closed, manifold, consistently oriented mesh whose faces point inwards is no solid
+    // either: `simulate` refuses it (load_mesh), so mesh-info calls it invalid too.
+    const bool inside_out = topo.valid() && q.volume < 0.0;
+    if (inside_out)
+      problems.push_back(fmt::format("inside-out: the faces are oriented inwards (volume {:.6g} < 0)", q.volume));
+    const bool valid = topo.valid() && !inside_out;
     const auto& r = loaded.report;
     nlohmann::json out = {
         {"file", path.string()},
@@ -54,7 +61,8 @@ Run add_mesh_info(CLI::App& app) {
           {"repairs", r.repairs}}},
         {"polygons", counts_json(r.file_counts)},
         {"triangles", counts_json(topo.counts)},
-        {"valid", topo.valid()},
+        {"valid", valid},
+        {"inside_out", inside_out},
         {"closed", topo.closed},
         {"manifold", topo.manifold},
         {"oriented", topo.oriented},
@@ -88,7 +96,7 @@ Run add_mesh_info(CLI::App& app) {
                                    {"note", "pairs capped at 1000; triangles are indices into the loaded mesh"}};
     }
     std::printf("%s\n", out.dump(2).c_str());
-    return static_cast<int>(topo.valid() && !intersects ? kExitOk : kExitInvalid);
+    return static_cast<int>(valid && !intersects ? kExitOk : kExitInvalid);
   };
 }
 

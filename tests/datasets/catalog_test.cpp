@@ -115,7 +115,7 @@ TEST(Catalog, BadFilesAreInputErrorsNamingTheFile) {
       {head + "  - {name: a, kind: cgal, source: x.off, description: x, triangles: 1, closed_manifold: false}\n",
        "'problem'"},
       {"datasets: []\n", "archive"},
-      {head + "  - [1, 2\n", "catalog.yaml: line"},
+      {head + "  - [1, 2\n", "catalog.yaml:4: invalid YAML"},
       {"archive: x\ndatasets:\n" + ok + "extra: 1\n", "unknown top-level key 'extra'"},
   };
   for (const auto& c : cases) {

@@ -290,7 +290,8 @@ struct PlyElement {
 /// every read.
 class PlyBody {
  public:
-  PlyBody(PlyFormat format, std::string bytes, std::size_t start) : format_(format), bytes_(std::move(bytes)), pos_(start) {}
+  PlyBody(PlyFormat format, std::string bytes, std::size_t start)
+      : format_(format), bytes_(std::move(bytes)), pos_(std::min(start, bytes_.size())) {}
 
   /// Reads one value of type t; false at the end of the data or on a malformed ASCII token.
   bool read(PlyType t, double& out) {
@@ -405,7 +406,10 @@ PolygonMesh read_ply_file(const fs::path& file, std::int64_t file_size) {
     }
   }
   if (!format) throw InputError(fmt::format("{}: PLY header has no 'format' line", name));
-  const auto header_end = static_cast<std::size_t>(in.tellg());
+  // tellg() fails (-1) when the header's last line ended the file.
+  const std::streamoff header_pos = in.tellg();
+  in.clear();
+  const std::size_t header_end = header_pos < 0 ? static_cast<std::size_t>(file_size) : static_cast<std::size_t>(header_pos);
   in.seekg(0);
   std::string bytes(static_cast<std::size_t>(file_size), '\0');
   in.read(bytes.data(), file_size);

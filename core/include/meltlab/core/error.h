@@ -16,10 +16,13 @@ enum ExitCode : int {
   kExitInterrupted = 130,
 };
 
-/// Base of all meltlab errors.
+std::string one_line(const std::string& text);
+
+/// Base of all meltlab errors. The message is made one line whatever it quotes (a key or value
+/// of a hostile input may hold line breaks).
 class Error : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit Error(const std::string& what) : std::runtime_error(one_line(what)) {}
 };
 
 /// Bad user input: a missing/corrupt/invalid file, a bad number, a bad config value.

@@ -17,7 +17,8 @@ struct DeclaredImageSize {
 
 /// Width and height an OpenEXR or PNG file declares (EXR: the dataWindow attribute; PNG: the
 /// IHDR chunk), or nullopt for other formats and for headers too broken to say (the image
-/// library then refuses them). Reads at most the first 64 KiB.
+/// library then refuses them). Reads at most the first 64 KiB. Throws InputError for an EXR
+/// attribute that declares more bytes than the file holds.
 std::optional<DeclaredImageSize> declared_image_size(const std::filesystem::path& file);
 
 /// Throws InputError naming the file if the declared size exceeds input_limits().image_pixels

@@ -1,0 +1,462 @@
+#!/usr/bin/env python3
+"""Malformed inputs against every reader and option of `meltlab`, as a new user might give them.
+
+Usage: hostile_corpus.py MELTLAB [--asan] [--only SUBSTRING] [--list]
+
+Every case runs one meltlab command on one bad input (a file written by this script, or a bad
+option) and must end with
+  - the expected exit code (2 = bad input; 1 = `mesh-info` found the mesh invalid),
+  - exactly one line on stderr, naming the file (or the option) that is wrong,
+  - no output folder left behind (not `--out`, not a hidden staging folder),
+  - within a time cap, under a memory cap (address space via setrlimit; under AddressSanitizer,
+    which reserves terabytes of address space, its own hard_rss_limit_mb instead).
+Exit code 0 when every case passes; the failures are listed otherwise.
+"""
+import argparse
+import os
+import resource
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+import zlib
+
+MEMORY_CAP_BYTES = 3 << 30       # a reader may not need more than this for a tiny bad file
+TIME_CAP_S = 30                  # generous: the slowest case is a CGAL repair attempt
+ASAN_TIME_CAP_S = 180
+ASAN_RSS_LIMIT_MB = 3072
+
+TETRA_V = [(-1, 0, 1), (0, 0, -1), (1, 0, 1), (0, 1, 0)]
+TETRA_F = [(3, 1, 0), (3, 2, 1), (3, 0, 2), (1, 2, 0)]
+
+
+def off_text(v=TETRA_V, f=TETRA_F, header=None):
+    h = header if header is not None else f"{len(v)} {len(f)} 0"
+    return "OFF\n" + h + "\n" + "".join(f"{a} {b} {c}\n" for a, b, c in v) + "".join(
+        f"{len(x)} " + " ".join(map(str, x)) + "\n" for x in f)
+
+
+def ply_header(fmt, nv=4, nf=4, vprops="property float x\nproperty float y\nproperty float z\n",
+               fprops="property list uchar int vertex_indices\n"):
+    return (f"ply\nformat {fmt} 1.0\nelement vertex {nv}\n{vprops}element face {nf}\n{fprops}end_header\n")
+
+
+def ply_binary(nv=4, faces=TETRA_F, count_fmt="<B", list_count=None):
+    body = b"".join(struct.pack("<3f", *p) for p in TETRA_V)
+    for f in faces:
+        n = list_count if list_count is not None else len(f)
+        body += struct.pack(count_fmt, n) + struct.pack(f"<{len(f)}i", *f)
+    return ply_header("binary_little_endian", nv, len(faces)).encode() + body
+
+
+def stl_binary(tris, count=None):
+    n = len(tris) if count is None else count
+    out = b"\0" * 80 + struct.pack("<I", n)
+    for t in tris:
+        out += struct.pack("<3f", 0, 0, 1) + b"".join(struct.pack("<3f", *p) for p in t) + b"\0\0"
+    return out
+
+
+def png_claiming(w, h):
+    def chunk(t, d):
+        return struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xffffffff)
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)) +
+            chunk(b"IDAT", zlib.compress(b"\0" * 64)) + chunk(b"IEND", b""))
+
+
+def exr_claiming(w, h):
+    def attr(name, typ, value):
+        return name.encode() + b"\0" + typ.encode() + b"\0" + struct.pack("<i", len(value)) + value
+    hdr = (b"\x76\x2f\x31\x01" + struct.pack("<I", 2) +
+           attr("channels", "chlist", b"R\0" + struct.pack("<iBBBBii", 1, 0, 0, 0, 0, 1, 1) + b"\0") +
+           attr("compression", "compression", b"\0") +
+           attr("dataWindow", "box2i", struct.pack("<4i", 0, 0, w - 1, h - 1)) +
+           attr("displayWindow", "box2i", struct.pack("<4i", 0, 0, w - 1, h - 1)) +
+           attr("lineOrder", "lineOrder", b"\0") + attr("pixelAspectRatio", "float", struct.pack("<f", 1)) +
+           attr("screenWindowCenter", "v2f", struct.pack("<2f", 0, 0)) +
+           attr("screenWindowWidth", "float", struct.pack("<f", 1)) + b"\0")
+    return hdr + b"\0" * 64
+
+
+class Case:
+    def __init__(self, name, args, files=None, code=2, names=None):
+        self.name = name
+        self.args = args          # {tokens} are replaced: {f} = the first file, {out}, {run}, {seq}
+        self.files = files or {}  # file name -> bytes or str
+        self.code = code
+        self.names = names        # what stderr must name (default: the first file's name)
+
+
+def mesh_cases():
+    cases = []
+    bad_off = {
+        "negative_vertex_count": "OFF\n-4 4 0\n",
+        "negative_face_count": "OFF\n4 -4 0\n",
+        "huge_counts_one_line_of_data": "OFF\n2147483647 2147483647 0\n0 0 0\n",
+        "counts_beyond_int64": "OFF\n99999999999999999999 4 0\n",
+        "counts_not_numbers": "OFF\nfour four 0\n",
+        "fractional_count": "OFF\n4.5 4 0\n",
+        "counts_missing": "OFF\n",
+        "header_lies_vertices": off_text(header="400 4 0"),
+        "header_lies_faces": off_text(header="4 400 0"),
+        "truncated_in_vertices": off_text()[:30],
+        "truncated_in_faces": off_text()[:-10],
+        "nan_coordinate": off_text().replace("1 0 1\n", "1 nan 1\n", 1),
+        "inf_coordinate": off_text().replace("0 1 0\n", "0 inf 0\n", 1),
+        "two_coordinates": off_text().replace("0 1 0\n", "0 1\n", 1),
+        "face_of_a_billion_corners": off_text().replace("3 3 1 0\n", "1000000000 3 1 0\n", 1),
+        "face_of_two_corners": off_text().replace("3 3 1 0\n", "2 3 1\n", 1),
+        "face_index_negative": off_text().replace("3 3 1 0\n", "3 -1 1 0\n", 1),
+        "face_index_beyond": off_text().replace("3 3 1 0\n", "3 4 1 0\n", 1),
+        "face_index_huge": off_text().replace("3 3 1 0\n", "3 99999999999 1 0\n", 1),
+        "four_dimensional": "4OFF\n" + off_text()[4:],
+        "not_off_magic": "FFO\n4 4 0\n",
+        "binary_noise": bytes(range(256)) * 4,
+        "binary_off_lies": b"OFF BINARY\n" + struct.pack("<3I", 1000000, 1000000, 0) + b"\0" * 40,
+        "binary_off_colours": b"COFF BINARY\n" + struct.pack("<3I", 4, 4, 0) + b"\0" * 200,
+        "binary_off_face_corners_lie": b"OFF BINARY\n" + struct.pack("<3I", 3, 1, 0) + struct.pack("<9f", *range(9)) +
+                                       struct.pack("<I", 4000000000) + struct.pack("<3I", 0, 1, 2),
+        "empty": "",
+        "only_comments": "# nothing here\n# at all\n",
+    }
+    for n, text in bad_off.items():
+        cases.append(Case(f"off/{n}/simulate", ["simulate", "--mesh", "{f}", "--cycles", "2", "--out", "{out}"],
+                          {"m.off": text}))
+    for n in ["negative_vertex_count", "huge_counts_one_line_of_data", "face_of_a_billion_corners", "binary_off_lies"]:
+        cases.append(Case(f"off/{n}/mesh-info", ["mesh-info", "{f}"], {"m.off": bad_off[n]}))
+    bad_ply = {
+        "negative_vertex_count": ply_header("ascii", nv=-4),
+        "huge_vertex_count": ply_header("ascii", nv=2**40),
+        "count_not_number": ply_header("ascii").replace("vertex 4", "vertex four"),
+        "no_end_header": "ply\nformat ascii 1.0\nelement vertex 4\n",
+        "not_ply": "plx\nformat ascii 1.0\n",
+        "format_version_2": ply_header("ascii").replace("1.0", "2.0"),
+        "format_unknown": ply_header("ascii").replace("ascii", "binary_middle_endian"),
+        "unknown_type": ply_header("ascii").replace("float x", "float128 x"),
+        "property_before_element": "ply\nformat ascii 1.0\nproperty float x\nend_header\n",
+        "vertex_without_z": ply_header("ascii", vprops="property float x\nproperty float y\n") + "0 0\n" * 4,
+        "face_without_indices": ply_header("ascii", fprops="property int flags\n") + "0 0 0\n" * 4 + "0\n" * 4,
+        "float_list_count": ply_header("ascii", fprops="property list float int vertex_indices\n"),
+        "ascii_truncated": ply_header("ascii") + "-1 0 1\n0 0 -1\n",
+        "ascii_garbage_token": ply_header("ascii") + "-1 0 1\n0 zero -1\n1 0 1\n0 1 0\n3 3 1 0\n" * 4,
+        "ascii_index_beyond": ply_header("ascii") + "".join(f"{a} {b} {c}\n" for a, b, c in TETRA_V) + "3 7 1 0\n" * 4,
+        "ascii_list_count_lies": ply_header("ascii") + "".join(f"{a} {b} {c}\n" for a, b, c in TETRA_V) + "200 3 1 0\n" * 4,
+        "binary_list_count_lies": ply_binary(count_fmt="<I", list_count=4000000000),
+        "binary_truncated": ply_binary()[:-9],
+        "binary_face_of_two": ply_binary(faces=[(0, 1)] * 4),
+        "binary_negative_list_count": ply_binary(count_fmt="<b", list_count=-3),
+        "big_endian_body_little": ply_binary().replace(b"binary_little_endian", b"binary_big_endian"),
+        "duplicate_element": ply_header("ascii") + "element vertex 4\nend_header\n",
+    }
+    for n, text in bad_ply.items():
+        cases.append(Case(f"ply/{n}", ["simulate", "--mesh", "{f}", "--cycles", "2", "--out", "{out}"], {"m.ply": text}))
+    tetra_obj = "".join(f"v {a} {b} {c}\n" for a, b, c in TETRA_V)
+    bad_obj = {
+        "nan_vertex": "v 0 nan 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        "vertex_two_coordinates": "v 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        "index_zero": tetra_obj + "f 0 1 2\n",
+        "index_beyond": tetra_obj + "f 1 2 99999999\n",
+        "relative_index_too_far": tetra_obj + "f -1 -2 -9\n",
+        "empty_index": tetra_obj + "f /1 2 3\n",
+        "face_two_corners": tetra_obj + "f 1 2\n",
+        "forward_reference": "f 1 2 3\n" + tetra_obj,
+        "no_faces": tetra_obj,
+        "no_vertices": "f 1 2 3\n",
+        "binary_noise": bytes(range(1, 256)) * 3,
+    }
+    for n, text in bad_obj.items():
+        cases.append(Case(f"obj/{n}", ["simulate", "--mesh", "{f}", "--cycles", "2", "--out", "{out}"], {"m.obj": text}))
+    tri = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+    bad_stl = {
+        "binary_count_lies_high": stl_binary([tri], count=0xFFFFFFFF)[:-1],
+        "ascii_facet_two_vertices": "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid t\n",
+        "ascii_vertex_outside_facet": "solid t\nvertex 0 0 0\nendsolid t\n",
+        "ascii_nan": "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 nan 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n",
+        "ascii_unterminated_facet": "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n",
+        "ascii_four_vertices": "solid t\nfacet normal 0 0 1\nouter loop\n" + "vertex 0 0 0\n" * 4 + "endloop\nendfacet\n",
+        "noise": bytes(range(256)) * 2,
+        "binary_nan": stl_binary([[(0, 0, float("nan")), (1, 0, 0), (0, 1, 0)]]),
+        "empty": "",
+    }
+    for n, text in bad_stl.items():
+        cases.append(Case(f"stl/{n}", ["simulate", "--mesh", "{f}", "--cycles", "2", "--out", "{out}"], {"m.stl": text}))
+    # Readable but not a closed solid: mesh-info reports it (exit 1), simulate refuses it (2).
+    open_tetra = off_text(f=TETRA_F[:3])
+    nonmanifold = off_text(v=TETRA_V + [(0, -1, 0)], f=TETRA_F + [(3, 1, 4)])
+    inside_out = off_text(f=[tuple(reversed(t)) for t in TETRA_F])
+    for n, text in {"open": open_tetra, "non_manifold": nonmanifold, "inside_out": inside_out}.items():
+        cases.append(Case(f"topology/{n}/mesh-info", ["mesh-info", "{f}"], {"m.off": text}, code=1, names=[]))
+        cases.append(Case(f"topology/{n}/simulate", ["simulate", "--mesh", "{f}", "--cycles", "2", "--out", "{out}"],
+                          {"m.off": text}))
+    cases.append(Case("mesh/unknown_extension", ["simulate", "--mesh", "{f}", "--out", "{out}"], {"m.xyz": off_text()}))
+    cases.append(Case("mesh/is_a_folder", ["simulate", "--mesh", "{d}", "--out", "{out}"], names=["meshdir"]))
+    cases.append(Case("mesh/missing", ["simulate", "--mesh", "nowhere.off", "--out", "{out}"], names=["nowhere.off"]))
+    cases.append(Case("mesh/over_the_limit", ["--limits", "mesh_elements=3", "simulate", "--mesh", "{f}", "--out", "{out}"],
+                      {"m.off": off_text()}))
+    return cases
+
+
+def manifest_cases():
+    cam = "{type: orthographic, width: 64, height: 48, pixels_per_mm: 2, centre_m: [0, 0]}"
+    base = f"meltlab_observations: 1\ninterval_s: 40\ncamera: {cam}\nframes:\n  - {{image: frames/frame_0001.jpg}}\n"
+    bad = {
+        "yaml_syntax": "meltlab_observations: 1\nframes: [a, b\n",
+        "yaml_bad_escape": 'meltlab_observations: 1\nobject: "\\q"\n',
+        "yaml_deep_nesting": "a: " + "[" * 20000 + "]" * 20000 + "\n",
+        "not_a_map": "- 1\n- 2\n",
+        "unknown_key": base + "objekt: x\n",
+        "negative_interval": base.replace("interval_s: 40", "interval_s: -40"),
+        "interval_not_number": base.replace("interval_s: 40", "interval_s: [1, 2]"),
+        "camera_unknown_type": base.replace("type: orthographic", "type: fisheye"),
+        "camera_zero_width": base.replace("width: 64", "width: 0"),
+        "camera_huge": base.replace("width: 64, height: 48", "width: 2000000000, height: 2000000000"),
+        "frames_missing_file": base.replace("frame_0001", "nope"),
+        "frames_glob_matches_nothing": base.replace("frames:\n  - {image: frames/frame_0001.jpg}\n", "frames: 'frames/*.tif'\n"),
+        "frames_empty": base.replace("frames:\n  - {image: frames/frame_0001.jpg}\n", "frames: []\n"),
+        "mass_series_missing": base + "mass_series: nope.csv\n",
+        "version_2": base.replace("meltlab_observations: 1", "meltlab_observations: 2"),
+        "empty_file": "",
+        "whitespace_only": "\n   \n",
+    }
+    cases = []
+    for n, text in bad.items():
+        cases.append(Case(f"manifest/{n}", ["compare", "--sim", "{run}", "--observations", "{f}", "--out", "{out}"],
+                          {"seq/m.yaml": text}))
+    jbad = {
+        "json_number_overflow": '{"meltlab_observations": 1, "interval_s": 5e555}',
+        "json_truncated": '{"meltlab_observations": 1, "frames": [',
+        "json_not_object": "[1, 2, 3]",
+    }
+    for n, text in jbad.items():
+        cases.append(Case(f"manifest/{n}", ["compare", "--sim", "{run}", "--observations", "{f}", "--out", "{out}"],
+                          {"seq/m.json": text}))
+    # Photos that a manifest names: hostile image files.
+    photos = {
+        "png_header_30000x30000": png_claiming(30000, 30000),
+        "exr_header_2e9_rows": exr_claiming(64, 2 ** 30),
+        "png_truncated": png_claiming(64, 48)[:40],
+        "zero_bytes": b"",
+        "text_named_png": b"this is not an image\n",
+    }
+    for n, data in photos.items():
+        ext = "exr" if n.startswith("exr") else "png"
+        man = base.replace("frames/frame_0001.jpg", f"frames/bad.{ext}")
+        cases.append(Case(f"photo/{n}", ["fit", "--mesh", "benchmark_a", "--observations", "{f}", "--fit", "kg",
+                                          "--cycles-per-photo", "2", "--out", "{out}"],
+                          {"seq/m.yaml": man, f"seq/frames/bad.{ext}": data}, names=[f"bad.{ext}"]))
+    series = {
+        "series_nan": "time_s,mass_g\n0,nan\n",
+        "series_unknown_column": "time_s,mass_lb\n0,1\n",
+        "series_missing_cell": "time_s,mass_g\n0,1\n1\n",
+        "series_empty": "",
+        "series_header_only": "time_s,mass_g\n",
+        "series_binary": bytes(range(256)),
+    }
+    for n, text in series.items():
+        cases.append(Case(f"series/{n}", ["fit", "--mesh", "benchmark_a", "--observations", "{f}", "--fit", "kg",
+                                           "--volume-weight", "1", "--cycles-per-photo", "2", "--out", "{out}"],
+                          {"seq/m.yaml": base + "mass_series: s.csv\n", "seq/s.csv": text}, names=["s.csv"]))
+    return cases
+
+
+def kl_cases():
+    bad = {
+        "yaml_syntax": "kl: {type: constant, value: [\n",
+        "no_kl_key": "k: 1\n",
+        "unknown_type": "kl: {type: magnetic}\n",
+        "unknown_key": "kl: {type: constant, valeu: 1}\n",
+        "value_out_of_range": "kl: {type: constant, value: 7}\n",
+        "value_not_number": "kl: {type: constant, value: [1]}\n",
+        "point_source_bad_position": "kl: {type: point_source, position: [0, 0], strength: 1, radius: 1}\n",
+        "product_empty": "kl: {type: product, of: []}\n",
+        "grid_missing_file": "kl: {type: grid, file: nope.grid}\n",
+        "bad_escape": 'kl: "\\q"\n',
+    }
+    cases = [Case(f"kl/{n}", ["simulate", "--mesh", "benchmark_a", "--kl", "{f}", "--out", "{out}"], {"kl.yaml": t})
+             for n, t in bad.items()]
+    grids = {
+        "dims_overflow": "meltlab-kl-grid 1\ndims 2097152 2097152 4194304\norigin 0 0 0\nspacing 1 1 1\nvalues\n",
+        "dims_huge": "meltlab-kl-grid 1\ndims 10000 10000 10000\norigin 0 0 0\nspacing 1 1 1\nvalues\n0.5\n",
+        "dims_negative": "meltlab-kl-grid 1\ndims -2 2 2\norigin 0 0 0\nspacing 1 1 1\nvalues\n",
+        "too_few_values": "meltlab-kl-grid 1\ndims 2 2 2\norigin 0 0 0\nspacing 1 1 1\nvalues\n0 0 0\n",
+        "value_nan": "meltlab-kl-grid 1\ndims 1 1 1\norigin 0 0 0\nspacing 1 1 1\nvalues\nnan\n",
+        "bad_magic": "meltlab-kl-grod 1\n",
+        "spacing_zero": "meltlab-kl-grid 1\ndims 1 1 1\norigin 0 0 0\nspacing 0 1 1\nvalues\n0.5\n",
+    }
+    for n, t in grids.items():
+        cases.append(Case(f"kl_grid/{n}", ["simulate", "--mesh", "benchmark_a", "--kl", "{f}", "--out", "{out}"],
+                          {"kl.yaml": "kl: {type: grid, file: g.grid}\n", "g.grid": t}, names=["g.grid"]))
+    return cases
+
+
+def scene_cases():
+    bad = {
+        "yaml_syntax": "ice: [1, 2\n",
+        "unknown_key": "ice: {cx: 1}\n",
+        "width_negative": "width: -5\n",
+        "width_huge": "width: 99999999\nheight: 99999999\n",
+        "bad_escape": 'ice: {model: "\\q"}\n',
+        "env_file_missing": "environment: {file: nope.exr}\n",
+        "env_png_claims_30000": "environment: {file: env.png}\n",
+        "ground_texture_truncated": "ground: {texture: tex.png}\n",
+        "deep_nesting": "ice: " + "{a: " * 5000 + "1" + "}" * 5000 + "\n",
+    }
+    files = {"env.png": png_claiming(30000, 15000), "tex.png": png_claiming(64, 64)[:50]}
+    cases = []
+    for n, t in bad.items():
+        names = {"env_png_claims_30000": ["env.png"], "ground_texture_truncated": ["tex.png"],
+                 "env_file_missing": ["nope.exr"]}.get(n)
+        cases.append(Case(f"scene/{n}", ["render", "--mesh", "benchmark_a", "--scene", "{f}", "--cycles", "0", "--out", "{out}"],
+                          {"scene.yaml": t, **files}, names=names))
+    return cases
+
+
+def reproduce_cases():
+    bad = {
+        "yaml_syntax": "name: x\nsteps: [\n",
+        "bad_name": "name: Bad-Name!\nsteps: []\n",
+        "unknown_key": "name: x\nstepz: []\n",
+        "unknown_variable": "name: x\nsteps:\n  - {name: a, meltlab: [simulate, --out, '${nope}']}\n",
+        "step_not_map": "name: x\nsteps: [1, 2]\n",
+        "bad_escape": 'name: "\\q"\n',
+    }
+    return [Case(f"reproduce/{n}", ["reproduce", "--configs", "{d}", "--out", "{out}"], {"cfg/e.yaml": t}, names=["e.yaml"])
+            for n, t in bad.items()]
+
+
+def option_cases():
+    o = ["simulate", "--mesh", "benchmark_a"]
+    long_name = "x" * 300
+    return [
+        Case("option/cycles_negative", o + ["--cycles", "-5", "--out", "{out}"], names=["--cycles"]),
+        Case("option/kg_nan", o + ["--kg", "nan", "--out", "{out}"], names=["--kg"]),
+        Case("option/kg_text", o + ["--kg", "abc", "--out", "{out}"], names=["--kg"]),
+        Case("option/threads_negative", o + ["--threads", "-1", "--out", "{out}"], names=["--threads"]),
+        Case("option/snapshot_format", o + ["--snapshot-format", "gltf", "--out", "{out}"], names=["--snapshot-format"]),
+        Case("option/out_name_too_long", o + ["--out", long_name], names=["--out"]),
+        Case("option/out_component_too_long", o + ["--out", f"a/{long_name}/b"], names=["--out"]),
+        Case("option/out_under_a_file", o + ["--out", "{file}/sub"], {"afile": "x"}, names=["--out"]),
+        Case("option/out_is_a_file", o + ["--out", "{file}"], {"afile": "x"}, names=["--out"]),
+        Case("option/out_in_proc", o + ["--out", "/proc/meltlab-cannot-be-here"], names=["--out"]),
+        Case("option/out_non_empty_folder", o + ["--out", "{d}"], {"full/keep.txt": "mine"}, names=["--out"]),
+        Case("option/limits_unknown", ["--limits", "bogus=1"] + o + ["--out", "{out}"], names=["--limits"]),
+        Case("option/limits_zero", ["--limits", "mesh_elements=0"] + o + ["--out", "{out}"], names=["--limits"]),
+        Case("option/limits_text", ["--limits", "mesh_elements=lots"] + o + ["--out", "{out}"], names=["--limits"]),
+        Case("option/compare_no_run", ["compare", "--sim", "nowhere", "--observations", "{seq}/manifest.yaml",
+                                       "--out", "{out}"], names=["nowhere"]),
+        Case("option/fit_unknown_parameter", ["fit", "--mesh", "benchmark_a", "--observations", "{seq}/manifest.yaml",
+                                              "--fit", "kq", "--out", "{out}"], names=["kq"]),
+        Case("option/synth_zero_photos", ["synth-sequence", "--mesh", "benchmark_a", "--photos", "0", "--out", "{out}"],
+             names=["--photos"]),
+        Case("option/render_every_zero", ["render", "--mesh", "benchmark_a", "--every", "0", "--out", "{out}"],
+             names=["--every"]),
+        Case("option/text_limit", ["--limits", "text_bytes=16", "simulate", "--mesh", "{mesh}", "--kl", "{f}",
+                                   "--out", "{out}"], {"kl.yaml": "kl: {type: constant, value: 0.5}\n"}),
+    ]
+
+
+def run_case(meltlab, case, root, fixtures, asan):
+    work = tempfile.mkdtemp(prefix="case-", dir=root)
+    first = None
+    for rel, data in case.files.items():
+        path = os.path.join(work, rel)
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, "wb") as out:
+            out.write(data.encode() if isinstance(data, str) else data)
+        first = first or path
+    os.makedirs(os.path.join(work, "meshdir"), exist_ok=True)
+    if case.name.startswith(("manifest/", "series/")):  # a real photo where the manifests expect one
+        os.makedirs(os.path.join(work, "seq", "frames"), exist_ok=True)
+        shutil.copy(os.path.join(fixtures["seq"], "frames", "frame_0001.jpg"),
+                    os.path.join(work, "seq", "frames", "frame_0001.jpg"))
+    subs = {"{f}": first or "", "{out}": os.path.join(work, "out"), "{run}": fixtures["run"], "{seq}": fixtures["seq"],
+            "{d}": os.path.join(work, "meshdir") if case.name == "mesh/is_a_folder" else
+                   os.path.join(work, "cfg") if case.name.startswith("reproduce/") else os.path.join(work, "full"),
+            "{file}": os.path.join(work, "afile"), "{mesh}": fixtures["mesh"]}
+    args = []
+    for a in case.args:
+        for k, v in subs.items():
+            a = a.replace(k, v)
+        args.append(a)
+    env = dict(os.environ)
+    env.pop("MELTLAB_LIMITS", None)
+    if asan:
+        env["ASAN_OPTIONS"] = f"detect_leaks=0:hard_rss_limit_mb={ASAN_RSS_LIMIT_MB}:allocator_may_return_null=1"
+
+    def cap():
+        if not asan:
+            resource.setrlimit(resource.RLIMIT_AS, (MEMORY_CAP_BYTES, MEMORY_CAP_BYTES))
+
+    t0 = time.monotonic()
+    try:
+        p = subprocess.run([meltlab] + args, cwd=work, env=env, capture_output=True, preexec_fn=cap,
+                           timeout=ASAN_TIME_CAP_S if asan else TIME_CAP_S)
+    except subprocess.TimeoutExpired:
+        return [f"did not finish within {ASAN_TIME_CAP_S if asan else TIME_CAP_S} s"]
+    elapsed = time.monotonic() - t0
+    problems = []
+    err = p.stderr.decode(errors="replace")
+    lines = [l for l in err.splitlines() if l.strip()]
+    if p.returncode != case.code:
+        problems.append(f"exit {p.returncode}, want {case.code}")
+    if case.code == 2:
+        if len(lines) != 1:
+            problems.append(f"{len(lines)} lines on stderr, want 1")
+        names = case.names if case.names is not None else [os.path.basename(first)] if first else []
+        for n in names:
+            if not lines or n not in lines[-1]:
+                problems.append(f"stderr does not name '{n}'")
+        if "internal error" in err:
+            problems.append("reported as an internal error")
+    out = os.path.join(work, "out")
+    if os.path.exists(out):
+        problems.append("--out was left behind")
+    leftovers = [n for n in os.listdir(work) if n.startswith(".") and "partial" in n]
+    if leftovers:
+        problems.append(f"staging folders left: {leftovers}")
+    if problems:
+        problems.append(f"stderr: {err.strip()[:300]!r} ({elapsed:.1f} s)")
+    shutil.rmtree(work, ignore_errors=True)
+    return problems
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("meltlab")
+    ap.add_argument("--asan", action="store_true")
+    ap.add_argument("--only", default="")
+    ap.add_argument("--list", action="store_true")
+    a = ap.parse_args()
+    cases = mesh_cases() + manifest_cases() + kl_cases() + scene_cases() + reproduce_cases() + option_cases()
+    cases = [c for c in cases if a.only in c.name]
+    if a.list:
+        for c in cases:
+            print(c.name)
+        print(f"{len(cases)} cases")
+        return 0
+    root = tempfile.mkdtemp(prefix="meltlab-hostile-")
+    try:
+        # Fixtures: a finished run and a tiny photo sequence, for the commands that need one.
+        fixtures = {"run": os.path.join(root, "run"), "seq": os.path.join(root, "seq"), "mesh": os.path.join(root, "t.off")}
+        with open(fixtures["mesh"], "w") as out:
+            out.write(off_text())
+        subprocess.run([a.meltlab, "simulate", "--mesh", "benchmark_a", "--cycles", "4", "--out", fixtures["run"]],
+                       check=True, capture_output=True)
+        subprocess.run([a.meltlab, "synth-sequence", "--mesh", "benchmark_a", "--photos", "2", "--width", "64",
+                        "--height", "48", "--out", fixtures["seq"]], check=True, capture_output=True)
+        failed = 0
+        for c in cases:
+            problems = run_case(a.meltlab, c, root, fixtures, a.asan)
+            if problems:
+                failed += 1
+                print(f"FAIL {c.name}: " + "; ".join(problems))
+        print(f"{len(cases) - failed}/{len(cases)} hostile inputs refused cleanly")
+        return 1 if failed else 0
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
