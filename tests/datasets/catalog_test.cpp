@@ -37,10 +37,7 @@ bool archive_present() {
 
 using test::message_of;
 
-void write_file(const fs::path& p, const std::string& text) {
-  std::ofstream out(p);
-  out << text;
-}
+using test::write_file;
 
 std::vector<fs::path> leftovers(const fs::path& dir) {
   std::vector<fs::path> out;
