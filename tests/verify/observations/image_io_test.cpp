@@ -1,6 +1,6 @@
 // read_image / write_image: round trips through every format we meet, and broken files.
 
-#include "../../verify/src/obs_detail.h"
+#include "../../../verify/src/obs_detail.h"
 
 #include <meltlab/core/error.h>
 #include <meltlab/verify/observations.h>
