@@ -14,23 +14,14 @@
 #include <random>
 #include <sstream>
 
+#include "test_files.h"
+
 namespace meltlab::verify {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    std::random_device rd;
-    path = fs::temp_directory_path() / fmt::format("meltlab_compare_test_{}", rd());
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
+using TempDir = meltlab::test::TempFolder;
 
 /// A sphere of radius r_k = r0 * (1 - 0.02 k) at cycle k; records the cycles asked for.
 class ShrinkingSphere final : public MeshSequence {
@@ -106,7 +97,7 @@ TEST(Overlay, UsesTheGreysOfFigure812) {
 
 TEST(CompareSequence, PhotosOfTheRendersGiveNearZeroP) {
   TempDir tmp;
-  const fs::path manifest = write_sequence(tmp.path, 6, 5);
+  const fs::path manifest = write_sequence(tmp.path(), 6, 5);
   const ObservationSequence obs = load_observations(manifest);
   ShrinkingSphere meshes;
   CompareOptions o;
@@ -136,7 +127,7 @@ TEST(CompareSequence, PhotosOfTheRendersGiveNearZeroP) {
 
 TEST(CompareSequence, AWrongMappingIsSeen) {
   TempDir tmp;
-  const fs::path manifest = write_sequence(tmp.path, 6, 5);
+  const fs::path manifest = write_sequence(tmp.path(), 6, 5);
   const ObservationSequence obs = load_observations(manifest);
   ShrinkingSphere meshes;
   CompareOptions o;
@@ -152,11 +143,11 @@ TEST(CompareSequence, AWrongMappingIsSeen) {
 
 TEST(CompareSequence, MissingUnreadableAndBeyondFramesAreSkippedNotScored) {
   TempDir tmp;
-  const fs::path manifest = write_sequence(tmp.path, 6, 5);
-  fs::remove(tmp.path / "frames" / "f1.png");
-  std::ofstream(tmp.path / "frames" / "f2.png") << "not a png";
+  const fs::path manifest = write_sequence(tmp.path(), 6, 5);
+  fs::remove(tmp.path() / "frames" / "f1.png");
+  std::ofstream(tmp.path() / "frames" / "f2.png") << "not a png";
   const cv::Mat black = cv::Mat::zeros(180, 240, CV_8UC1);
-  write_image(tmp.path / "frames" / "f3.png", black);
+  write_image(tmp.path() / "frames" / "f3.png", black);
   const ObservationSequence obs = load_observations(manifest);
   ShrinkingSphere meshes;
   CompareOptions o;
@@ -171,8 +162,8 @@ TEST(CompareSequence, MissingUnreadableAndBeyondFramesAreSkippedNotScored) {
   EXPECT_EQ(r.compared, 2);
   EXPECT_EQ(r.skipped, 4);
   TempDir out;
-  write_per_frame_csv(out.path / "per_frame.csv", r.frames);
-  std::ifstream in(out.path / "per_frame.csv");
+  write_per_frame_csv(out.path() / "per_frame.csv", r.frames);
+  std::ifstream in(out.path() / "per_frame.csv");
   std::string header, line;
   std::getline(in, header);
   EXPECT_EQ(header.rfind("frame,image,status,time_s,cycle,S_A,S_B,S_I,P,P_exact,IoU", 0), 0u) << header;

@@ -111,19 +111,19 @@ TEST(ImageIo, BrokenFilesAreInputErrorsNamingTheFile) {
   test::TempDir dir;
   write_image(dir / "good.png", pattern(CV_8UC3, 300, 200));
   write_image(dir / "good.jpg", pattern(CV_8UC3, 300, 200));
-  const std::string png = test::read_bytes(dir / "good.png");
-  const std::string jpg = test::read_bytes(dir / "good.jpg");
-  test::write_text(dir / "half.png", png.substr(0, png.size() / 2));
-  test::write_text(dir / "half.jpg", jpg.substr(0, jpg.size() / 2));
-  test::write_text(dir / "tiny.png", png.substr(0, 20));
-  test::write_text(dir / "zero.png", "");
+  const std::string png = test::read_file(dir / "good.png");
+  const std::string jpg = test::read_file(dir / "good.jpg");
+  test::write_file(dir / "half.png", png.substr(0, png.size() / 2));
+  test::write_file(dir / "half.jpg", jpg.substr(0, jpg.size() / 2));
+  test::write_file(dir / "tiny.png", png.substr(0, 20));
+  test::write_file(dir / "zero.png", "");
   std::mt19937 rng(7);
   std::string noise(5000, '\0');
   for (char& ch : noise) ch = static_cast<char>(rng() & 0xFF);
-  test::write_text(dir / "noise.png", noise);
-  test::write_text(dir / "noise.jpg", noise);
-  test::write_text(dir / "noise.exr", noise);
-  test::write_text(dir / "text.tif", "this is not a TIFF file\n");
+  test::write_file(dir / "noise.png", noise);
+  test::write_file(dir / "noise.jpg", noise);
+  test::write_file(dir / "noise.exr", noise);
+  test::write_file(dir / "text.tif", "this is not a TIFF file\n");
   std::filesystem::create_directory(dir / "folder.png");
 
   for (const char* name : {"half.png", "half.jpg", "tiny.png", "zero.png", "noise.png", "noise.jpg", "noise.exr",

@@ -70,8 +70,8 @@ class Manifest : public ::testing::Test {
     const cv::Mat img(48, 64, CV_8UC3, cv::Scalar(20, 30, 40));
     for (const char* name : {"0001.png", "0002.png", "0003.png"}) write_image(obs_ / "frames" / name, img);
     write_image(obs_ / "bg.png", img);
-    test::write_text(obs_ / "mass.csv", "time_s,mass_g\n0,1\n");
-    test::write_text(dir_ / "truth" / "giraffe.json", "{}\n");
+    test::write_file(obs_ / "mass.csv", "time_s,mass_g\n0,1\n");
+    test::write_file(dir_ / "truth" / "giraffe.json", "{}\n");
   }
 
   /// The base YAML with line `line` (1-based) replaced by `text` (which may hold several
@@ -85,7 +85,7 @@ class Manifest : public ::testing::Test {
 
   std::string error_of(const std::string& content, const std::string& name = "m.yaml") {
     const fs::path file = obs_ / name;
-    test::write_text(file, content);
+    test::write_file(file, content);
     try {
       load_observations(file);
     } catch (const InputError& e) {
@@ -107,7 +107,7 @@ class Manifest : public ::testing::Test {
 };
 
 TEST_F(Manifest, YamlReadsEverything) {
-  test::write_text(obs_ / "m.yaml", kYaml);
+  test::write_file(obs_ / "m.yaml", kYaml);
   const ObservationSequence s = load_observations(obs_ / "m.yaml");
   EXPECT_EQ(s.manifest, (obs_ / "m.yaml").lexically_normal());
   EXPECT_EQ(s.object, "giraffe");
@@ -139,8 +139,8 @@ TEST_F(Manifest, YamlReadsEverything) {
 }
 
 TEST_F(Manifest, JsonLoadsLikeYaml) {
-  test::write_text(obs_ / "m.yaml", kYaml);
-  test::write_text(obs_ / "m.json", kJson);
+  test::write_file(obs_ / "m.yaml", kYaml);
+  test::write_file(obs_ / "m.json", kJson);
   const ObservationSequence a = load_observations(obs_ / "m.yaml");
   const ObservationSequence b = load_observations(obs_ / "m.json");
   ASSERT_EQ(a.frames.size(), b.frames.size());
@@ -184,7 +184,7 @@ TEST_F(Manifest, GlobSortsByNameAndTimesFromInterval) {
   write_image(obs_ / "g" / "b02.png", img);
   write_image(obs_ / "g" / "a.png", img);
   write_image(obs_ / "g" / "skip.jpg", img);
-  test::write_text(obs_ / "m.yaml",
+  test::write_file(obs_ / "m.yaml",
                    "meltlab_observations: 1\n"
                    "frames: {glob: \"g/*.png\"}\n"
                    "interval_s: 30\n"
@@ -203,7 +203,7 @@ TEST_F(Manifest, GlobSortsByNameAndTimesFromInterval) {
 }
 
 TEST_F(Manifest, NoTimesWithoutIntervalOrTimes) {
-  test::write_text(obs_ / "m.yaml",
+  test::write_file(obs_ / "m.yaml",
                    "meltlab_observations: 1\n"
                    "frames: [frames/0001.png, frames/0002.png]\n"
                    "camera: {type: orthographic, width: 64, height: 48, pixels_per_mm: 1}\n");
@@ -214,7 +214,7 @@ TEST_F(Manifest, NoTimesWithoutIntervalOrTimes) {
 }
 
 TEST_F(Manifest, AMissingFrameIsNotAnError) {
-  test::write_text(obs_ / "m.yaml", with_line(5, "  - {image: frames/0009.png}\n"));
+  test::write_file(obs_ / "m.yaml", with_line(5, "  - {image: frames/0009.png}\n"));
   const ObservationSequence s = load_observations(obs_ / "m.yaml");
   ASSERT_EQ(s.frames.size(), 3U);
   EXPECT_EQ(s.frames[1].image, obs_ / "frames" / "0009.png");
@@ -222,7 +222,7 @@ TEST_F(Manifest, AMissingFrameIsNotAnError) {
 }
 
 TEST_F(Manifest, NoExistingFrameIsAnError) {
-  test::write_text(obs_ / "m.yaml",
+  test::write_file(obs_ / "m.yaml",
                    "meltlab_observations: 1\n"
                    "camera: {type: orthographic, width: 64, height: 48, pixels_per_mm: 1}\n"
                    "frames:\n"

@@ -24,7 +24,7 @@ std::string error_of(const std::filesystem::path& file) {
 
 TEST(TimeSeries, ReadsGrams) {
   test::TempDir dir;
-  test::write_text(dir / "m.csv", "time_s,mass_g\n0,120.5\n40, 118.25\n80,115\n");
+  test::write_file(dir / "m.csv", "time_s,mass_g\n0,120.5\n40, 118.25\n80,115\n");
   const TimeSeries ts = read_time_series(dir / "m.csv");
   EXPECT_EQ(ts.quantity, "mass_g");
   ASSERT_EQ(ts.time_s.size(), 3U);
@@ -35,7 +35,7 @@ TEST(TimeSeries, ReadsGrams) {
 
 TEST(TimeSeries, ReadsKilogramsInAnyColumnOrderWithCrlfAndComments) {
   test::TempDir dir;
-  test::write_text(dir / "m.csv", "\xEF\xBB\xBF# scale log\r\nmass_kg , time_s\r\n0.5,0\r\n\r\n0.45,1e2\r\n");
+  test::write_file(dir / "m.csv", "\xEF\xBB\xBF# scale log\r\nmass_kg , time_s\r\n0.5,0\r\n\r\n0.45,1e2\r\n");
   const TimeSeries ts = read_time_series(dir / "m.csv");
   EXPECT_EQ(ts.quantity, "mass_kg");
   ASSERT_EQ(ts.time_s.size(), 2U);
@@ -46,9 +46,9 @@ TEST(TimeSeries, ReadsKilogramsInAnyColumnOrderWithCrlfAndComments) {
 
 TEST(TimeSeries, ReadsVolumes) {
   test::TempDir dir;
-  test::write_text(dir / "v.csv", "time_s,volume_cm3\n0,10\n1,9\n");
+  test::write_file(dir / "v.csv", "time_s,volume_cm3\n0,10\n1,9\n");
   EXPECT_EQ(read_time_series(dir / "v.csv").quantity, "volume_cm3");
-  test::write_text(dir / "w.csv", "time_s,volume_m3\n0,1e-5\n");
+  test::write_file(dir / "w.csv", "time_s,volume_m3\n0,1e-5\n");
   EXPECT_EQ(read_time_series(dir / "w.csv").quantity, "volume_m3");
 }
 
@@ -79,7 +79,7 @@ TEST(TimeSeries, BadFilesNameFileAndLine) {
   test::TempDir dir;
   for (const BadCase& c : cases) {
     const auto file = dir / (std::string(c.name) + ".csv");
-    test::write_text(file, c.text);
+    test::write_file(file, c.text);
     const std::string msg = error_of(file);
     EXPECT_THAT(msg, HasSubstr(file.string() + c.line)) << c.name;
     EXPECT_THAT(msg, HasSubstr(c.problem)) << c.name;
