@@ -19,7 +19,6 @@
 #include <fstream>
 #include <numeric>
 #include <sstream>
-#include <thread>
 
 namespace meltlab::experiments {
 

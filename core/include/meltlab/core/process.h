@@ -18,8 +18,8 @@ struct ProcessSpec {
   std::vector<std::string> argv;  ///< argv[0] is the program; must not be empty
   bool search_path = true;        ///< look argv[0] up in PATH (as a shell would) unless it holds a '/'
   /// Redirections: unset inherits this process's stream. stdin is opened for reading; stdout
-  /// and stderr are created or truncated (mode 0644). The same file may serve stdout and stderr
-  /// only through separate opens (each truncates), so give distinct files.
+  /// and stderr are created or truncated (mode 0644), each by its own open, so give them
+  /// distinct files (kNullDevice excepted).
   std::optional<std::filesystem::path> stdin_file, stdout_file, stderr_file;
   /// Variables added to (or replacing those of) this process's environment.
   std::vector<std::pair<std::string, std::string>> env_additions;
