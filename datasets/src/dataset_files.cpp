@@ -8,17 +8,15 @@
 #include <meltlab/datasets/procedural.h>
 #include <meltlab/datasets/refine.h>
 #include <meltlab/core/error.h>
+#include <meltlab/core/process.h>
 #include <meltlab/sim/mesh_io.h>
 
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cerrno>
 #include <charconv>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <functional>
@@ -27,8 +25,6 @@
 #include <set>
 
 #include "catalog_internal.h"
-
-extern char** environ;
 
 namespace meltlab::datasets {
 
@@ -158,30 +154,6 @@ bool usable_file(const fs::path& p) {
   return fs::is_regular_file(p, ec) && fs::file_size(p, ec) > 0 && !ec;
 }
 
-// ---- running tar ----
-
-// Runs argv[0] (looked up in PATH) without a shell; stdout goes to /dev/null, stderr to
-// `stderr_file`. Returns the exit status (128 + signal if killed).
-int run_program(const std::vector<std::string>& argv, const fs::path& stderr_file, const std::string& who) {
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, stderr_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  std::vector<char*> args;
-  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-  args.push_back(nullptr);
-  pid_t pid = 0;
-  const int rc = posix_spawnp(&pid, argv[0].c_str(), &actions, nullptr, args.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (rc != 0) throw InputError(fmt::format("{}: cannot run {}: {}", who, argv[0], std::strerror(rc)));
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR)
-      throw InputError(fmt::format("{}: waiting for {} failed: {}", who, argv[0], std::strerror(errno)));
-  if (WIFEXITED(status)) return WEXITSTATUS(status);
-  return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : 255;
-}
-
 std::string first_line_of(const fs::path& file) {
   std::ifstream in(file);
   std::string line;
@@ -222,8 +194,17 @@ fs::path extracted_cgal_file(const DatasetEntry& e, const fs::path& cache_dir) {
                                  std::strerror(errno)));
   const ScopedFolder tmp(pattern);
   const fs::path log = tmp.path() / "tar.stderr";
-  const int status = run_program(
-      {"tar", "-xzf", archive.string(), "-C", tmp.path().string(), "--no-same-owner", e.source}, log, e.name);
+  ProcessSpec spec;
+  spec.argv = {"tar", "-xzf", archive.string(), "-C", tmp.path().string(), "--no-same-owner", e.source};
+  spec.stdout_file = kNullDevice;
+  spec.stderr_file = log;
+  ProcessStatus tar;
+  try {
+    tar = run_process(spec);
+  } catch (const InputError& ex) {
+    throw InputError(fmt::format("{}: {}", e.name, ex.what()));
+  }
+  const int status = tar.shell_status();
   if (status != 0) {
     const std::string says = first_line_of(log);
     throw InputError(fmt::format("{}: extracting {} from {} failed (tar exit status {}){}{}", e.name, e.source,

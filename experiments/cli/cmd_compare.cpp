@@ -12,7 +12,7 @@
 
 namespace meltlab::cli {
 
-Run add_compare(CLI::App& app, const std::string& command_line) {
+Run add_compare(CLI::App& app, const std::vector<std::string>& command_line) {
   auto* sub = app.add_subcommand(
       "compare", "Compare a simulate run with an observed photo sequence: P (Eq. 8.1) per photo, overlays, P curve");
   auto o = std::make_shared<experiments::CompareRunOptions>();

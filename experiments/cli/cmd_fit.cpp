@@ -44,7 +44,7 @@ std::map<std::string, double> parse_assignments(const std::vector<std::string>& 
 
 }  // namespace
 
-Run add_fit(CLI::App& app, const std::string& command_line) {
+Run add_fit(CLI::App& app, const std::vector<std::string>& command_line) {
   auto* sub = app.add_subcommand("fit", "Fit kg, kl parameters, time scale and registration to an observation sequence (Ceres)");
   auto o = std::make_shared<experiments::FitRunOptions>();
   auto precision = std::make_shared<std::string>("double");

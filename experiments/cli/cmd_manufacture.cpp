@@ -11,7 +11,7 @@
 
 namespace meltlab::cli {
 
-Run add_manufacture(CLI::App& app, const std::string& command_line) {
+Run add_manufacture(CLI::App& app, const std::vector<std::string>& command_line) {
   auto* sub = app.add_subcommand(
       "manufacture", "Melt an ice body with the physically based reference solver and photograph it (observations with truth)");
   auto o = std::make_shared<experiments::ManufactureOptions>();

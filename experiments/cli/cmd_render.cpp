@@ -13,7 +13,7 @@
 
 namespace meltlab::cli {
 
-Run add_render(CLI::App& app, const std::string& command_line) {
+Run add_render(CLI::App& app, const std::vector<std::string>& command_line) {
   auto* sub = app.add_subcommand("render", "Melt a mesh and ray-trace it as ice on a wet ground (Eq. 6.11, 7.17), or --liquid-figure");
   auto o = std::make_shared<experiments::RenderRunOptions>();
   auto no_liquid = std::make_shared<bool>(false);

@@ -18,7 +18,7 @@ std::atomic<bool> g_stop{false};
 extern "C" void on_interrupt(int) { g_stop.store(true); }
 }  // namespace
 
-Run add_simulate(CLI::App& app, const std::string& command_line) {
+Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
   auto* sub = app.add_subcommand("simulate", "Melt a mesh with the empirical surface model (Alg. 1-3) and record every cycle");
   auto o = std::make_shared<experiments::SimulateOptions>();
   auto precision = std::make_shared<std::string>("double");

@@ -37,11 +37,12 @@ verify::Similarity2D parse_misalignment(const std::string& text) {
 
 }  // namespace
 
-Run add_synth_sequence(CLI::App& app) {
+Run add_synth_sequence(CLI::App& app, const std::vector<std::string>& command_line) {
   auto* sub = app.add_subcommand(
       "synth-sequence",
       "Render a photo-like observation sequence of the empirical melt (inverse-crime data with known truth)");
   auto o = std::make_shared<experiments::SyntheticSequenceOptions>();
+  o->command_line = command_line;
   auto precision = std::make_shared<std::string>("double");
   auto units = std::make_shared<std::string>("relative");
   auto kn = std::make_shared<double>(0.0);

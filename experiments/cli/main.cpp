@@ -12,14 +12,15 @@
 #include <filesystem>
 #include <new>
 #include <map>
+#include <string>
+#include <vector>
 
 #include "cli_util.h"
 #include "commands.h"
 
 int main(int argc, char** argv) {
   using namespace meltlab;
-  std::string command_line;
-  for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
+  const std::vector<std::string> command_line(argv, argv + argc);
 
   CLI::App app{"meltlab: verification and validation of melting and sublimation visualization"};
   app.set_version_flag("--version", fmt::format("meltlab {} ({})", kVersion, kGitRevision));
@@ -37,7 +38,7 @@ int main(int argc, char** argv) {
   add(cli::add_mesh_info(app));
   add(cli::add_dataset(app));
   add(cli::add_compare(app, command_line));
-  add(cli::add_synth_sequence(app));
+  add(cli::add_synth_sequence(app, command_line));
   add(cli::add_fit(app, command_line));
   add(cli::add_manufacture(app, command_line));
   add(cli::add_render(app, command_line));

@@ -4,7 +4,7 @@
 #include <meltlab/experiments/simulate_run.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
-#include <meltlab/version.h>
+#include <meltlab/experiments/provenance.h>
 
 #include <fmt/format.h>
 
@@ -128,6 +128,7 @@ json summarize_frames(const std::vector<verify::FrameResult>& frames) {
 
 CompareRunResult run_compare(const CompareRunOptions& o, const std::function<void(const CompareRunProgress&)>& progress) {
   const auto t_start = std::chrono::steady_clock::now();
+  Provenance provenance = start_provenance("compare", o.command_line);
   const auto& m = o.compare.mapping;
   require(!(m.cycles_per_photo && m.seconds_per_cycle), "--cycles-per-photo and --seconds-per-cycle exclude each other");
   if (m.cycles_per_photo)
@@ -155,9 +156,6 @@ CompareRunResult run_compare(const CompareRunOptions& o, const std::function<voi
   out.compare = compare_and_write(obs, replay, copt, folder.path(), o.overlay_every, progress, &frame_ms);
   out.summary = summarize_frames(out.compare.frames);
   json j;
-  j["meltlab_version"] = kVersion;
-  j["git_revision"] = kGitRevision;
-  j["command_line"] = o.command_line;
   j["run"] = {{"dir", fs::absolute(o.run_dir).string()}, {"cycles_run", replay.cycles_run()},
               {"mesh", replay.run_json().value("mesh", json::object())}};
   j["observations"] = {{"manifest", fs::absolute(obs.manifest).string()},
@@ -193,7 +191,7 @@ CompareRunResult run_compare(const CompareRunOptions& o, const std::function<voi
   j["timing"] = {{"total_s", total_s},
                  {"frame_ms_median", sorted.empty() ? 0.0 : sorted[sorted.size() / 2]},
                  {"frame_ms_max", sorted.empty() ? 0.0 : sorted.back()}};
-  j["hardware"] = hardware_json();
+  j["provenance"] = finish_provenance(provenance);
   write_text_atomically(folder.path() / "compare.json", j.dump(2) + "\n");
   folder.commit();
   return out;

@@ -7,7 +7,7 @@
 #include <meltlab/core/error.h>
 #include <meltlab/sim/kl_field.h>
 #include <meltlab/sim/quality.h>
-#include <meltlab/version.h>
+#include <meltlab/experiments/provenance.h>
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
@@ -179,6 +179,7 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
   require(o.volume_weight >= 0 && std::isfinite(o.volume_weight), "--volume-weight: must be >= 0");
   require(std::isfinite(o.first_cycle) && o.first_cycle >= 0, "--first-cycle: must be >= 0");
   RunFolder folder(o.out_dir, {"--out", "fit.json", "fit", o.overwrite});
+  Provenance provenance = start_provenance("fit", o.command_line);
   const verify::ObservationSequence obs = verify::load_observations(o.observations);
   std::shared_ptr<const PreparedSimulation> prepared = prepare_simulation(o.simulation, /*check_output=*/false);
 
@@ -244,9 +245,6 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
   const verify::CompareResult cmp = compare_and_write(obs, *meshes, copt, folder.path() / "comparison", o.overlay_every, {});
 
   json j;
-  j["meltlab_version"] = kVersion;
-  j["git_revision"] = kGitRevision;
-  j["command_line"] = o.command_line;
   j["observations"] = {{"manifest", fs::absolute(obs.manifest).string()}, {"manifest_hash", file_hash(obs.manifest)},
                        {"frames", n_frames}, {"object", obs.object}};
   j["simulation"] = options_to_json(o.simulation);
@@ -306,7 +304,8 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
       j["truth"] = {{"error", e.what()}};
     }
   }
-  j["hardware"] = hardware_json();
+  provenance.timings_s.emplace_back("fit", fit.time_s);
+  j["provenance"] = finish_provenance(provenance);
   write_text_atomically(folder.path() / "fit.json", j.dump(2) + "\n");
   folder.commit();
   return j;

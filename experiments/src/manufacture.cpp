@@ -12,7 +12,7 @@
 #include <meltlab/sim/quality.h>
 #include <meltlab/verify/metrics.h>
 #include <meltlab/verify/observations.h>
-#include <meltlab/version.h>
+#include <meltlab/experiments/provenance.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -49,6 +49,7 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
   require(std::isfinite(o.fill) && o.fill > 0 && o.fill <= 1, "--fill: must be in (0, 1]");
   require(o.jpeg_quality >= 1 && o.jpeg_quality <= 100, "--jpeg-quality: must be in [1, 100]");
   RunFolder folder(o.out_dir, {"--out", "manifest.yaml", "sequence", o.overwrite});
+  Provenance provenance = start_provenance("manufacture", o.command_line);
   const fs::path& dir = folder.path();
 
   // ---- the object: scaled to the ice mass, standing on the ground, centred ----
@@ -158,9 +159,7 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
   write_text_atomically(dir / "mass.csv", mass_csv.str());
   const auto ledger = solver.ledger();
   json truth;
-  truth["meltlab_version"] = kVersion;
   truth["generator"] = "meltlab manufacture (enthalpy reference solver + photo renderer)";
-  truth["command_line"] = o.command_line;
   truth["mesh"] = {{"source", mesh_path.string()}, {"source_hash", file_hash(mesh_path)}, {"scale", scale},
                    {"shift_m", {shift.x(), shift.y(), shift.z()}}, {"initial_mesh", "truth/initial_mesh.ply"}};
   truth["physics"] = {{"voxel_mm", o.voxel_mm},
@@ -182,6 +181,7 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
                     {"jpeg_quality", o.jpeg_quality}, {"seed", o.seed}};
   truth["interval_s"] = o.interval_s;
   truth["frames"] = frames;
+  truth["provenance"] = finish_provenance(provenance);
   write_text_atomically(dir / "truth" / "truth.json", truth.dump(2) + "\n");
 
   SequenceManifest manifest;

@@ -6,7 +6,7 @@
 #include <meltlab/render/render_assets.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
-#include <meltlab/version.h>
+#include <meltlab/experiments/provenance.h>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -87,6 +87,7 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   if (o.height > 0) scene.height = o.height;
   auto prepared = prepare_simulation(o.melt, /*check_output=*/false);
   RunFolder folder(o.out_dir, {"--out", "render.json", "run", o.overwrite});
+  Provenance provenance = start_provenance("render", o.command_line);
   const fs::path& dir = folder.path();
 
   // ---- set up ----
@@ -176,9 +177,6 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   }
   result.median_trace_ms = median(trace_ms);
   json j;
-  j["meltlab_version"] = std::string(kVersion);
-  j["git_revision"] = std::string(kGitRevision);
-  j["command_line"] = o.command_line;
   j["mesh"] = prepared->mesh_json;
   j["mesh_up_axis"] = std::string(1, o.up);
   j["mesh_lift_z"] = lift;
@@ -211,7 +209,7 @@ RenderRunResult run_render(const RenderRunOptions& o) {
     j["median_trace_ms"] = result.median_trace_ms;
   }
   j["threads"] = threads;
-  j["hardware"] = hardware_json();
+  j["provenance"] = finish_provenance(provenance);
   result.run_json = j;
   write_text_atomically(dir / "render.json", j.dump(2) + "\n");
   folder.commit();

@@ -4,31 +4,24 @@
 #include <meltlab/experiments/reproduce.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
+#include <meltlab/core/process.h>
+#include <meltlab/core/time.h>
 #include <meltlab/version.h>
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <cerrno>
 #include <chrono>
 #include <cstdint>
-#include <cstring>
-#include <ctime>
 #include <fstream>
 #include <mutex>
 #include <regex>
 #include <set>
 #include <sstream>
 #include <thread>
-
-extern char** environ;
 
 namespace meltlab::experiments {
 namespace fs = std::filesystem;
@@ -199,15 +192,6 @@ ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) 
   return e;
 }
 
-std::string now_utc() {
-  const auto t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
 std::string last_line(const fs::path& p) {
   std::ifstream in(p);
   std::string line, last;
@@ -217,29 +201,6 @@ std::string last_line(const fs::path& p) {
     if (!line.empty()) last = line;
   }
   return last;
-}
-
-/// Runs argv with stdout/stderr redirected; returns the exit code (128+signal if killed).
-int spawn_and_wait(const std::vector<std::string>& argv, const fs::path& out, const fs::path& err, bool search_path) {
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  std::vector<char*> cargv;
-  for (const auto& a : argv) cargv.push_back(const_cast<char*>(a.c_str()));
-  cargv.push_back(nullptr);
-  pid_t pid = 0;
-  const int rc = search_path ? posix_spawnp(&pid, cargv[0], &fa, nullptr, cargv.data(), environ)
-                             : posix_spawn(&pid, cargv[0], &fa, nullptr, cargv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) throw InputError(fmt::format("cannot start '{}': {}", argv[0], std::strerror(rc)));
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR) throw InvariantError(fmt::format("waitpid: {}", std::strerror(errno)));
-  if (WIFEXITED(status)) return WEXITSTATUS(status);
-  if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
-  return -1;
 }
 
 std::string quote_join(const std::vector<std::string>& args) {
@@ -352,7 +313,13 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
       int code = -1;
       try {
         fs::create_directories(out_file.parent_path());
-        code = spawn_and_wait(argv, out_file, err_file, s.kind == "python");
+        ProcessSpec spec;
+        spec.argv = argv;
+        spec.search_path = s.kind == "python";  // meltlab is started by its absolute path
+        spec.stdin_file = kNullDevice;
+        spec.stdout_file = out_file;
+        spec.stderr_file = err_file;
+        code = run_process(spec).shell_status();
       } catch (const std::exception& ex) {
         out.error = fmt::format("step {}: {}", s.name, ex.what());
       }
@@ -371,7 +338,7 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
     json steps = json::array();
     for (const auto& s : out.steps) steps.push_back({{"name", s.name}, {"exit_code", s.exit_code}, {"seconds", s.seconds}});
     const json marker = {{"experiment", e.name}, {"hash", e.hash},       {"mode", o.quick ? "quick" : "full"},
-                         {"finished", now_utc()}, {"seconds", out.seconds}, {"steps", steps},
+                         {"finished", utc_timestamp_iso8601_now()}, {"seconds", out.seconds}, {"steps", steps},
                          {"config", e.config_file.string()}};
     write_text_atomically(done, marker.dump(2) + "\n");  // last: the folder is complete
   };
@@ -478,7 +445,7 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
     return json{{"meltlab", {{"version", kVersion}, {"git_revision", kGitRevision}}},
                 {"mode", o.quick ? "quick" : "full"},
                 {"jobs", jobs},
-                {"finished", now_utc()},
+                {"finished", utc_timestamp_iso8601_now()},
                 {"seconds", result.seconds},
                 {"interrupted", result.interrupted},
                 {"experiments", ex}};
@@ -495,7 +462,12 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
     }
     int code = -1;
     try {
-      code = spawn_and_wait({o.python, script.string(), o.out_dir.string()}, log_out, log_err, true);
+      ProcessSpec spec;
+      spec.argv = {o.python, script.string(), o.out_dir.string()};
+      spec.stdin_file = kNullDevice;
+      spec.stdout_file = log_out;
+      spec.stderr_file = log_err;
+      code = run_process(spec).shell_status();
     } catch (const std::exception& ex) {
       result.report_status = fmt::format("failed: {}", ex.what());
     }

@@ -7,21 +7,18 @@
 #include <meltlab/sim/mesh_order.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/sim/topology.h>
-#include <meltlab/version.h>
+#include <meltlab/experiments/provenance.h>
 
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <ctime>
 #include <fstream>
 #include <numeric>
 #include <sstream>
-#include <thread>
 
 namespace meltlab::experiments {
 
@@ -37,13 +34,6 @@ const char* name_of(sim::DeformMode m) {
     case sim::DeformMode::kEdgeOnly: return "edge";
   }
   return "?";
-}
-
-std::string now_iso8601() {
-  const std::time_t t = std::time(nullptr);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
-  return buf;
 }
 
 double percentile(std::vector<double> v, double q) {
@@ -136,22 +126,6 @@ SimulateOptions options_from_json(const json& j, const std::string& source) {
     throw InputError(fmt::format("{}: run options incomplete or malformed: {}", source, e.what()));
   }
   return o;
-}
-
-json hardware_json() {
-  json h;
-  std::ifstream cpu("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(cpu, line))
-    if (line.rfind("model name", 0) == 0) {
-      h["cpu"] = line.substr(line.find(':') + 2);
-      break;
-    }
-  h["hardware_threads"] = std::thread::hardware_concurrency();
-  h["tbb_default_concurrency"] = tbb::info::default_concurrency();
-  char host[256] = {0};
-  if (::gethostname(host, sizeof host - 1) == 0) h["host"] = host;
-  return h;
 }
 
 fs::path resolve_mesh_argument(const std::string& mesh) {
@@ -281,7 +255,7 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
   const SimulateOptions& o = p.opt;
   if (!p.output) throw InvariantError("run_simulation: the simulation was prepared without an output folder");
   const fs::path dir = p.output->path();
-  const std::string started = now_iso8601();
+  Provenance provenance = start_provenance("simulate", o.command_line);
   create_output_directories(dir / "snapshots", "--out");
   const int threads = o.threads == 0 ? tbb::info::default_concurrency() : o.threads;
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
@@ -406,13 +380,9 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
       {"kl_file", p.opt.kl_file.string()},
       {"kl_file_hash", p.opt.kl_file.empty() ? std::string() : file_hash(p.opt.kl_file)},
   };
+  provenance.timings_s.emplace_back("cycles", total_s);
   json run = {
-      {"meltlab", {{"version", kVersion}, {"git_revision", kGitRevision}}},
-      {"command", "simulate"},
-      {"command_line", o.command_line},
       {"options", options_to_json(p.opt)},
-      {"started_utc", started},
-      {"finished_utc", now_iso8601()},
       {"status", result.status},
       {"mesh", p.mesh_json},
       {"parameters", params},
@@ -442,9 +412,9 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
         {"intersections", intersections}}},
       {"outputs", {{"stats", "stats.csv"}, {"snapshots", snapshots}}},
       {"stats_every", o.stats_every},
-      {"hardware", hardware_json()},
   };
   if (!result.error.empty()) run["error"] = result.error;
+  run["provenance"] = finish_provenance(provenance);
   write_text_atomically(dir / "run.json", run.dump(2) + "\n");
   p.output->commit();
   result.run_json = std::move(run);

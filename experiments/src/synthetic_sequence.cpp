@@ -7,7 +7,7 @@
 #include <meltlab/core/error.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/verify/observations.h>
-#include <meltlab/version.h>
+#include <meltlab/experiments/provenance.h>
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -95,6 +95,7 @@ void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::funct
   require(std::isfinite(mis.scale) && mis.scale > 0 && std::isfinite(mis.angle_rad) && mis.translation.allFinite(),
           "--misalign: scale must be > 0 and all values finite");
   RunFolder folder(o.out_dir, {"--out", "manifest.yaml", "sequence", o.overwrite});
+  Provenance provenance = start_provenance("synth-sequence", o.command_line);
   const fs::path& dir = folder.path();
 
   RunReplay simulation(o.simulation);
@@ -171,7 +172,6 @@ void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::funct
 
   write_text_atomically(dir / "volume.csv", volume_csv.str());
   json truth;
-  truth["meltlab_version"] = kVersion;
   truth["generator"] = "meltlab synth-sequence (empirical model, inverse-crime data)";
   truth["simulation"] = options_to_json(o.simulation);
   truth["mesh_hash"] = file_hash(simulation.prepared().mesh_path);
@@ -189,6 +189,7 @@ void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::funct
   truth["seed"] = o.seed;
   truth["image_model"] = {{"noise_sigma", o.noise_sigma}, {"blur_sigma_px", o.blur_sigma_px}, {"jpeg_quality", o.jpeg_quality}};
   truth["frames"] = frames;
+  truth["provenance"] = finish_provenance(provenance);
   write_text_atomically(dir / "truth" / "truth.json", truth.dump(2) + "\n");
 
   SequenceManifest manifest;

@@ -7,7 +7,7 @@
 //                          common light grey) of every K-th compared frame
 //   DIR/p_curve.png        P against photo number (Figs. 8.7-8.10)
 //   DIR/compare.json       options, inputs (with hashes), summary (P_first, P_last, P_max,
-//                          mean, frames compared/skipped), registration, timings
+//                          mean, frames compared/skipped), registration, timings, provenance
 // Every input is validated before DIR is touched; every file is written atomically and
 // compare.json, written last, marks a finished comparison.
 
@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace meltlab::experiments {
 
@@ -28,7 +29,7 @@ struct CompareRunOptions {
   verify::CompareOptions compare;
   int overlay_every = 1;               ///< write the overlay of every K-th compared frame (0 = none)
   bool overwrite = false;              ///< allow DIR to hold a previous comparison
-  std::string command_line;
+  std::vector<std::string> command_line;  ///< argv, recorded in the provenance of the run record
 };
 
 struct CompareRunProgress {

@@ -3,7 +3,7 @@
 // empirical model to an observation sequence (verify/fit.h) and writes
 //   DIR/fit.json          estimates, standard errors, correlations, costs, iterations,
 //                         simulations, time, the kg scan, frames used/refused, hold-out P,
-//                         and (if the manifest's ground truth names them) the true values
+//                         and (if the manifest's ground truth names them) the true values; provenance
 //   DIR/comparison/       per_frame.csv, overlays/, p_curve.png of the fitted run (all
 //                         frames, held-out ones included)
 // Every input is validated before DIR is touched; fit.json is written last.
@@ -36,7 +36,7 @@ struct FitRunOptions {
   verify::FitOptions fit_options;
   int overlay_every = 10;
   bool overwrite = false;
-  std::string command_line;
+  std::vector<std::string> command_line;  ///< argv, recorded in the provenance of the run record
 };
 
 /// Runs the fit and writes DIR; returns fit.json.

@@ -9,7 +9,7 @@
 //   DIR/frames/frame_0001.jpg ...   the photos
 //   DIR/manifest.yaml               observation manifest (pinhole camera, interval, defaults)
 //   DIR/mass.csv                    time_s, mass_g of the ice (the weighing experiment)
-//   DIR/truth/truth.json            parameters, per frame: time, mass, volume, true outline
+//   DIR/truth/truth.json            parameters, per frame: time, mass, volume, true outline; provenance
 //                                   area, and the P of the default segmentation against it
 //   DIR/truth/masks/frame_NNNN.png  true outlines: silhouette of the ice surface (the ½ level
 //                                   of the solid fraction, marching tetrahedra)
@@ -23,6 +23,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace meltlab::experiments {
 
@@ -42,7 +43,7 @@ struct ManufactureOptions {
   std::uint64_t seed = 1;
   std::filesystem::path out_dir;
   bool overwrite = false;
-  std::string command_line;
+  std::vector<std::string> command_line;  ///< argv, recorded in the provenance of the run record
 };
 
 struct ManufactureProgress {

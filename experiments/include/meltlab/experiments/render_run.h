@@ -3,7 +3,7 @@
 // (monograph chapters 6-7), writing
 //   DIR/frames/frame_<cycle>.png|.exr   every K cycles (and the first and last)
 //   DIR/frames.csv                      per frame: cycle, triangles, BVH update, timings, mask
-//   DIR/render.json                     options, resolved scene, skipped terms, timings
+//   DIR/render.json                     options, resolved scene, skipped terms, timings, provenance
 // or, with liquid_figure, the mask alone after the cycles of Fig. 7.6:
 //   DIR/liquid/mask_<cycle>.png         8-bit gray, white = deposit_value, seen from above
 //   DIR/liquid/mask_sums.csv            cycle, triangles, mask sum, wet texels, max
@@ -39,7 +39,7 @@ struct RenderRunOptions {
   int width = 0, height = 0;            ///< override the scene's size (0 = keep)
   bool liquid_figure = false;           ///< Fig. 7.6 mode: masks only
   std::vector<std::int64_t> figure_cycles{100, 400, 700, 1000, 2000, 3000, 6000, 10000};
-  std::string command_line;
+  std::vector<std::string> command_line;  ///< argv, recorded in the provenance of the run record
 };
 
 struct RenderRunResult {

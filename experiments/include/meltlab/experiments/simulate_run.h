@@ -2,7 +2,7 @@
 // `meltlab simulate`: runs the melt cycle on a mesh and writes the run folder
 //   DIR/stats.csv         one row per recorded cycle (cycle 0 = the input)
 //   DIR/snapshots/*.ply   mesh snapshots (cycle 0, every K cycles, and the last cycle)
-//   DIR/run.json          parameters (as given and resolved), versions, timings, result
+//   DIR/run.json          parameters (as given and resolved), timings, result, provenance
 // Every input is validated before DIR is touched; every file is written atomically.
 
 #include <meltlab/core/run_folder.h>
@@ -18,6 +18,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace meltlab::experiments {
 
@@ -51,7 +52,7 @@ struct SimulateOptions {
   std::int64_t intersect_every = 0;  ///< CGAL self-intersection test every K cycles (0 = never)
   std::filesystem::path out_dir;
   bool overwrite = false;            ///< allow DIR to hold a previous run
-  std::string command_line;          ///< recorded in run.json
+  std::vector<std::string> command_line;  ///< argv, recorded in run.json's provenance
 };
 
 struct SimulateProgress {
@@ -128,8 +129,5 @@ SimulateResult run_simulation(PreparedSimulation& prepared, const std::function<
 
 /// Resolves a --mesh argument: an existing file, else a catalog dataset (fetched/cached).
 std::filesystem::path resolve_mesh_argument(const std::string& mesh);
-
-/// Machine description for run files: CPU model, cores, OS.
-nlohmann::json hardware_json();
 
 }  // namespace meltlab::experiments

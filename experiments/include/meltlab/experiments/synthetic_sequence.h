@@ -10,7 +10,7 @@
 //                                  lens blur, sensor noise, JPEG (or PNG) encoding
 //   DIR/manifest.yaml              observation manifest (camera, interval, default segmentation)
 //   DIR/volume.csv                 time_s, volume_m3 of the simulated mesh (mesh units = m)
-//   DIR/truth/truth.json           parameters, cycle and true area per frame, the misalignment
+//   DIR/truth/truth.json           parameters, cycle and true area per frame, the misalignment, provenance
 //   DIR/truth/masks/frame_0001.png true masks (coverage >= 1/2) in photo coordinates
 // The manifest is written last: its presence marks a complete sequence.
 
@@ -21,6 +21,8 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <string>
+#include <vector>
 
 namespace meltlab::experiments {
 
@@ -39,6 +41,7 @@ struct SyntheticSequenceOptions {
   int jpeg_quality = 92;                 ///< 0 writes PNG instead
   std::filesystem::path out_dir;
   bool overwrite = false;
+  std::vector<std::string> command_line;  ///< argv, recorded in the provenance of truth/truth.json
 };
 
 struct SyntheticProgress {

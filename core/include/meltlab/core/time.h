@@ -1,0 +1,17 @@
+#pragma once
+// Wall-clock timestamps for records (run.json, fit.json, done.json, summary.json): one format
+// everywhere, so records sort and compare as text.
+
+#include <chrono>
+#include <string>
+
+namespace meltlab {
+
+/// `t` as an ISO-8601 UTC timestamp to the second, "2026-11-25T12:04:44Z" (the fraction of
+/// the second is dropped, not rounded). Thread-safe (gmtime_r).
+std::string utc_timestamp_iso8601(std::chrono::system_clock::time_point t);
+
+/// utc_timestamp_iso8601 of now.
+std::string utc_timestamp_iso8601_now();
+
+}  // namespace meltlab

@@ -1,0 +1,20 @@
+#include <meltlab/core/time.h>
+
+#include <ctime>
+
+namespace meltlab {
+
+std::string utc_timestamp_iso8601(std::chrono::system_clock::time_point t) {
+  // floor, not to_time_t's implementation-defined rounding: a timestamp never lies in the future.
+  const auto seconds = std::chrono::floor<std::chrono::seconds>(t);
+  const std::time_t tt = static_cast<std::time_t>(seconds.time_since_epoch().count());
+  std::tm tm{};
+  gmtime_r(&tt, &tm);
+  char buf[32];
+  const std::size_t n = std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return std::string(buf, n);
+}
+
+std::string utc_timestamp_iso8601_now() { return utc_timestamp_iso8601(std::chrono::system_clock::now()); }
+
+}  // namespace meltlab
