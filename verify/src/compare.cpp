@@ -110,7 +110,7 @@ void write_per_frame_csv(const fs::path& file, const std::vector<FrameResult>& f
   write_text_atomically(file, out.str());
 }
 
-CompareResult compare_sequence(const ObservationSequence& obs, MeshSequence& meshes, const CompareOptions& options,
+CompareResult compare_sequence(const ObservationSequence& obs, sim::MeshSequence& meshes, const CompareOptions& options,
                                const std::function<void(const FrameResult&, const FrameImages&)>& on_frame) {
   CompareResult result;
   const std::string manifest = obs.manifest.string();

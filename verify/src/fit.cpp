@@ -209,7 +209,7 @@ class Evaluator {
     for (const At& n : at) cycles.insert(n.cycle);
     for (const auto& vc : volume_cycles) cycles.insert(vc.begin(), vc.end());
     std::map<std::int64_t, double> volume_at;
-    const std::unique_ptr<MeshSequence> seq = model_.start(model_values);
+    const std::unique_ptr<sim::MeshSequence> seq = model_.start(model_values);
     cv::Mat coverage;
     for (const std::int64_t cycle : cycles) {
       const sim::TriMesh<double>& mesh = seq->mesh_at(cycle);
