@@ -16,7 +16,8 @@ std::function<void()> add_melt_options(CLI::App& sub, experiments::SimulateOptio
   auto units = std::make_shared<std::string>("relative");
   if (set.units)
     sub.add_option("--units", *units,
-                   "relative: --ke/--kn/--kr are multiples of the mean input edge length L0; absolute: mesh units")
+                   std::string("relative: ") + (set.kn ? "--ke/--kn/--kr" : "--ke/--kr") +
+                       " are multiples of the mean input edge length L0; absolute: mesh units")
         ->check(CLI::IsMember({"relative", "absolute"}))
         ->default_val("relative");
   if (set.kl) sub.add_option("--kl", options.kl_file, set.kl_help);
