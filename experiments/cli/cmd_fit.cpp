@@ -10,6 +10,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "melt_options.h"
 
 namespace meltlab::cli {
 
@@ -47,15 +48,12 @@ std::map<std::string, double> parse_assignments(const std::vector<std::string>& 
 Run add_fit(CLI::App& app, const std::vector<std::string>& command_line) {
   auto* sub = app.add_subcommand("fit", "Fit kg, kl parameters, time scale and registration to an observation sequence (Ceres)");
   auto o = std::make_shared<experiments::FitRunOptions>();
-  auto precision = std::make_shared<std::string>("double");
-  auto units = std::make_shared<std::string>("relative");
   auto fit = std::make_shared<std::string>("kg,reg");
   auto fix = std::make_shared<std::vector<std::string>>();
   auto initial = std::make_shared<std::vector<std::string>>();
   auto bounds = std::make_shared<std::vector<std::string>>();
   auto no_scan = std::make_shared<bool>(false);
   o->command_line = command_line;
-  o->simulation.kg = 0.5;
   auto& s = o->simulation;
   sub->add_option("--mesh", s.mesh, "Mesh file or dataset name (the object at the first photo)")->required();
   sub->add_option("--observations", o->observations, "Observation manifest (.yaml/.yml/.json)")->required();
@@ -67,16 +65,13 @@ Run add_fit(CLI::App& app, const std::vector<std::string>& command_line) {
   sub->add_option("--fix", *fix, "Fixed values: name=value[,name=value...]");
   sub->add_option("--initial", *initial, "Starting values: name=value[,...]");
   sub->add_option("--bound", *bounds, "Bounds: name=lower:upper (repeatable)");
-  sub->add_option("--kg", s.kg, "Starting kg")->default_val(0.5);
-  sub->add_option("--ke", s.kE, "kE (x L0 with --units relative)")->default_val(0.05);
-  sub->add_option("--kr", s.kr, "kr (x L0 with --units relative)")->default_val(0.5);
-  sub->add_option("--units", *units, "relative or absolute coefficients")
-      ->check(CLI::IsMember({"relative", "absolute"}))
-      ->default_val("relative");
-  sub->add_option("--kl", s.kl_file, "YAML file with the local coefficient field (its numbers can be fitted)");
-  sub->add_option("--precision", *precision, "Floating point type of the mesh")
-      ->check(CLI::IsMember({"float", "double"}))
-      ->default_val("double");
+  // kg is where the fit starts (0.5: mid-range); kN is fitted as "kn" (--fit), not an option.
+  MeltOptionSet melt;
+  melt.kg = 0.5;
+  melt.kg_help = "Starting kg";
+  melt.kn = false;
+  melt.kl_help = "YAML file with the local coefficient field (its numbers can be fitted)";
+  const auto store_melt_options = add_melt_options(*sub, s, melt);
   sub->add_option("--cycles-per-photo", o->cycles_per_photo, "Cycles between photos (start value when fitted)")->default_val(7.0);
   sub->add_option("--first-cycle", o->first_cycle, "Cycle shown by the first photo")->default_val(0);
   sub->add_option("--holdout", o->holdout, "Fraction of the last photos kept out of the fit and predicted")->default_val(0.0);
@@ -91,8 +86,7 @@ Run add_fit(CLI::App& app, const std::vector<std::string>& command_line) {
   sub->add_flag("--overwrite", o->overwrite, "Allow --out to hold a previous fit");
 
   return [=]() {
-    o->simulation.double_precision = *precision == "double";
-    o->simulation.relative_units = *units == "relative";
+    store_melt_options();
     o->fit.clear();
     std::stringstream in(*fit);
     std::string item;

@@ -10,6 +10,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "melt_options.h"
 
 namespace meltlab::cli {
 
@@ -27,10 +28,11 @@ Run add_render(CLI::App& app, const std::vector<std::string>& command_line) {
   sub->add_option("--out", o->out_dir, "Output folder (frames/, frames.csv, render.json)")->required();
   sub->add_option("--width", o->width, "Image width for the automatic camera (overrides the scene's)")->default_val(0);
   sub->add_option("--height", o->height, "Image height for the automatic camera (overrides the scene's)")->default_val(0);
-  sub->add_option("--kg", o->melt.kg, "Global rate coefficient kg in [0, 1]")->default_val(1.0);
-  sub->add_option("--ke", o->melt.kE, "kE relative to the mean edge length L0, per cycle")->default_val(0.05);
-  sub->add_option("--kr", o->melt.kr, "kr relative to L0: shorter edges collapse")->default_val(0.5);
-  sub->add_option("--threads", o->melt.threads, "Worker threads (0 = all cores, 1 = serial)")->default_val(0);
+  // Render melts in double precision with coefficients relative to L0 and kN = kE / 100.
+  MeltOptionSet melt;
+  melt.kn = melt.units = melt.kl = melt.precision = false;
+  melt.threads = true;
+  const auto store_melt_options = add_melt_options(*sub, o->melt, melt);
   sub->add_flag("--no-liquid", *no_liquid, "Sublimation: no liquid stage (the mask is neither evolved nor shaded)");
   sub->add_option("--mask-resolution", o->mask_resolution, "Liquid mask texels per side")->default_val(256);
   sub->add_option("--mask-extent", o->mask_extent, "Mask side / the mesh's larger horizontal extent")->default_val(3.0);
@@ -51,6 +53,7 @@ Run add_render(CLI::App& app, const std::vector<std::string>& command_line) {
       ->default_str("100,400,700,1000,2000,3000,6000,10000");
   sub->add_flag("--overwrite", o->overwrite, "Allow --out to hold a previous render");
   return [=]() {
+    store_melt_options();
     o->liquid = !*no_liquid;
     o->place_on_ground = !*no_place;
     o->up = (*up)[0];

@@ -10,6 +10,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "melt_options.h"
 
 namespace meltlab::cli {
 
@@ -21,10 +22,7 @@ extern "C" void on_interrupt(int) { g_stop.store(true); }
 Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
   auto* sub = app.add_subcommand("simulate", "Melt a mesh with the empirical surface model (Alg. 1-3) and record every cycle");
   auto o = std::make_shared<experiments::SimulateOptions>();
-  auto precision = std::make_shared<std::string>("double");
-  auto units = std::make_shared<std::string>("relative");
   auto order = std::make_shared<std::string>("morton");
-  auto kn = std::make_shared<double>(0.0);
   auto no_repair = std::make_shared<bool>(false);
   auto keep_going = std::make_shared<bool>(false);
   o->command_line = command_line;
@@ -32,14 +30,9 @@ Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
   sub->add_option("--mesh", o->mesh, "Mesh file (.off .ply .obj .stl) or a dataset name (meltlab dataset list)")->required();
   sub->add_option("--cycles", o->cycles, "Number of cycles (stops earlier when everything has melted)")->default_val(1000);
   sub->add_option("--out", o->out_dir, "Output folder (stats.csv, run.json, snapshots/)")->required();
-  sub->add_option("--kg", o->kg, "Global rate coefficient kg in [0, 1] (ambient temperature)")->default_val(1.0);
-  sub->add_option("--ke", o->kE, "kE: weight of the edge vector M_E, per cycle (x L0 with --units relative)")->default_val(0.05);
-  CLI::Option* kn_opt = sub->add_option("--kn", *kn, "kN: weight of the normal vector M_N, per cycle (default kE/100)");
-  sub->add_option("--kr", o->kr, "kr: minimum edge length; shorter edges collapse (x L0 with --units relative)")->default_val(0.5);
-  sub->add_option("--units", *units, "relative: --ke/--kn/--kr are multiples of the mean input edge length L0; absolute: mesh units")
-      ->check(CLI::IsMember({"relative", "absolute"}))
-      ->default_val("relative");
-  sub->add_option("--kl", o->kl_file, "YAML file with the local coefficient field (top-level key 'kl'); default kl = 1");
+  MeltOptionSet melt;
+  melt.threads = true;
+  const auto store_melt_options = add_melt_options(*sub, *o, melt);
   std::map<std::string, sim::DeformMode> deform{{"combined", sim::DeformMode::kCombined},
                                                 {"normal", sim::DeformMode::kNormalOnly},
                                                 {"edge", sim::DeformMode::kEdgeOnly}};
@@ -66,10 +59,6 @@ Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
                   "Compact the arrays when fewer than this fraction of triangle slots is live (0 = never, as the monograph)")
       ->default_val(0.5);
   sub->add_flag("--no-repair", *no_repair, "Do not run the topology repair after Alg. 3 (the monograph's algorithms only)");
-  sub->add_option("--precision", *precision, "Floating point type of the mesh")
-      ->check(CLI::IsMember({"float", "double"}))
-      ->default_val("double");
-  sub->add_option("--threads", o->threads, "Worker threads (0 = all cores, 1 = serial execution)")->default_val(0);
   sub->add_option("--order", *order, "Vertex numbering: morton (renumbered for locality) or file (as in the input)")
       ->check(CLI::IsMember({"morton", "file"}))
       ->default_val("morton");
@@ -87,12 +76,10 @@ Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
   sub->add_flag("--overwrite", o->overwrite, "Allow --out to hold a previous run");
 
   return [=]() {
-    o->double_precision = *precision == "double";
-    o->relative_units = *units == "relative";
+    store_melt_options();
     o->morton_order = *order == "morton";
     o->repair_topology = !*no_repair;
     o->stop_when_empty = !*keep_going;
-    if (kn_opt->count() > 0) o->kN = *kn;
     auto prepared = experiments::prepare_simulation(*o);
     std::fprintf(stderr, "meltlab: %s: %zu vertices, %zu triangles, L0 = %.4g; kE = %.4g, kN = %.4g, kr = %.4g (mesh units)\n",
                  prepared->mesh_path.string().c_str(), prepared->mesh.V.size(), prepared->mesh.F.size(),

@@ -11,6 +11,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "melt_options.h"
 
 namespace meltlab::cli {
 
@@ -43,23 +44,10 @@ Run add_synth_sequence(CLI::App& app, const std::vector<std::string>& command_li
       "Render a photo-like observation sequence of the empirical melt (inverse-crime data with known truth)");
   auto o = std::make_shared<experiments::SyntheticSequenceOptions>();
   o->command_line = command_line;
-  auto precision = std::make_shared<std::string>("double");
-  auto units = std::make_shared<std::string>("relative");
-  auto kn = std::make_shared<double>(0.0);
   auto misalign = std::make_shared<std::string>();
   auto& s = o->simulation;
   sub->add_option("--mesh", s.mesh, "Mesh file or dataset name (the object at cycle 0)")->required();
-  sub->add_option("--kg", s.kg, "Global rate coefficient kg")->default_val(1.0);
-  sub->add_option("--ke", s.kE, "kE (x L0 with --units relative)")->default_val(0.05);
-  CLI::Option* kn_opt = sub->add_option("--kn", *kn, "kN (default kE/100)");
-  sub->add_option("--kr", s.kr, "kr (x L0 with --units relative)")->default_val(0.5);
-  sub->add_option("--units", *units, "relative or absolute coefficients")
-      ->check(CLI::IsMember({"relative", "absolute"}))
-      ->default_val("relative");
-  sub->add_option("--kl", s.kl_file, "YAML file with the local coefficient field");
-  sub->add_option("--precision", *precision, "Floating point type of the mesh")
-      ->check(CLI::IsMember({"float", "double"}))
-      ->default_val("double");
+  const auto store_melt_options = add_melt_options(*sub, s, MeltOptionSet{});
   sub->add_option("--photos", o->photos, "Number of photos")->default_val(100);
   sub->add_option("--cycles-per-photo", o->cycles_per_photo, "Simulation cycles between photos")->default_val(7.0);
   sub->add_option("--interval-s", o->interval_s, "Seconds between photos")->default_val(40.0);
@@ -75,9 +63,7 @@ Run add_synth_sequence(CLI::App& app, const std::vector<std::string>& command_li
   sub->add_flag("--overwrite", o->overwrite, "Allow --out to hold a previous sequence");
 
   return [=]() {
-    o->simulation.double_precision = *precision == "double";
-    o->simulation.relative_units = *units == "relative";
-    if (kn_opt->count() > 0) o->simulation.kN = *kn;
+    store_melt_options();
     if (!misalign->empty()) o->misalignment = parse_misalignment(*misalign);
     ProgressLine line;
     experiments::make_synthetic_sequence(*o, [&](const experiments::SyntheticProgress& p) {

@@ -1,7 +1,7 @@
 #include <meltlab/core/run_folder.h>
 #include <meltlab/core/hash.h>
 #include <meltlab/experiments/compare_run.h>
-#include <meltlab/experiments/simulate_run.h>
+#include <meltlab/experiments/run_replay.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
 #include <meltlab/experiments/provenance.h>
@@ -52,7 +52,7 @@ void require(bool ok, const std::string& message) {
 
 }  // namespace
 
-verify::CompareResult compare_and_write(const verify::ObservationSequence& obs, verify::MeshSequence& meshes,
+verify::CompareResult compare_and_write(const verify::ObservationSequence& obs, sim::MeshSequence& meshes,
                                         const verify::CompareOptions& options, const fs::path& out_dir, int overlay_every,
                                         const std::function<void(const CompareRunProgress&)>& progress,
                                         std::vector<double>* frame_ms) {

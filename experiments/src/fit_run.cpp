@@ -6,6 +6,7 @@
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
 #include <meltlab/sim/kl_field.h>
+#include <meltlab/sim/mesh_sequence.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/experiments/provenance.h>
 
@@ -75,7 +76,7 @@ class EmpiricalModel final : public verify::FitModel {
   EmpiricalModel(std::shared_ptr<const PreparedSimulation> p, YAML::Node kl_doc)
       : p_(std::move(p)), kl_doc_(std::move(kl_doc)) {}
 
-  std::unique_ptr<verify::MeshSequence> start(const std::map<std::string, double>& values) override {
+  std::unique_ptr<sim::MeshSequence> start(const std::map<std::string, double>& values) override {
     sim::MeltParams params = p_->params;
     sim::KlFieldPtr kl = p_->kl;
     bool kl_changed = false;
@@ -100,7 +101,7 @@ class EmpiricalModel final : public verify::FitModel {
       ctx.base_dir = p_->opt.kl_file.parent_path();
       kl = sim::parse_kl_field(doc["kl"], p_->opt.kl_file.string(), ctx);
     }
-    return std::make_unique<RunReplay>(p_, params, kl);
+    return std::make_unique<sim::MeltReplay>(p_->mesh, params, kl, p_->opt.double_precision);
   }
 
  private:

@@ -1,31 +1,20 @@
-// Replaying a finished simulate run (for compare and fit): the melt cycle is deterministic
-// for any thread count, so rebuilding the simulation from run.json's options reproduces the
-// run's meshes bit for bit.
+// Replaying a finished simulate run (for compare and synth-sequence): the melt cycle is
+// deterministic for any thread count, so rebuilding the simulation from run.json's options
+// reproduces the run's meshes bit for bit (the stepping is sim::MeltReplay's).
 
 #include <meltlab/core/input_file.h>
 #include <meltlab/core/hash.h>
-#include <meltlab/experiments/simulate_run.h>
+#include <meltlab/experiments/run_replay.h>
 #include <meltlab/core/error.h>
 
 #include <fmt/format.h>
-
-#include <fstream>
-#include <variant>
 
 namespace meltlab::experiments {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-struct RunReplay::Impl {
-  std::shared_ptr<const PreparedSimulation> prepared;
-  std::variant<std::monostate, sim::MeltSimulator<float>, sim::MeltSimulator<double>> simulator;
-  sim::TriMesh<double> current;
-  std::int64_t cycle = 0;
-  bool current_valid = false;
-};
-
-RunReplay::RunReplay(const fs::path& run_dir) : impl_(std::make_unique<Impl>()) {
+RunReplay::RunReplay(const fs::path& run_dir) {
   const fs::path file = run_dir / "run.json";
   const std::string name = file.string();
   std::error_code no_file;
@@ -52,61 +41,14 @@ RunReplay::RunReplay(const fs::path& run_dir) : impl_(std::make_unique<Impl>()) 
   start(o);
 }
 
-RunReplay::RunReplay(const SimulateOptions& options) : impl_(std::make_unique<Impl>()) {
-  cycles_run_ = -1;
-  start(options);
-}
-
-RunReplay::RunReplay(std::shared_ptr<const PreparedSimulation> prepared, const sim::MeltParams& params,
-                     sim::KlFieldPtr kl)
-    : impl_(std::make_unique<Impl>()) {
-  cycles_run_ = -1;
-  impl_->prepared = std::move(prepared);
-  start_simulator(params, std::move(kl));
-}
-
-void RunReplay::start(const SimulateOptions& o) {
-  impl_->prepared = prepare_simulation(o, /*check_output=*/false);
-  start_simulator(impl_->prepared->params, impl_->prepared->kl);
-}
-
-void RunReplay::start_simulator(const sim::MeltParams& params, sim::KlFieldPtr kl) {
-  const auto& p = *impl_->prepared;
-  if (p.opt.double_precision)
-    impl_->simulator.emplace<sim::MeltSimulator<double>>(sim::TriMesh<double>::from_indexed(p.mesh), params, std::move(kl),
-                                                         sim::Execution::kParallel);
-  else
-    impl_->simulator.emplace<sim::MeltSimulator<float>>(sim::TriMesh<float>::from_indexed(p.mesh), params, std::move(kl),
-                                                        sim::Execution::kParallel);
-}
-
-const PreparedSimulation& RunReplay::prepared() const { return *impl_->prepared; }
+RunReplay::RunReplay(const SimulateOptions& options) { start(options); }
 
 RunReplay::~RunReplay() = default;
 
-const sim::TriMesh<double>& RunReplay::mesh_at(std::int64_t cycle) {
-  if (cycle < impl_->cycle)
-    throw std::logic_error(fmt::format("RunReplay: cycle {} requested after cycle {}", cycle, impl_->cycle));
-  std::visit(
-      [&](auto& s) {
-        using S = std::decay_t<decltype(s)>;
-        if constexpr (!std::is_same_v<S, std::monostate>) {
-          while (impl_->cycle < cycle) {
-            s.step();
-            ++impl_->cycle;
-            impl_->current_valid = false;
-          }
-          if (!impl_->current_valid) {
-            if constexpr (std::is_same_v<S, sim::MeltSimulator<double>>)
-              impl_->current = s.mesh();
-            else
-              impl_->current = s.mesh().template cast<double>();
-            impl_->current_valid = true;
-          }
-        }
-      },
-      impl_->simulator);
-  return impl_->current;
+void RunReplay::start(const SimulateOptions& o) {
+  prepared_ = prepare_simulation(o, /*check_output=*/false);
+  melt_ = std::make_unique<sim::MeltReplay>(prepared_->mesh, prepared_->params, prepared_->kl,
+                                            prepared_->opt.double_precision, sim::Execution::kParallel);
 }
 
 }  // namespace meltlab::experiments

@@ -1,6 +1,7 @@
 #include <meltlab/core/run_folder.h>
 #include <meltlab/core/hash.h>
 #include <meltlab/experiments/sequence_manifest.h>
+#include <meltlab/experiments/run_replay.h>
 #include <meltlab/experiments/synthetic_sequence.h>
 #include <meltlab/render/silhouette.h>
 #include <meltlab/core/atomic_file.h>

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -69,23 +70,46 @@ int camera_height(const Camera& c) {
   return std::visit([](const auto& cam) { return cam.height; }, c);
 }
 
-std::pair<Vec2d, bool> project(const Camera& c, const Vec3d& p_world) {
+Camera crop(const Camera& c, const PixelWindow& window) {
   if (const auto* o = std::get_if<OrthographicTopDown>(&c)) {
-    const double u = (p_world.x() - o->centre.x()) * o->pixels_per_unit + 0.5 * (o->width - 1);
-    const double v = -(p_world.y() - o->centre.y()) * o->pixels_per_unit + 0.5 * (o->height - 1);
-    return {Vec2d(u, v), true};
+    // The window's centre pixel, in the full image, is where the cropped camera's centre is.
+    OrthographicTopDown cropped = *o;
+    cropped.width = window.width;
+    cropped.height = window.height;
+    cropped.centre.x() =
+        o->centre.x() + ((window.width - 1) / 2.0 - (o->width - 1) / 2.0 + window.x) / o->pixels_per_unit;
+    cropped.centre.y() =
+        o->centre.y() - ((window.height - 1) / 2.0 - (o->height - 1) / 2.0 + window.y) / o->pixels_per_unit;
+    return cropped;
   }
+  Pinhole cropped = std::get<Pinhole>(c);
+  cropped.width = window.width;
+  cropped.height = window.height;
+  cropped.cx -= window.x;
+  cropped.cy -= window.y;
+  return cropped;
+}
+
+PixelWindow pixel_window(const Camera& c, const Vec2d& lo_px, const Vec2d& hi_px) {
+  const int W = camera_width(c), H = camera_height(c);
+  const int x0 = std::clamp(static_cast<int>(std::floor(lo_px.x())), 0, W - 1);
+  const int y0 = std::clamp(static_cast<int>(std::floor(lo_px.y())), 0, H - 1);
+  const int x1 = std::clamp(static_cast<int>(std::ceil(hi_px.x())), x0 + 1, W);
+  const int y1 = std::clamp(static_cast<int>(std::ceil(hi_px.y())), y0 + 1, H);
+  return PixelWindow{x0, y0, x1 - x0, y1 - y0};
+}
+
+double ground_units_per_pixel(const Camera& c) {
+  if (const auto* o = std::get_if<OrthographicTopDown>(&c)) return 1.0 / o->pixels_per_unit;
   const auto& p = std::get<Pinhole>(c);
-  const Vec3d q = p.camera_from_world * p_world;
-  if (!(q.z() > 0.0)) return {Vec2d(std::nan(""), std::nan("")), false};
-  const double x = q.x() / q.z(), y = q.y() / q.z();
-  const double k1 = p.distortion[0], k2 = p.distortion[1], p1 = p.distortion[2], p2 = p.distortion[3],
-               k3 = p.distortion[4];
-  const double r2 = x * x + y * y;
-  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-  const double xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
-  const double yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
-  return {Vec2d(p.fx * xd + p.cx, p.fy * yd + p.cy), true};
+  // Ray through the principal point, in world coordinates.
+  const Eigen::Isometry3d world_from_camera = p.camera_from_world.inverse();
+  const Vec3d origin = world_from_camera.translation();
+  const Vec3d dir = world_from_camera.linear() * Vec3d(0, 0, 1);
+  if (std::abs(dir.z()) < 1e-12) return 0.0;
+  const double t = -origin.z() / dir.z();
+  if (t <= 0) return 0.0;
+  return t / p.fx;  // depth along the optical axis ≈ t (the axis is the ray)
 }
 
 RayGenerator::RayGenerator(const Camera& camera, double ortho_start_z) : camera_(camera), ortho_start_z_(ortho_start_z) {
@@ -112,6 +136,35 @@ CameraRay RayGenerator::generate_ray(double u_px, double v_px) const {
   r.origin = world_from_camera_.translation();
   r.direction = (world_from_camera_.linear() * Vec3d(x, y, 1.0)).normalized();
   return r;
+}
+
+Projection RayGenerator::project(const Vec3d& p_world) const {
+  Projection out;
+  if (const auto* o = std::get_if<OrthographicTopDown>(&camera_)) {
+    const double u = (p_world.x() - o->centre.x()) * o->pixels_per_unit + 0.5 * (o->width - 1);
+    const double v = -(p_world.y() - o->centre.y()) * o->pixels_per_unit + 0.5 * (o->height - 1);
+    out.pixel = Vec2d(u, v);
+    out.depth = out.distance = ortho_start_z_ - p_world.z();
+    return out;
+  }
+  const auto& p = std::get<Pinhole>(camera_);
+  const Vec3d q = p.camera_from_world * p_world;
+  out.depth = q.z();
+  out.distance = q.norm();
+  if (!(q.z() > 0.0)) {
+    out.pixel = Vec2d(std::nan(""), std::nan(""));
+    out.in_front = false;
+    return out;
+  }
+  const double x = q.x() / q.z(), y = q.y() / q.z();
+  const double k1 = p.distortion[0], k2 = p.distortion[1], p1 = p.distortion[2], p2 = p.distortion[3],
+               k3 = p.distortion[4];
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  const double xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+  const double yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
+  out.pixel = Vec2d(p.fx * xd + p.cx, p.fy * yd + p.cy);
+  return out;
 }
 
 // ---- YAML -----------------------------------------------------------------------------

@@ -1,5 +1,5 @@
-// Cameras (camera.h): projection conventions, agreement with OpenCV, YAML parsing and the
-// JSON round trip.
+// Cameras (camera.h): projection conventions, agreement with OpenCV, rays and projections
+// as inverses, crops, YAML parsing and the JSON round trip.
 
 #include <meltlab/render/camera.h>
 #include <meltlab/core/error.h>
@@ -9,7 +9,9 @@
 #include <opencv2/core/eigen.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <random>
+#include <vector>
 
 namespace meltlab::render {
 namespace {
@@ -34,15 +36,17 @@ TEST(OrthographicTopDown, MapsKnownPoints) {
   EXPECT_DOUBLE_EQ(cam.pixels_per_unit, 10000.0);
   const Camera c = cam;
   // The centre maps to the middle of the image ((w - 1)/2, (h - 1)/2), height is ignored.
-  auto [p0, ok0] = project(c, Vec3d(0.01, -0.02, 0.5));
-  EXPECT_TRUE(ok0);
+  const RayGenerator rays(c);
+  const Projection a = rays.project(Vec3d(0.01, -0.02, 0.5));
+  EXPECT_TRUE(a.in_front);
+  const Vec2d p0 = a.pixel;
   EXPECT_NEAR(p0.x(), 1023.5, kOrthoTolPx);
   EXPECT_NEAR(p0.y(), 767.5, kOrthoTolPx);
   // 1 mm to +x is 10 px to the right; 1 mm to +y is 10 px up (smaller v).
-  auto [p1, ok1] = project(c, Vec3d(0.011, -0.02, 0.0));
+  const Vec2d p1 = rays.project(Vec3d(0.011, -0.02, 0.0)).pixel;
   EXPECT_NEAR(p1.x(), 1033.5, kOrthoTolPx);
   EXPECT_NEAR(p1.y(), 767.5, kOrthoTolPx);
-  auto [p2, ok2] = project(c, Vec3d(0.01, -0.019, 0.0));
+  const Vec2d p2 = rays.project(Vec3d(0.01, -0.019, 0.0)).pixel;
   EXPECT_NEAR(p2.x(), 1023.5, kOrthoTolPx);
   EXPECT_NEAR(p2.y(), 757.5, kOrthoTolPx);
   EXPECT_EQ(camera_width(c), 2048);
@@ -75,9 +79,9 @@ TEST(Pinhole, ProjectionEqualsOpenCvProjectPoints) {
                         p.distortion[3], p.distortion[4]);
   std::vector<cv::Point2d> img;
   cv::projectPoints(pts, rvec, tvec, K, dist, img);
-  const Camera c = p;
+  const RayGenerator rays(p);
   for (std::size_t i = 0; i < world.size(); ++i) {
-    auto [uv, ok] = project(c, world[i]);
+    const auto [uv, depth, distance, ok] = rays.project(world[i]);
     ASSERT_TRUE(ok);
     // Rodrigues round-trips R to ~1e-15, i.e. ~1e-12 px here: inside kProjectTolPx.
     EXPECT_NEAR(uv.x(), img[i].x, kProjectTolPx) << i;
@@ -86,19 +90,24 @@ TEST(Pinhole, ProjectionEqualsOpenCvProjectPoints) {
 }
 
 TEST(Pinhole, PointBehindTheCameraIsFlagged) {
-  const Camera c = Pinhole::look_at(640, 480, 500.0, Vec3d(0, 0, 1), Vec3d(0, 0, 0));
-  EXPECT_TRUE(project(c, Vec3d(0, 0, 0)).second);
-  EXPECT_FALSE(project(c, Vec3d(0, 0, 2)).second);
-  EXPECT_FALSE(project(c, Vec3d(0.1, 0, 1)).second);  // in the camera plane (z_camera = 0)
+  const RayGenerator rays(Pinhole::look_at(640, 480, 500.0, Vec3d(0, 0, 1), Vec3d(0, 0, 0)));
+  const Projection ahead = rays.project(Vec3d(0, 0, 0));
+  EXPECT_TRUE(ahead.in_front);
+  EXPECT_DOUBLE_EQ(ahead.depth, 1.0);
+  const Projection behind = rays.project(Vec3d(0, 0, 2));
+  EXPECT_FALSE(behind.in_front);
+  EXPECT_DOUBLE_EQ(behind.depth, -1.0);
+  EXPECT_TRUE(std::isnan(behind.pixel.x()));
+  EXPECT_FALSE(rays.project(Vec3d(0.1, 0, 1)).in_front);  // in the camera plane (z_camera = 0)
 }
 
 TEST(Pinhole, LookAtPutsTheTargetAtThePrincipalPointWithUpUp) {
   for (const Vec3d& eye : {Vec3d(0, 0, 3), Vec3d(1, -2, 0.5), Vec3d(-0.3, 0.2, -4)}) {
     const Vec3d target(0.1, 0.2, 0.05);
     const Pinhole p = Pinhole::look_at(2048, 1536, 1800.0, eye, target, Vec3d(0, 0, 1) + Vec3d(0, 1, 0));
-    const Camera c = p;
-    auto [uv, ok] = project(c, target);
+    const auto [uv, depth, distance, ok] = RayGenerator(p).project(target);
     ASSERT_TRUE(ok);
+    EXPECT_NEAR(depth, (target - eye).norm(), 1e-12);  // the target is on the optical axis
     // Rotation + division by the distance: round-off of ~1e3 px coordinates.
     EXPECT_NEAR(uv.x(), 1023.5, 1e-9);
     EXPECT_NEAR(uv.y(), 767.5, 1e-9);
@@ -108,14 +117,124 @@ TEST(Pinhole, LookAtPutsTheTargetAtThePrincipalPointWithUpUp) {
     EXPECT_LT((R * R.transpose() - Eigen::Matrix3d::Identity()).norm(), 1e-12);
   }
   // Looking straight down with up = +y: world +x is image right, world +y is image up.
-  const Camera down = Pinhole::look_at(640, 480, 500.0, Vec3d(0, 0, 2), Vec3d(0, 0, 0));
-  const Vec2d c0 = project(down, Vec3d(0, 0, 0)).first;
-  const Vec2d cx = project(down, Vec3d(0.1, 0, 0)).first;
-  const Vec2d cy = project(down, Vec3d(0, 0.1, 0)).first;
+  const RayGenerator down(Pinhole::look_at(640, 480, 500.0, Vec3d(0, 0, 2), Vec3d(0, 0, 0)));
+  const Vec2d c0 = down.project(Vec3d(0, 0, 0)).pixel;
+  const Vec2d cx = down.project(Vec3d(0.1, 0, 0)).pixel;
+  const Vec2d cy = down.project(Vec3d(0, 0.1, 0)).pixel;
   EXPECT_GT(cx.x(), c0.x() + 20);
   EXPECT_NEAR(cx.y(), c0.y(), 1e-9);
   EXPECT_LT(cy.y(), c0.y() - 20);
   EXPECT_NEAR(cy.x(), c0.x(), 1e-9);
+}
+
+// A pinhole with every intrinsic off its default and a strong distortion, looking obliquely.
+Pinhole oblique_distorted_pinhole() {
+  Pinhole p = Pinhole::look_at(640, 480, 520.0, Vec3d(0.3, -0.4, 0.9), Vec3d(0.02, 0.01, 0.0), Vec3d(0, 1, 0));
+  p.fy = 530.0;
+  p.cx = 322.25;
+  p.cy = 236.75;
+  p.distortion = {-0.21, 0.08, 0.0013, -0.0021, -0.015};
+  return p;
+}
+
+std::vector<Camera> cameras_of_every_kind() {
+  Pinhole undistorted = oblique_distorted_pinhole();
+  undistorted.distortion = {0, 0, 0, 0, 0};
+  return {OrthographicTopDown::from_pixels_per_mm(640, 480, 3.0, Vec2d(0.012, -0.034)), undistorted,
+          oblique_distorted_pinhole()};
+}
+
+TEST(RayGenerator, ProjectInvertsGenerateRay) {
+  // A point t along the ray through pixel p projects back to p, at distance t. Tolerances:
+  // the ray and the projection are each a few operations on ~1e3 px coordinates (~1e-13
+  // relative); Newton's undistortion stops at a residual of 1e-13 normalized (~1e-10 px).
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> U(-20.0, 660.0), V(-20.0, 500.0), T(0.2, 1.5);
+  for (const Camera& c : cameras_of_every_kind()) {
+    const RayGenerator rays(c, /*ortho_start_z=*/0.5);
+    for (int i = 0; i < 2000; ++i) {
+      const Vec2d p(U(rng), V(rng));
+      const CameraRay ray = rays.generate_ray(p.x(), p.y());
+      ASSERT_TRUE(ray.ok);
+      const double t = T(rng);
+      const Projection back = rays.project(ray.at(t));
+      ASSERT_TRUE(back.in_front);
+      EXPECT_NEAR(back.pixel.x(), p.x(), 1e-8) << c.index() << " " << p.transpose();
+      EXPECT_NEAR(back.pixel.y(), p.y(), 1e-8) << c.index() << " " << p.transpose();
+      EXPECT_NEAR(back.distance, t, 1e-12);
+      EXPECT_GT(back.depth, 0.0);
+      EXPECT_LE(back.depth, back.distance + 1e-15);
+    }
+  }
+}
+
+TEST(RayGenerator, OrthographicDepthIsMeasuredFromTheRayStart) {
+  const RayGenerator rays(OrthographicTopDown::from_pixels_per_mm(64, 48, 1.0, Vec2d(0, 0)), 0.25);
+  const Projection below = rays.project(Vec3d(0.001, 0.002, 0.05));
+  EXPECT_DOUBLE_EQ(below.depth, 0.2);
+  EXPECT_DOUBLE_EQ(below.distance, 0.2);
+  EXPECT_TRUE(below.in_front);
+  // The orthographic camera sees every height: above the ray start is not "behind" it.
+  EXPECT_TRUE(rays.project(Vec3d(0, 0, 1.0)).in_front);
+}
+
+TEST(Crop, TheCroppedCameraIsTheFullCameraShiftedByTheWindowCorner) {
+  // Cropped pixel (u, v) is full pixel (u + x, v + y), both ways: rays and projections.
+  const PixelWindow window{37, 21, 101, 64};
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(0.0, 100.0), V(0.0, 63.0);
+  for (const Camera& full : cameras_of_every_kind()) {
+    const Camera cropped = crop(full, window);
+    EXPECT_EQ(camera_width(cropped), 101);
+    EXPECT_EQ(camera_height(cropped), 64);
+    const RayGenerator full_rays(full, 0.5), cropped_rays(cropped, 0.5);
+    for (int i = 0; i < 500; ++i) {
+      const double u = U(rng), v = V(rng);
+      const CameraRay a = cropped_rays.generate_ray(u, v), b = full_rays.generate_ray(u + window.x, v + window.y);
+      EXPECT_LT((a.origin - b.origin).norm(), 1e-12);
+      EXPECT_LT((a.direction - b.direction).norm(), 1e-12);
+      const Vec3d p = b.at(0.7);
+      const Vec2d shift(window.x, window.y);
+      EXPECT_LT((cropped_rays.project(p).pixel + shift - full_rays.project(p).pixel).norm(), 1e-9);
+    }
+  }
+}
+
+TEST(Crop, AWindowOfTheWholeImageIsTheSameCamera) {
+  for (const Camera& c : cameras_of_every_kind()) {
+    const Camera same = crop(c, PixelWindow{0, 0, camera_width(c), camera_height(c)});
+    EXPECT_EQ(describe_camera_json(same), describe_camera_json(c));
+  }
+}
+
+TEST(PixelWindow, CoversTheBoxInWholePixelsClampedToTheImage) {
+  const Camera c = OrthographicTopDown::from_pixels_per_mm(64, 48, 1.0, Vec2d(0, 0));
+  const PixelWindow inside = pixel_window(c, Vec2d(3.2, 4.9), Vec2d(10.1, 7.0));
+  EXPECT_EQ(inside.x, 3);
+  EXPECT_EQ(inside.y, 4);
+  EXPECT_EQ(inside.width, 8);   // columns 3..10
+  EXPECT_EQ(inside.height, 3);  // rows 4..6 (7.0 is the end, exactly)
+  const PixelWindow clamped = pixel_window(c, Vec2d(-5.5, -1.0), Vec2d(80.0, 60.0));
+  EXPECT_EQ(clamped.x, 0);
+  EXPECT_EQ(clamped.y, 0);
+  EXPECT_EQ(clamped.width, 64);
+  EXPECT_EQ(clamped.height, 48);
+  // A box beside the image still gives a window inside it, at least one pixel.
+  const PixelWindow outside = pixel_window(c, Vec2d(100.0, 100.0), Vec2d(90.0, 90.0));
+  EXPECT_EQ(outside.x, 63);
+  EXPECT_EQ(outside.y, 47);
+  EXPECT_EQ(outside.width, 1);
+  EXPECT_EQ(outside.height, 1);
+}
+
+TEST(GroundUnitsPerPixel, OrthographicAndPinholeLookingDown) {
+  EXPECT_DOUBLE_EQ(ground_units_per_pixel(OrthographicTopDown::from_pixels_per_mm(64, 48, 4.0, Vec2d(0, 0))), 1.0 / 4000.0);
+  // 0.8 m above the ground with f = 1000 px: 0.8 mm per pixel.
+  const Camera down = Pinhole::look_at(640, 480, 1000.0, Vec3d(0.1, 0.2, 0.8), Vec3d(0.1, 0.2, 0.0));
+  EXPECT_NEAR(ground_units_per_pixel(down), 0.8 / 1000.0, 1e-15);
+  // Looking up, the optical axis never meets the ground.
+  const Camera up = Pinhole::look_at(640, 480, 1000.0, Vec3d(0, 0, 0.8), Vec3d(0, 0, 2.0));
+  EXPECT_EQ(ground_units_per_pixel(up), 0.0);
 }
 
 TEST(CameraYaml, ParsesBothForms) {

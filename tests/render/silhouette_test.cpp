@@ -88,8 +88,9 @@ double perimeter(const std::vector<Vec2d>& poly) {
   return s;
 }
 std::vector<Vec2d> projected_hull(const IndexedMesh& m, const Camera& c) {
+  const RayGenerator rays(c);
   std::vector<Vec2d> pts;
-  for (const auto& v : m.V) pts.push_back(project(c, v).first);
+  for (const auto& v : m.V) pts.push_back(rays.project(v).pixel);
   return hull(pts);
 }
 
@@ -280,7 +281,8 @@ TEST(Silhouette, FanAroundAPixelCentreCountsEveryPixelOnce) {
   const cv::Mat u = silhouette_mask(all, Camera(cam));
   EXPECT_EQ(sum, count(u));
   std::vector<Vec2d> poly;  // clockwise in (u, v) as required by inside_top_left
-  for (int i = 0; i < 12; ++i) poly.push_back(project(Camera(cam), all.position[std::size_t(1 + i)]).first);
+  const RayGenerator rays(cam);
+  for (int i = 0; i < 12; ++i) poly.push_back(rays.project(all.position[std::size_t(1 + i)]).pixel);
   int ref = 0;
   for (int j = 0; j < 48; ++j)
     for (int i = 0; i < 64; ++i) ref += inside_top_left(poly, i, j);
@@ -363,7 +365,7 @@ TEST(Silhouette, GroundReachingBehindThePinholeIsClippedNotGarbage) {
   g.F = {{0, 1, 2}, {0, 2, 3}};
   const Pinhole p = Pinhole::look_at(640, 480, 500.0, Vec3d(0, 0, 1), Vec3d(0, 10, 0));
   const cv::Mat m = silhouette_mask(g, Camera(p));
-  const double v_far = project(Camera(p), Vec3d(0, 100, 0)).first.y();  // about 239.5 - 500 * (0.1 - 0.01)
+  const double v_far = RayGenerator(p).project(Vec3d(0, 100, 0)).pixel.y();  // about 239.5 - 500 * (0.1 - 0.01)
   ASSERT_GT(v_far, 150);
   ASSERT_LT(v_far, 239.5);
   for (int j = 0; j < 480; ++j) {
@@ -405,8 +407,9 @@ TEST(Silhouette, DistortedMaskMatchesPerPixelUndistortionToHalfAPixel) {
   Pinhole ideal_cam = p;
   p.distortion = {-0.3, 0.08, 0.002, -0.001, 0.0};
   const cv::Mat m = silhouette_mask(sphere, Camera(p));
+  const RayGenerator ideal_rays(ideal_cam);
   std::vector<Vec2d> ideal_pts;
-  for (const auto& v : sphere.V) ideal_pts.push_back(project(Camera(ideal_cam), v).first);
+  for (const auto& v : sphere.V) ideal_pts.push_back(ideal_rays.project(v).pixel);
   const std::vector<Vec2d> h = hull(ideal_pts);
   std::vector<cv::Point2f> contour;
   for (const auto& q : h) contour.emplace_back(float(q.x()), float(q.y()));
@@ -448,6 +451,38 @@ TEST(Silhouette, FarPinholeLookingDownApproachesTheOrthographicMask) {
   // The orthographic area matches the block's outline area (6 px/mm = 36 px per mm^2) up to the
   // pixel term (2 x perimeter ~ 2 x 1 m x 6000 px/m / area ~ 4%).
   EXPECT_NEAR(count(a) / (b.outline_area_m2 * 36e6), 1.0, 0.04);
+}
+
+TEST(Silhouette, ACroppedCameraRendersTheFullCamerasSubWindow) {
+  // The fit renders photo windows through crop(): the same pixels as the full render's window
+  // (coverage exactly, binary and supersampled) for both camera kinds. Differences could only
+  // come from a vertex landing within round-off (~1e-13 px) of a sub-sample snapping boundary.
+  const IndexedMesh sphere = datasets::geodesic_sphere(16, 0.05);
+  OrthographicTopDown ortho;
+  ortho.width = 320;
+  ortho.height = 240;
+  ortho.pixels_per_unit = 1900.0;
+  ortho.centre = Vec2d(0.004, -0.003);
+  const Camera pinhole = Pinhole::look_at(320, 240, 600.0, Vec3d(0.05, -0.08, 0.3), Vec3d(0.01, 0.0, 0.0));
+  const PixelWindow window{180, 30, 121, 88};  // across the sphere's right side
+  const cv::Rect rect(window.x, window.y, window.width, window.height);
+  for (const Camera& full : {Camera(ortho), pinhole}) {
+    for (int k : {1, 4}) {
+      SilhouetteRenderer whole(full, SilhouetteOptions{k, true});
+      SilhouetteRenderer part(crop(full, window), SilhouetteOptions{k, true});
+      cv::Mat a, b;
+      whole.render(sphere, a);
+      part.render(sphere, b);
+      ASSERT_EQ(b.size(), rect.size());
+      cv::Mat diff;
+      cv::absdiff(a(rect), b, diff);
+      EXPECT_EQ(cv::countNonZero(diff.reshape(1)), 0) << full.index() << " k = " << k;
+      // The window holds part of the outline (not all empty or all covered).
+      double lo = 0, hi = 0;
+      cv::minMaxLoc(b, &lo, &hi);
+      EXPECT_LT(lo, hi) << full.index() << " k = " << k;
+    }
+  }
 }
 
 TEST(Silhouette, IndexedAndTriMeshAndFloatAgree) {

@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 using TempDir = meltlab::test::TempFolder;
 
 /// A sphere of radius r_k = r0 * (1 - 0.02 k) at cycle k; records the cycles asked for.
-class ShrinkingSphere final : public MeshSequence {
+class ShrinkingSphere final : public sim::MeshSequence {
  public:
   const sim::TriMesh<double>& mesh_at(std::int64_t cycle) override {
     requested.push_back(cycle);

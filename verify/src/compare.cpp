@@ -24,24 +24,6 @@ std::int64_t FrameMapping::cycle_of(const Frame& f, const std::string& manifest)
   return static_cast<std::int64_t>(std::llround(first_cycle + k * f.index));
 }
 
-namespace {
-
-// Mesh units per pixel on the ground plane z = 0 (at the image centre for a pinhole).
-double ground_units_per_pixel(const render::Camera& camera) {
-  if (const auto* o = std::get_if<render::OrthographicTopDown>(&camera)) return 1.0 / o->pixels_per_unit;
-  const auto& p = std::get<render::Pinhole>(camera);
-  // Ray through the principal point, in world coordinates.
-  const Eigen::Isometry3d world_from_camera = p.camera_from_world.inverse();
-  const Eigen::Vector3d origin = world_from_camera.translation();
-  const Eigen::Vector3d dir = world_from_camera.linear() * Eigen::Vector3d(0, 0, 1);
-  if (std::abs(dir.z()) < 1e-12) return 0.0;
-  const double t = -origin.z() / dir.z();
-  if (t <= 0) return 0.0;
-  return t / p.fx;  // depth along the optical axis ≈ t (the axis is the ray)
-}
-
-}  // namespace
-
 cv::Mat overlay_image(const cv::Mat& photo_mask, const cv::Mat& render_mask) {
   CV_Assert(photo_mask.size() == render_mask.size() && photo_mask.type() == CV_8UC1 && render_mask.type() == CV_8UC1);
   cv::Mat out(photo_mask.size(), CV_8UC1, cv::Scalar(255));
@@ -128,13 +110,13 @@ void write_per_frame_csv(const fs::path& file, const std::vector<FrameResult>& f
   write_text_atomically(file, out.str());
 }
 
-CompareResult compare_sequence(const ObservationSequence& obs, MeshSequence& meshes, const CompareOptions& options,
+CompareResult compare_sequence(const ObservationSequence& obs, sim::MeshSequence& meshes, const CompareOptions& options,
                                const std::function<void(const FrameResult&, const FrameImages&)>& on_frame) {
   CompareResult result;
   const std::string manifest = obs.manifest.string();
   render::SilhouetteRenderer binary(obs.camera, render::SilhouetteOptions{1, true});
   render::SilhouetteRenderer soft(obs.camera, render::SilhouetteOptions{std::max(1, options.supersample), true});
-  const double units_per_px = ground_units_per_pixel(obs.camera);
+  const double units_per_px = render::ground_units_per_pixel(obs.camera);
   const double mm_per_px = units_per_px * 1000.0;  // mesh units are metres
   std::optional<Similarity2D> fixed;
   if (options.registration == RegistrationMode::kGiven) fixed = options.given_registration;

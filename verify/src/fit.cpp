@@ -114,25 +114,6 @@ cv::Mat signed_distance_image(const cv::Mat& mask) {
   return sdf;
 }
 
-/// The camera restricted to a window of its image (same projection, pixel (0, 0) at the
-/// window's corner). Distorted pinholes are returned whole (their maps are per image).
-render::Camera crop_camera(const render::Camera& camera, const cv::Rect& window) {
-  if (const auto* o = std::get_if<render::OrthographicTopDown>(&camera)) {
-    render::OrthographicTopDown c = *o;
-    c.width = window.width;
-    c.height = window.height;
-    c.centre.x() = o->centre.x() + ((window.width - 1) / 2.0 - (o->width - 1) / 2.0 + window.x) / o->pixels_per_unit;
-    c.centre.y() = o->centre.y() - ((window.height - 1) / 2.0 - (o->height - 1) / 2.0 + window.y) / o->pixels_per_unit;
-    return c;
-  }
-  render::Pinhole c = std::get<render::Pinhole>(camera);
-  c.width = window.width;
-  c.height = window.height;
-  c.cx -= window.x;
-  c.cy -= window.y;
-  return c;
-}
-
 // ---------------------------------------------------------------- targets and evaluation
 
 struct PhotoTarget {
@@ -228,7 +209,7 @@ class Evaluator {
     for (const At& n : at) cycles.insert(n.cycle);
     for (const auto& vc : volume_cycles) cycles.insert(vc.begin(), vc.end());
     std::map<std::int64_t, double> volume_at;
-    const std::unique_ptr<MeshSequence> seq = model_.start(model_values);
+    const std::unique_ptr<sim::MeshSequence> seq = model_.start(model_values);
     cv::Mat coverage;
     for (const std::int64_t cycle : cycles) {
       const sim::TriMesh<double>& mesh = seq->mesh_at(cycle);
@@ -275,8 +256,10 @@ class Evaluator {
     const PhotoTarget& t = targets_[target];
     const bool distorted = std::holds_alternative<render::Pinhole>(obs_.camera) &&
                            std::get<render::Pinhole>(obs_.camera).distorted();
-    const int W = render::camera_width(obs_.camera), H = render::camera_height(obs_.camera);
-    cv::Rect window(0, 0, W, H);
+    // A distorted pinhole renders the whole image, as the fit always has: its renderer
+    // resamples an undistorted canvas placed by the window, so a crop would move the
+    // coverage by rounding (and fit.json numbers must not change).
+    render::PixelWindow window{0, 0, render::camera_width(obs_.camera), render::camera_height(obs_.camera)};
     if (!distorted) {
       const Similarity2D inv = initial_registration_.inverse();
       Vec2d lo = Vec2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
@@ -289,13 +272,9 @@ class Evaluator {
       const Vec2d widen = 0.25 * (hi - lo) + Vec2d::Constant(2.0);
       lo -= widen;
       hi += widen;
-      const int x0 = std::clamp(static_cast<int>(std::floor(lo.x())), 0, W - 1);
-      const int y0 = std::clamp(static_cast<int>(std::floor(lo.y())), 0, H - 1);
-      const int x1 = std::clamp(static_cast<int>(std::ceil(hi.x())), x0 + 1, W);
-      const int y1 = std::clamp(static_cast<int>(std::ceil(hi.y())), y0 + 1, H);
-      window = cv::Rect(x0, y0, x1 - x0, y1 - y0);
+      window = render::pixel_window(obs_.camera, lo, hi);
     }
-    render::SilhouetteRenderer renderer(crop_camera(obs_.camera, window),
+    render::SilhouetteRenderer renderer(render::crop(obs_.camera, window),
                                         render::SilhouetteOptions{std::max(2, o_.supersample), true});
     renderer.render(mesh, coverage);
     Region region = region_from_image(coverage, 0.5);

@@ -48,7 +48,7 @@ CompareRunResult run_compare(const CompareRunOptions& options, const std::functi
 
 /// Compares and writes per_frame.csv, overlays/ (every K-th compared frame) and
 /// p_curve.png into `out_dir` (created). `frame_ms` (optional) receives the time per frame.
-verify::CompareResult compare_and_write(const verify::ObservationSequence& observations, verify::MeshSequence& meshes,
+verify::CompareResult compare_and_write(const verify::ObservationSequence& observations, sim::MeshSequence& meshes,
                                         const verify::CompareOptions& options, const std::filesystem::path& out_dir,
                                         int overlay_every, const std::function<void(const CompareRunProgress&)>& progress,
                                         std::vector<double>* frame_ms = nullptr);

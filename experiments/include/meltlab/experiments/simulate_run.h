@@ -8,7 +8,6 @@
 #include <meltlab/core/run_folder.h>
 #include <meltlab/sim/melt.h>
 #include <meltlab/sim/mesh_io.h>
-#include <meltlab/verify/compare.h>
 
 #include <nlohmann/json.hpp>
 
@@ -91,35 +90,6 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& op
 /// The options as JSON (recorded in run.json as "options") and back. Paths are absolute.
 nlohmann::json options_to_json(const SimulateOptions& options);
 SimulateOptions options_from_json(const nlohmann::json& j, const std::string& source);
-
-/// Replays a finished `meltlab simulate` run: rebuilds its simulation from run.json (the
-/// cycle is deterministic for any thread count) and steps it forward on request. Refuses a
-/// run whose input mesh or kl file changed since (content hash).
-class RunReplay final : public verify::MeshSequence {
- public:
-  explicit RunReplay(const std::filesystem::path& run_dir);
-  /// A run that was never written: the simulation `options` describe (out_dir ignored).
-  explicit RunReplay(const SimulateOptions& options);
-  /// A prepared simulation run with other coefficients (for fitting kg and kl).
-  RunReplay(std::shared_ptr<const PreparedSimulation> prepared, const sim::MeltParams& params, sim::KlFieldPtr kl);
-  ~RunReplay() override;
-  /// The mesh after `cycle` cycles (cycles must not decrease between calls).
-  const sim::TriMesh<double>& mesh_at(std::int64_t cycle) override;
-  /// Cycles the recorded run made (-1 for a run built from options).
-  std::int64_t cycles_run() const { return cycles_run_; }
-  /// run.json of the recorded run (null for a run built from options).
-  const nlohmann::json& run_json() const { return run_; }
-  const PreparedSimulation& prepared() const;
-
- private:
-  void start(const SimulateOptions& options);
-  void start_simulator(const sim::MeltParams& params, sim::KlFieldPtr kl);
-
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
-  nlohmann::json run_;
-  std::int64_t cycles_run_ = 0;
-};
 
 /// Runs a prepared simulation. `progress` is called about ten times a second; `stop` is
 /// polled every cycle (set it from a signal handler to interrupt: status "interrupted").

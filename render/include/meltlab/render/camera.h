@@ -57,27 +57,62 @@ using Camera = std::variant<OrthographicTopDown, Pinhole>;
 int camera_width(const Camera& c);
 int camera_height(const Camera& c);
 
-/// Projects a world point to pixel coordinates (with distortion for a Pinhole). The bool is
-/// false for a point behind a pinhole camera (z_camera <= 0).
-std::pair<Vec2d, bool> project(const Camera& c, const Vec3d& p_world);
+/// A rectangle of whole pixels of an image: columns [x, x + width), rows [y, y + height).
+struct PixelWindow {
+  int x = 0, y = 0, width = 0, height = 0;
+};
+
+/// The camera that sees `window` of `c`'s image: the same projection with pixel (0, 0) at the
+/// window's corner (its pixel (u, v) is `c`'s pixel (u + x, v + y)), width x height pixels.
+/// A distorted pinhole crops like any other (its distortion acts before cx, cy are added).
+Camera crop(const Camera& c, const PixelWindow& window);
+
+/// The smallest window of whole pixels that covers the image box [lo_px, hi_px] (pixel
+/// coordinates, as project gives them), clamped to `c`'s image and at least 1 x 1.
+PixelWindow pixel_window(const Camera& c, const Vec2d& lo_px, const Vec2d& hi_px);
+
+/// Mesh units per pixel on the ground plane z = 0: exact for an orthographic camera; for a
+/// pinhole, at the ground point seen along the optical axis (0 if the axis misses the ground).
+double ground_units_per_pixel(const Camera& c);
 
 /// A ray from the camera in the world frame.
 struct CameraRay {
   Vec3d origin = Vec3d::Zero();
   Vec3d direction = Vec3d(0, 0, -1);  ///< unit length
   bool ok = true;  ///< false where a distorted pinhole's undistortion does not converge
+
+  /// The point `distance` (world units) along the ray.
+  Vec3d at(double distance) const { return origin + distance * direction; }
 };
 
-/// Rays through image points, with the camera's pose inverted once (build it per frame and
-/// query it per pixel from any thread).
-///   orthographic: origin (x, y, start_z) under image point (u, v), direction -z;
-///   pinhole: origin at the eye, direction through the undistorted image point.
+/// Where a world point appears in the image.
+struct Projection {
+  Vec2d pixel = Vec2d::Zero();  ///< image point (pixel centres at integers); NaN behind a pinhole
+  /// Along the viewing direction: z_camera for a pinhole, (ray start height - z) for the
+  /// orthographic camera.
+  double depth = 0.0;
+  /// Along the ray through `pixel` from its origin: generate_ray(pixel).at(distance) is the
+  /// point (world units; equal to depth for the orthographic camera).
+  double distance = 0.0;
+  /// False behind a pinhole camera (z_camera <= 0). Always true for the orthographic camera,
+  /// which sees every height (its ray start is a rendering choice, not a position).
+  bool in_front = true;
+};
+
+/// The camera's two directions, with its pose inverted once (build it per frame and query it
+/// per pixel from any thread):
+///   generate_ray: image point -> ray. Orthographic: origin (x, y, start_z) under image point
+///     (u, v), direction -z; pinhole: origin at the eye, direction through the undistorted
+///     image point.
+///   project: world point -> image point (with distortion for a pinhole), the inverse.
 class RayGenerator {
  public:
   /// `ortho_start_z`: the height at which orthographic rays start (above the scene).
   explicit RayGenerator(const Camera& camera, double ortho_start_z = 0.0);
   /// The ray through image point (u_px, v_px) (pixel centres at integers).
   CameraRay generate_ray(double u_px, double v_px) const;
+  /// The image point of world point `p_world`, with its depth.
+  Projection project(const Vec3d& p_world) const;
   const Camera& camera() const { return camera_; }
 
  private:

@@ -8,6 +8,7 @@
 
 #include <meltlab/render/silhouette.h>
 #include <meltlab/sim/mesh.h>
+#include <meltlab/sim/mesh_sequence.h>
 #include <meltlab/verify/metrics.h>
 #include <meltlab/verify/observations.h>
 #include <meltlab/verify/registration.h>
@@ -19,14 +20,6 @@
 #include <vector>
 
 namespace meltlab::verify {
-
-/// The simulated meshes, cycle by cycle. Cycles are requested in non-decreasing order.
-class MeshSequence {
- public:
-  virtual ~MeshSequence() = default;
-  /// The mesh after `cycle` cycles (possibly empty if it has melted away).
-  virtual const sim::TriMesh<double>& mesh_at(std::int64_t cycle) = 0;
-};
 
 /// Which cycle shows the state of photo k (0-based): either k photos × K cycles, or the
 /// photo's time divided by the seconds per cycle (monograph §9.4: ~7 cycles per 40 s photo).
@@ -87,7 +80,7 @@ struct FrameImages {
 
 /// Runs the comparison. `on_frame` (optional) is called after every frame with its result
 /// and masks (e.g. to write overlays and show progress).
-CompareResult compare_sequence(const ObservationSequence& observations, MeshSequence& meshes, const CompareOptions& options,
+CompareResult compare_sequence(const ObservationSequence& observations, sim::MeshSequence& meshes, const CompareOptions& options,
                                const std::function<void(const FrameResult&, const FrameImages&)>& on_frame = {});
 
 /// The overlay of the monograph's Fig. 8.12: photo only dark grey, render only black,

@@ -56,7 +56,7 @@ struct FitParameter {
 class FitModel {
  public:
   virtual ~FitModel() = default;
-  virtual std::unique_ptr<MeshSequence> start(const std::map<std::string, double>& model_values) = 0;
+  virtual std::unique_ptr<sim::MeshSequence> start(const std::map<std::string, double>& model_values) = 0;
 };
 
 struct FitOptions {
