@@ -401,16 +401,8 @@ TEST(RenderScene, ParsesAndRefusesUnknownKeys) {
   EXPECT_NE(message("{texture_filter: trilinear}").find("'texture_filter' must be one of"), std::string::npos);
   EXPECT_NE(message("{environment: {layout: sphere}}").find("'environment.layout' must be one of"), std::string::npos);
   EXPECT_NE(message("{ground: {a: -1}}").find("'ground.a' must be in"), std::string::npos);
-  EXPECT_EQ(message("width: 64
-ice:
-  eta: 1.3
-  ct: 0
-  eta: 1.4
-"), "scene.yaml:5: ice: key 'eta' appears twice");
-  EXPECT_EQ(message("outputs:
-  exr: false
-  png: no
-"), "scene.yaml:2: outputs: at least one of 'exr' and 'png' must be true");
+  EXPECT_EQ(message("width: 64\nice:\n  eta: 1.3\n  ct: 0\n  eta: 1.4\n"), "scene.yaml:5: ice: key 'eta' appears twice");
+  EXPECT_EQ(message("outputs:\n  exr: false\n  png: no\n"), "scene.yaml:2: outputs: at least one of 'exr' and 'png' must be true");
   EXPECT_NE(message("{lights: [{to_light: [0, 0, 0]}]}").find("zero vector"), std::string::npos);
 }
 
