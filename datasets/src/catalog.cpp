@@ -1,13 +1,11 @@
 // Reading datasets/catalog.yaml (catalog.h) and the folders datasets live in.
 
-#include <meltlab/core/yaml_keys.h>
-#include <meltlab/core/input_file.h>
+#include <meltlab/core/config.h>
 #include <meltlab/datasets/catalog.h>
 #include <meltlab/datasets/molds.h>
 #include <meltlab/core/error.h>
 
 #include <fmt/format.h>
-#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -30,86 +28,59 @@ std::string env_or_empty(const char* name) {
   return v ? std::string(v) : std::string();
 }
 
-// Where a YAML node sits, for messages: "line 12".
-std::string where(const YAML::Node& node) { return fmt::format("line {}", node.Mark().line + 1); }
-
-DatasetKind kind_from_name(const std::string& s, const std::string& context) {
+DatasetKind kind_of(const ConfigSection& d) {
+  const std::string s = d.require<std::string>("kind");
   if (s == "cgal") return DatasetKind::kCgal;
   if (s == "procedural") return DatasetKind::kProcedural;
   if (s == "mold") return DatasetKind::kMold;
   if (s == "refined") return DatasetKind::kRefined;
-  throw InputError(fmt::format("{}: kind '{}' is not one of cgal, procedural, mold, refined", context, s));
+  d.fail_at("kind", fmt::format("kind '{}' is not one of cgal, procedural, mold, refined", s));
 }
 
-template <class T>
-T scalar_as(const YAML::Node& node, const std::string& context, const char* key) {
-  if (!node.IsScalar()) throw InputError(fmt::format("{}: '{}' must be a single value", context, key));
-  try {
-    return node.as<T>();
-  } catch (const YAML::Exception&) {
-    throw InputError(fmt::format("{}: '{}' has a bad value '{}'", context, key, node.Scalar()));
-  }
-}
-
-DatasetEntry parse_entry(const YAML::Node& node, const std::string& file) {
-  if (!node.IsMap()) throw InputError(fmt::format("{}: {}: each dataset must be a map of keys", file, where(node)));
-  static const std::set<std::string> kKnown = {"name",        "kind",      "source",          "params",
-                                               "description", "triangles", "closed_manifold", "need_repair",
-                                               "problem",     "genus",     "shells"};
-  const std::string name_context = fmt::format("{}: {}", file, where(node));
-  if (!node["name"]) throw InputError(fmt::format("{}: dataset without a 'name'", name_context));
+DatasetEntry parse_entry(const ConfigSection& d) {
   DatasetEntry e;
-  e.name = scalar_as<std::string>(node["name"], name_context, "name");
-  const std::string context = fmt::format("{}: dataset '{}' ({})", file, e.name, where(node));
-  for (const auto& kv : node) {
-    const auto key = kv.first.as<std::string>();
-    if (!kKnown.count(key)) throw InputError(fmt::format("{}: unknown key '{}'", context, key));
-  }
-  for (const char* required : {"kind", "source", "description", "triangles"})
-    if (!node[required]) throw InputError(fmt::format("{}: missing key '{}'", context, required));
-  e.kind = kind_from_name(scalar_as<std::string>(node["kind"], context, "kind"), context);
-  e.source = scalar_as<std::string>(node["source"], context, "source");
-  e.description = scalar_as<std::string>(node["description"], context, "description");
-  e.triangles = scalar_as<std::int64_t>(node["triangles"], context, "triangles");
-  if (e.triangles <= 0) throw InputError(fmt::format("{}: 'triangles' must be positive", context));
-  if (node["params"]) {
-    if (e.kind == DatasetKind::kCgal)
-      throw InputError(fmt::format("{}: only procedural, mold and refined datasets take 'params'", context));
-    if (!node["params"].IsMap()) throw InputError(fmt::format("{}: 'params' must be a map", context));
-    for (const auto& kv : node["params"])
-      e.params[kv.first.as<std::string>()] = scalar_as<std::string>(kv.second, context, "params");
+  e.name = d.require<std::string>("name");
+  // Problems of the entry as a whole, at its line: "dataset 'bunny00': ...".
+  const auto fail = [&](const std::string& key, const std::string& problem) {
+    d.fail_at(key, fmt::format("dataset '{}': {}", e.name, problem));
+  };
+  e.kind = kind_of(d);
+  e.source = d.require<std::string>("source");
+  e.description = d.require<std::string>("description");
+  e.triangles = d.require<std::int64_t>("triangles");
+  if (e.triangles <= 0) fail("triangles", "'triangles' must be positive");
+  if (const auto params = d.optional_section("params")) {
+    if (e.kind == DatasetKind::kCgal) fail("params", "only procedural, mold and refined datasets take 'params'");
+    for (const std::string& key : params->keys()) e.params[key] = params->require<std::string>(key);
   }
   if (e.kind == DatasetKind::kCgal) {
-    if (!node["closed_manifold"])
-      throw InputError(fmt::format("{}: a cgal dataset must say whether it is a closed manifold", context));
-    e.closed_manifold = scalar_as<bool>(node["closed_manifold"], context, "closed_manifold");
-  } else if (node["closed_manifold"] && !scalar_as<bool>(node["closed_manifold"], context, "closed_manifold")) {
-    throw InputError(fmt::format("{}: generated datasets are always closed manifolds", context));
+    if (!d.has("closed_manifold"))
+      d.fail(fmt::format("dataset '{}': a cgal dataset must say whether it is a closed manifold", e.name));
+    e.closed_manifold = d.require<bool>("closed_manifold");
+  } else if (!d.get("closed_manifold", true)) {
+    fail("closed_manifold", "generated datasets are always closed manifolds");
   }
-  e.need_repair =
-      node["need_repair"] ? scalar_as<bool>(node["need_repair"], context, "need_repair") : !e.closed_manifold;
+  e.need_repair = d.get("need_repair", !e.closed_manifold);
   if (!e.closed_manifold && !e.need_repair)
-    throw InputError(fmt::format("{}: a dataset that is not a closed manifold needs need_repair: true", context));
-  if (node["problem"]) e.problem = scalar_as<std::string>(node["problem"], context, "problem");
-  if (e.need_repair && e.problem.empty())
-    throw InputError(fmt::format("{}: need_repair datasets must say what the 'problem' is", context));
-  if (node["genus"]) e.genus = scalar_as<int>(node["genus"], context, "genus");
-  if (node["shells"]) e.shells = scalar_as<int>(node["shells"], context, "shells");
-  if (e.genus < 0 || e.shells < 1) throw InputError(fmt::format("{}: genus must be >= 0 and shells >= 1", context));
+    fail("need_repair", "a dataset that is not a closed manifold needs need_repair: true");
+  e.problem = d.get<std::string>("problem", "");
+  if (e.need_repair && e.problem.empty()) fail("problem", "need_repair datasets must say what the 'problem' is");
+  e.genus = d.get("genus", e.genus);
+  e.shells = d.get("shells", e.shells);
+  if (e.genus < 0 || e.shells < 1) fail("genus", "genus must be >= 0 and shells >= 1");
   switch (e.kind) {
     case DatasetKind::kCgal:
       if (e.source.empty() || e.source.front() == '/' || e.source.find("..") != std::string::npos)
-        throw InputError(fmt::format("{}: source must be a relative archive member path", context));
+        fail("source", "source must be a relative archive member path");
       break;
     case DatasetKind::kProcedural:
-      if (!detail::is_known_generator(e.source))
-        throw InputError(fmt::format("{}: unknown generator '{}'", context, e.source));
+      if (!detail::is_known_generator(e.source)) fail("source", fmt::format("unknown generator '{}'", e.source));
       break;
     case DatasetKind::kMold:
       try {
         (void)mold_from_name(e.source);
       } catch (const InputError& err) {
-        throw InputError(fmt::format("{}: {}", context, err.what()));
+        fail("source", err.what());
       }
       break;
     case DatasetKind::kRefined:
@@ -122,17 +93,7 @@ DatasetEntry parse_entry(const YAML::Node& node, const std::string& file) {
 
 namespace detail {
 
-CatalogFile read_catalog_checked(const fs::path& yaml_file);
-
 CatalogFile read_catalog(const fs::path& yaml_file) {
-  try {
-    return read_catalog_checked(yaml_file);
-  } catch (const YAML::Exception& e) {
-    throw yaml_error(yaml_file.string(), e, "bad value");
-  }
-}
-
-CatalogFile read_catalog_checked(const fs::path& yaml_file) {
   const std::string file = yaml_file.string();
   std::error_code ec;
   if (!fs::is_regular_file(yaml_file, ec))
@@ -140,42 +101,29 @@ CatalogFile read_catalog_checked(const fs::path& yaml_file) {
         fmt::format("{}: dataset catalog not found (set MELTLAB_DATASETS_DIR to the folder holding "
                     "catalog.yaml)",
                     file));
-  const std::string text = read_text_file(file, "dataset catalog");
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw yaml_error(file, e);
-  }
-  if (!root.IsMap()) throw InputError(fmt::format("{}: the catalog must be a map with 'archive' and 'datasets'", file));
-  for (const auto& kv : root) {
-    const auto key = kv.first.as<std::string>();
-    if (key != "archive" && key != "datasets")
-      throw InputError(fmt::format("{}: {}: unknown top-level key '{}'", file, where(kv.first), key));
-  }
+  const ConfigSection root = load_config(yaml_file, "dataset catalog");
   CatalogFile out;
-  if (!root["archive"] || !root["archive"].IsScalar())
-    throw InputError(fmt::format("{}: missing 'archive' (path of CGAL's data.tar.gz)", file));
-  out.archive = root["archive"].as<std::string>();
-  const YAML::Node list = root["datasets"];
-  if (!list || !list.IsSequence() || list.size() == 0)
-    throw InputError(fmt::format("{}: 'datasets' must be a non-empty list", file));
+  if (!root.has("archive")) root.fail("missing key 'archive' (path of CGAL's data.tar.gz)");
+  out.archive = root.require<std::string>("archive");
+  const std::vector<ConfigSection> list = root.has("datasets") ? root.sections("datasets") : std::vector<ConfigSection>{};
+  if (list.empty()) root.fail_at("datasets", "'datasets' must be a non-empty list");
   std::set<std::string> names;
-  for (const auto& node : list) {
-    DatasetEntry e = parse_entry(node, file);
-    if (!names.insert(e.name).second)
-      throw InputError(fmt::format("{}: {}: dataset name '{}' is used twice", file, where(node), e.name));
+  for (const ConfigSection& d : list) {
+    DatasetEntry e = parse_entry(d);
+    if (!names.insert(e.name).second) d.fail_at("name", fmt::format("dataset name '{}' is used twice", e.name));
     out.entries.push_back(std::move(e));
   }
-  for (const DatasetEntry& e : out.entries) {
+  root.finish();
+  for (std::size_t i = 0; i < out.entries.size(); ++i) {
+    const DatasetEntry& e = out.entries[i];
     if (e.kind != DatasetKind::kRefined) continue;
     const auto src = std::find_if(out.entries.begin(), out.entries.end(),
                                   [&](const DatasetEntry& s) { return s.name == e.source; });
     if (src == out.entries.end())
-      throw InputError(fmt::format("{}: refined dataset '{}': source '{}' is not a dataset of the catalog", file, e.name,
-                                   e.source));
+      list[i].fail_at("source", fmt::format("refined dataset '{}': source '{}' is not a dataset of the catalog", e.name,
+                                            e.source));
     if (src->kind == DatasetKind::kRefined)
-      throw InputError(fmt::format("{}: refined dataset '{}': source '{}' is itself refined", file, e.name, e.source));
+      list[i].fail_at("source", fmt::format("refined dataset '{}': source '{}' is itself refined", e.name, e.source));
   }
   return out;
 }

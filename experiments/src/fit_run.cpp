@@ -1,4 +1,5 @@
 #include <meltlab/core/run_folder.h>
+#include <meltlab/core/config.h>
 #include <meltlab/core/input_file.h>
 #include <meltlab/core/hash.h>
 #include <meltlab/experiments/compare_run.h>
@@ -38,37 +39,36 @@ std::vector<std::string> split(const std::string& s, char sep) {
 }
 
 /// The YAML node at a dotted path below the document ("kl.of.0.strength"); sequences are
-/// indexed by number. Throws InputError naming the path.
+/// indexed by number. Throws InputError "FILE:LINE: PATH: ..." at the last node reached.
 YAML::Node node_at(const YAML::Node& doc, const std::string& path, const std::string& source) {
   YAML::Node n = doc;
+  std::string reached;  // the part of `path` walked so far
   for (const std::string& key : split(path, '.')) {
+    const ConfigValue here(n, source, reached);
     if (n.IsMap()) {
-      if (!n[key]) throw InputError(fmt::format("{}: {}: no key '{}'", source, path, key));
+      if (!n[key]) here.fail(fmt::format("{}: no key '{}'", path, key));
       n.reset(n[key]);
     } else if (n.IsSequence()) {
       std::size_t i = 0;
       try {
         i = std::stoul(key);
       } catch (const std::exception&) {
-        throw InputError(fmt::format("{}: {}: '{}' is not an index of a list", source, path, key));
+        here.fail(fmt::format("{}: '{}' is not an index of a list", path, key));
       }
-      if (i >= n.size()) throw InputError(fmt::format("{}: {}: index {} beyond the list's {} items", source, path, i, n.size()));
+      if (i >= n.size()) here.fail(fmt::format("{}: index {} beyond the list's {} items", path, i, n.size()));
       n.reset(n[i]);
     } else {
-      throw InputError(fmt::format("{}: {}: '{}' is below a plain value", source, path, key));
+      here.fail(fmt::format("{}: '{}' is below a plain value", path, key));
     }
+    reached += (reached.empty() ? "" : ".") + key;
   }
   return n;
 }
 
 double number_at(const YAML::Node& doc, const std::string& path, const std::string& source) {
-  const YAML::Node n = node_at(doc, path, source);
-  try {
-    if (!n.IsScalar()) throw YAML::Exception(YAML::Mark(), "");
-    return n.as<double>();
-  } catch (const YAML::Exception&) {
-    throw InputError(fmt::format("{}: {}: not a number (only numbers can be fitted)", source, path));
-  }
+  const ConfigValue v(node_at(doc, path, source), source, path);
+  if (!v.is_scalar()) v.fail("not a number (only numbers can be fitted)");
+  return v.as<double>();
 }
 
 class EmpiricalModel final : public verify::FitModel {
@@ -194,7 +194,7 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
     if (name.rfind("kl.", 0) != 0) continue;
     require(!o.simulation.kl_file.empty(), fmt::format("{}: fitting a kl parameter needs --kl FILE", name));
     // (A default YAML::Node is a defined null node, so `!kl_doc` would never be true.)
-    if (kl_doc.IsNull()) kl_doc = YAML::Load(read_text_file(prepared->opt.kl_file, "kl field"));
+    if (kl_doc.IsNull()) kl_doc = load_yaml_file(prepared->opt.kl_file, "kl field");
     kl_values[name] = number_at(kl_doc, name, o.simulation.kl_file.string());
   }
   const std::vector<verify::FitParameter> params = fit_parameters(o, o.simulation.kg, kl_values);

@@ -1,4 +1,4 @@
-#include <meltlab/core/yaml_keys.h>
+#include <meltlab/core/config.h>
 #include <meltlab/core/input_file.h>
 #include <meltlab/core/hash.h>
 #include <meltlab/experiments/reproduce.h>
@@ -7,8 +7,6 @@
 #include <meltlab/core/process.h>
 #include <meltlab/core/time.h>
 #include <meltlab/version.h>
-
-#include <yaml-cpp/yaml.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -28,6 +26,16 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 namespace {
+
+/// The Python files in the folder of `script` and below it, sorted (the modules it may import).
+std::vector<fs::path> python_modules_beside(const fs::path& script) {
+  std::vector<fs::path> modules;
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(script.parent_path(), ec), end; !ec && it != end; it.increment(ec))
+    if (it->is_regular_file(ec) && it->path().extension() == ".py" && it->path() != script) modules.push_back(it->path());
+  std::sort(modules.begin(), modules.end());
+  return modules;
+}
 
 using Clock = std::chrono::steady_clock;
 
@@ -60,51 +68,34 @@ std::string substitute(const std::string& s, const std::map<std::string, std::st
   return out;
 }
 
-std::string scalar_of(const YAML::Node& n, const fs::path& config, const std::string& what) {
-  if (!n.IsScalar()) throw InputError(fmt::format("{}: {} must be a scalar", config.string(), what));
-  return n.as<std::string>();
+/// The texts of a list of scalars.
+std::vector<std::string> texts(const ConfigValue& list) {
+  std::vector<std::string> out;
+  for (const ConfigValue& item : list.items()) out.push_back(item.as<std::string>());
+  return out;
 }
 
 ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) {
   const std::string text = read_file(config);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw yaml_error(config.string(), e);
-  }
-  if (!root.IsMap()) throw InputError(fmt::format("{}: not a YAML map", config.string()));
-  static const std::set<std::string> known{"name", "title", "sources", "inputs", "vars", "steps", "notes", "exclusive", "modes"};
-  for (const auto& kv : root) {
-    const auto key = kv.first.as<std::string>();
-    if (!known.count(key)) throw InputError(fmt::format("{}: unknown key '{}'", config.string(), key));
-  }
+  const ConfigSection root(parse_yaml_text(text, config.string()), config.string());
   ReproduceExperiment e;
   e.config_file = config;
-  if (!root["name"]) throw InputError(fmt::format("{}: missing 'name'", config.string()));
-  e.name = scalar_of(root["name"], config, "name");
+  e.name = root.require<std::string>("name");
   if (!valid_name(e.name) || e.name == "report" || e.name == "logs")
-    throw InputError(fmt::format("{}: name '{}' must be [a-z0-9_]+ and not 'report' or 'logs'", config.string(), e.name));
-  e.title = root["title"] ? scalar_of(root["title"], config, "title") : e.name;
-  if (root["sources"])
-    for (const auto& s : root["sources"]) e.sources.push_back(scalar_of(s, config, "sources[]"));
+    root.fail_at("name", fmt::format("name '{}' must be [a-z0-9_]+ and not 'report' or 'logs'", e.name));
+  e.title = root.get("title", e.name);
+  if (const auto sources = root.optional_value("sources")) e.sources = texts(*sources);
+  root.ignore("notes");  // free text for whoever reads the config
   e.out_dir = o.out_dir / e.name;
-  if (root["exclusive"]) {
-    try {
-      e.exclusive = root["exclusive"].as<bool>();
-    } catch (const YAML::Exception&) {
-      throw InputError(fmt::format("{}: 'exclusive' must be true or false", config.string()));
-    }
-  }
+  e.exclusive = root.get("exclusive", e.exclusive);
 
   const std::string mode = o.quick ? "quick" : "full";
-  if (root["modes"]) {
-    if (!root["modes"].IsSequence() || root["modes"].size() == 0)
-      throw InputError(fmt::format("{}: 'modes' must be a non-empty list of quick and/or full", config.string()));
+  if (const auto modes = root.optional_value("modes")) {
+    if (!modes->is_sequence() || modes->items().empty()) modes->fail("must be a non-empty list of quick and/or full");
     e.modes.clear();
-    for (const auto& m : root["modes"]) {
-      const std::string v = scalar_of(m, config, "modes[]");
-      if (v != "quick" && v != "full") throw InputError(fmt::format("{}: 'modes' must be quick and/or full (got '{}')", config.string(), v));
+    for (const ConfigValue& m : modes->items()) {
+      const std::string v = m.as<std::string>();
+      if (v != "quick" && v != "full") m.fail(fmt::format("must be quick or full (got '{}')", v));
       e.modes.push_back(v);
     }
   }
@@ -114,55 +105,59 @@ ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) 
                                           {"config_dir", config.parent_path().string()},
                                           {"bin", o.self_exe.parent_path().string()},
                                           {"mode", mode}};
-  if (root["vars"]) {
-    if (!root["vars"].IsMap()) throw InputError(fmt::format("{}: 'vars' must be a map", config.string()));
-    for (const auto& kv : root["vars"]) {
-      const auto key = kv.first.as<std::string>();
-      if (vars.count(key) || key == "step") throw InputError(fmt::format("{}: var '{}' is reserved", config.string(), key));
-      const YAML::Node& v = kv.second;
-      if (v.IsMap()) {
-        if (!v["quick"] || !v["full"])
-          throw InputError(fmt::format("{}: var '{}' needs both 'quick' and 'full'", config.string(), key));
-        vars[key] = scalar_of(v[mode], config, "vars." + key + "." + mode);
-      } else {
-        vars[key] = scalar_of(v, config, "vars." + key);
+  if (const auto var_section = root.optional_section("vars")) {
+    for (const std::string& key : var_section->keys()) {
+      if (vars.count(key) || key == "step") var_section->fail_at(key, fmt::format("var '{}' is reserved", key));
+      const ConfigValue v = var_section->value(key);
+      if (!v.is_map()) {
+        vars[key] = v.as<std::string>();
+        continue;
       }
+      // {quick: a, full: b}: this mode's value; the other one must be there too.
+      const ConfigSection by_mode = v.section();
+      if (!by_mode.has("quick") || !by_mode.has("full")) v.fail("needs both 'quick' and 'full'");
+      vars[key] = by_mode.require<std::string>(mode);
+      by_mode.ignore(mode == "quick" ? "full" : "quick");
     }
   }
   auto resolve = [&](const std::string& p) {
     const fs::path path(p);
     return path.is_absolute() ? path : o.source_dir / path;
   };
-  if (root["inputs"])
-    for (const auto& in : root["inputs"]) {
-      const fs::path p = resolve(substitute(scalar_of(in, config, "inputs[]"), vars, config));
-      if (!fs::is_regular_file(p)) throw InputError(fmt::format("{}: input '{}' does not exist", config.string(), p.string()));
+  if (const auto inputs = root.optional_value("inputs"))
+    for (const ConfigValue& in : inputs->items()) {
+      const fs::path p = resolve(substitute(in.as<std::string>(), vars, config));
+      if (!fs::is_regular_file(p)) in.fail(fmt::format("input '{}' does not exist", p.string()));
       e.hashed_files.push_back(p);
     }
-  if (!root["steps"] || !root["steps"].IsSequence() || root["steps"].size() == 0)
-    throw InputError(fmt::format("{}: 'steps' must be a non-empty list", config.string()));
+  if (!root.has("steps")) root.fail("missing key 'steps' (a non-empty list)");
+  const std::vector<ConfigValue> steps = root.value("steps").items();
+  if (steps.empty()) root.fail_at("steps", "'steps' must be a non-empty list");
   std::set<std::string> step_names;
-  for (const auto& s : root["steps"]) {
+  for (const ConfigValue& item : steps) {
+    const ConfigSection s = item.section();
     ReproduceStep step;
-    if (!s.IsMap() || !s["name"]) throw InputError(fmt::format("{}: every step needs a 'name'", config.string()));
-    step.name = scalar_of(s["name"], config, "steps[].name");
+    if (!s.has("name")) s.fail("every step needs a 'name'");
+    step.name = s.require<std::string>("name");
     if (!valid_name(step.name) || !step_names.insert(step.name).second)
-      throw InputError(fmt::format("{}: step name '{}' must be [a-z0-9_]+ and unique", config.string(), step.name));
-    if (static_cast<bool>(s["meltlab"]) == static_cast<bool>(s["python"]))
-      throw InputError(fmt::format("{}: step '{}' needs exactly one of 'meltlab' and 'python'", config.string(), step.name));
-    step.kind = s["meltlab"] ? "meltlab" : "python";
-    const YAML::Node& args = s[step.kind];
-    if (!args.IsSequence() || args.size() == 0)
-      throw InputError(fmt::format("{}: step '{}': '{}' must be a non-empty list", config.string(), step.name, step.kind));
+      s.fail_at("name", fmt::format("step name '{}' must be [a-z0-9_]+ and unique", step.name));
+    if (s.has("meltlab") == s.has("python")) s.fail(fmt::format("step '{}' needs exactly one of 'meltlab' and 'python'", step.name));
+    step.kind = s.has("meltlab") ? "meltlab" : "python";
+    const ConfigValue args = s.value(step.kind);
+    if (!args.is_sequence() || args.items().empty())
+      args.fail(fmt::format("step '{}': '{}' must be a non-empty list", step.name, step.kind));
     auto step_vars = vars;
     step_vars["step"] = (e.out_dir / step.name).string();
-    for (const auto& a : args) step.args.push_back(substitute(scalar_of(a, config, "step argument"), step_vars, config));
+    for (const std::string& a : texts(args)) step.args.push_back(substitute(a, step_vars, config));
     if (step.kind == "python") {
       step.args[0] = resolve(step.args[0]).string();
       if (!fs::is_regular_file(step.args[0]))
-        throw InputError(fmt::format("{}: step '{}': script '{}' does not exist", config.string(), step.name, step.args[0]));
+        args.fail(fmt::format("step '{}': script '{}' does not exist", step.name, step.args[0]));
+      // A script imports its siblings (report/experiment_report.py dispatches to
+      // report/experiments/<kind>.py): every Python file of its folder is an input too.
+      for (const fs::path& module : python_modules_beside(step.args[0])) e.hashed_files.push_back(module);
     }
-    if (s["stdout"]) step.stdout_file = substitute(scalar_of(s["stdout"], config, "stdout"), step_vars, config);
+    if (const auto out = s.optional<std::string>("stdout")) step.stdout_file = substitute(*out, step_vars, config);
     // Files named by the arguments (a mesh, a kl field, a script) are inputs too; what lies
     // under the output folder is not.
     for (const auto& a : step.args) {
@@ -175,6 +170,7 @@ ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) 
     }
     e.steps.push_back(std::move(step));
   }
+  root.finish();
 
   ContentHash f;
   f.add_field("meltlab-reproduce-2");
@@ -223,12 +219,7 @@ std::vector<ReproduceExperiment> load_reproduce_experiments(const ReproduceOptio
   std::vector<ReproduceExperiment> all;
   std::set<std::string> names;
   for (const auto& f : files) {
-    ReproduceExperiment e;
-    try {
-      e = load_one(f, o);
-    } catch (const YAML::Exception& ex) {
-      throw yaml_error(f.string(), ex, "bad value");
-    }
+    ReproduceExperiment e = load_one(f, o);
     if (!names.insert(e.name).second) throw InputError(fmt::format("{}: experiment name '{}' used twice", f.string(), e.name));
     all.push_back(std::move(e));
   }

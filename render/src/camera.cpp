@@ -2,15 +2,13 @@
 // JSON description (see camera.h).
 
 #include <meltlab/render/camera.h>
-#include <meltlab/core/yaml_keys.h>
+#include <meltlab/core/config.h>
 #include <meltlab/core/error.h>
 
 #include <fmt/format.h>
-#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
-#include <set>
 
 namespace meltlab::render {
 
@@ -171,132 +169,49 @@ Projection RayGenerator::project(const Vec3d& p_world) const {
 
 namespace {
 
-std::string where_of(const std::string& source, const YAML::Node& n) {
-  const YAML::Mark mark = n.Mark();
-  if (mark.line >= 0) return fmt::format("{}:{}: camera", source, mark.line + 1);
-  return fmt::format("{}: camera", source);
+// Image sizes: at least a pixel, at most what any camera we model has (and what fits an int
+// product of width and height).
+constexpr int kMaxImageSide = 65536;
+
+// A list of exactly 3 numbers; as a camera's lists, it may be written as rows ([[x, y], z]).
+Vec3d numbers3(const ConfigSection& c, const std::string& key) {
+  const auto v = c.require_numbers(key, 3, 3);
+  return {v[0], v[1], v[2]};
 }
 
-double read_number(const YAML::Node& n, const std::string& at, const std::string& key) {
-  double x = 0;
-  try {
-    x = n.as<double>();
-  } catch (const YAML::Exception&) {
-    throw InputError(fmt::format("{}: '{}' must be a number (got '{}')", at, key, n.IsScalar() ? n.Scalar() : "?"));
+Camera parse_orthographic(const ConfigSection& c) {
+  OrthographicTopDown o;
+  o.width = c.require_in_range<int>("width", 1, kMaxImageSide);
+  o.height = c.require_in_range<int>("height", 1, kMaxImageSide);
+  if (c.has("pixels_per_mm") == c.has("pixels_per_unit")) c.fail("give exactly one of 'pixels_per_mm' and 'pixels_per_unit'");
+  if (c.has("centre_m") && c.has("centre")) c.fail("give at most one of 'centre_m' and 'centre'");
+  o.pixels_per_unit = c.has("pixels_per_mm") ? 1000.0 * c.require_positive("pixels_per_mm") : c.require_positive("pixels_per_unit");
+  for (const char* key : {"centre_m", "centre"}) {
+    if (!c.has(key)) continue;
+    const auto v = c.require_numbers(key, 2, 2);
+    o.centre = Vec2d(v[0], v[1]);
   }
-  if (!std::isfinite(x)) throw InputError(fmt::format("{}: '{}' must be a finite number", at, key));
-  return x;
+  return o;
 }
 
-std::vector<double> read_list(const YAML::Node& n, const std::string& at, const std::string& key) {
-  if (!n.IsSequence()) throw InputError(fmt::format("{}: '{}' must be a list of numbers", at, key));
-  std::vector<double> v;
-  for (const auto& e : n) {
-    if (e.IsSequence()) {  // nested (a 4x4 matrix as 4 rows)
-      for (const auto& f : e) v.push_back(read_number(f, at, key));
-    } else {
-      v.push_back(read_number(e, at, key));
-    }
-  }
-  return v;
-}
-
-class Keys {
- public:
-  Keys(const YAML::Node& n, std::string at, const std::set<std::string>& allowed) : n_(n), at_(std::move(at)) {
-    refuse_unknown_keys(n, at_, allowed);
-  }
-  bool has(const std::string& k) const { return static_cast<bool>(n_[k]); }
-  void require(const std::string& k) const {
-    if (!has(k)) throw InputError(fmt::format("{}: missing key '{}'", at_, k));
-  }
-  double number(const std::string& k) const {
-    require(k);
-    return read_number(n_[k], at_, k);
-  }
-  double positive(const std::string& k) const {
-    const double x = number(k);
-    if (!(x > 0.0)) throw InputError(fmt::format("{}: '{}' must be > 0 (got {})", at_, k, x));
-    return x;
-  }
-  int size(const std::string& k) const {
-    require(k);
-    int v = 0;
-    try {
-      v = n_[k].as<int>();
-    } catch (const YAML::Exception&) {
-      throw InputError(fmt::format("{}: '{}' must be an integer (got '{}')", at_, k,
-                                   n_[k].IsScalar() ? n_[k].Scalar() : "?"));
-    }
-    if (v < 1 || v > 65536) throw InputError(fmt::format("{}: '{}' must be in [1, 65536] (got {})", at_, k, v));
-    return v;
-  }
-  std::vector<double> list(const std::string& k, std::size_t n_min, std::size_t n_max) const {
-    require(k);
-    auto v = read_list(n_[k], at_, k);
-    if (v.size() < n_min || v.size() > n_max) {
-      if (n_min == n_max) throw InputError(fmt::format("{}: '{}' must have {} numbers (got {})", at_, k, n_min, v.size()));
-      throw InputError(fmt::format("{}: '{}' must have {} to {} numbers (got {})", at_, k, n_min, n_max, v.size()));
-    }
-    return v;
-  }
-  Vec3d vec3(const std::string& k) const {
-    const auto v = list(k, 3, 3);
-    return {v[0], v[1], v[2]};
-  }
-  Vec2d vec2(const std::string& k) const {
-    const auto v = list(k, 2, 2);
-    return {v[0], v[1]};
-  }
-  std::string text(const std::string& k) const {
-    require(k);
-    if (!n_[k].IsScalar()) throw InputError(fmt::format("{}: '{}' must be a string", at_, k));
-    return n_[k].Scalar();
-  }
-  const std::string& at() const { return at_; }
-
- private:
-  const YAML::Node n_;
-  std::string at_;
-};
-
-Camera parse_orthographic(const YAML::Node& node, const std::string& at) {
-  const Keys keys(node, at, {"type", "width", "height", "pixels_per_mm", "pixels_per_unit", "centre_m", "centre"});
-  OrthographicTopDown c;
-  c.width = keys.size("width");
-  c.height = keys.size("height");
-  if (keys.has("pixels_per_mm") == keys.has("pixels_per_unit"))
-    throw InputError(fmt::format("{}: give exactly one of 'pixels_per_mm' and 'pixels_per_unit'", at));
-  if (keys.has("centre_m") && keys.has("centre"))
-    throw InputError(fmt::format("{}: give at most one of 'centre_m' and 'centre'", at));
-  c.pixels_per_unit = keys.has("pixels_per_mm") ? 1000.0 * keys.positive("pixels_per_mm") : keys.positive("pixels_per_unit");
-  if (keys.has("centre_m")) c.centre = keys.vec2("centre_m");
-  if (keys.has("centre")) c.centre = keys.vec2("centre");
-  return c;
-}
-
-Camera parse_pinhole(const YAML::Node& node, const std::string& at) {
-  const Keys keys(node, at,
-                  {"type", "width", "height", "fx", "fy", "cx", "cy", "distortion", "eye", "target", "up",
-                   "camera_from_world"});
-  const int width = keys.size("width");
-  const int height = keys.size("height");
-  const double fx = keys.positive("fx");
+Camera parse_pinhole(const ConfigSection& c) {
+  const int width = c.require_in_range<int>("width", 1, kMaxImageSide);
+  const int height = c.require_in_range<int>("height", 1, kMaxImageSide);
+  const double fx = c.require_positive("fx");
   Pinhole p;
-  const bool has_pose = keys.has("eye") || keys.has("target") || keys.has("up");
-  if (keys.has("camera_from_world")) {
-    if (has_pose) throw InputError(fmt::format("{}: give either 'camera_from_world' or 'eye'/'target'/'up', not both", at));
-    const auto m = keys.list("camera_from_world", 16, 16);
+  const bool has_pose = c.has("eye") || c.has("target") || c.has("up");
+  if (c.has("camera_from_world")) {
+    if (has_pose) c.fail("give either 'camera_from_world' or 'eye'/'target'/'up', not both");
+    const auto m = c.require_numbers("camera_from_world", 16, 16);
     Eigen::Matrix4d M;
     for (int r = 0; r < 4; ++r)
-      for (int c = 0; c < 4; ++c) M(r, c) = m[static_cast<std::size_t>(4 * r + c)];
+      for (int col = 0; col < 4; ++col) M(r, col) = m[static_cast<std::size_t>(4 * r + col)];
     const Eigen::Matrix3d R = M.topLeftCorner<3, 3>();
     // Tolerance: a rotation written with ~10 significant digits is orthonormal to ~1e-9.
     const double ortho_err = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
     if (ortho_err > 1e-6 || R.determinant() <= 0.0 || M(3, 0) != 0.0 || M(3, 1) != 0.0 || M(3, 2) != 0.0 ||
         M(3, 3) != 1.0)
-      throw InputError(fmt::format(
-          "{}: 'camera_from_world' must be a rigid transform (rotation + translation, last row 0 0 0 1)", at));
+      c.fail_at("camera_from_world", "'camera_from_world' must be a rigid transform (rotation + translation, last row 0 0 0 1)");
     p.camera_from_world.matrix() = M;
     p.width = width;
     p.height = height;
@@ -304,18 +219,18 @@ Camera parse_pinhole(const YAML::Node& node, const std::string& at) {
     p.cx = 0.5 * (width - 1);
     p.cy = 0.5 * (height - 1);
   } else {
-    if (!keys.has("eye")) throw InputError(fmt::format("{}: missing key 'eye' (or 'camera_from_world')", at));
-    const Vec3d eye = keys.vec3("eye");
-    const Vec3d target = keys.vec3("target");
-    const Vec3d up = keys.has("up") ? keys.vec3("up") : Vec3d(0, 1, 0);
-    if (eye == target) throw InputError(fmt::format("{}: 'eye' and 'target' coincide", at));
+    if (!c.has("eye")) c.fail("missing key 'eye' (or 'camera_from_world')");
+    const Vec3d eye = numbers3(c, "eye");
+    const Vec3d target = numbers3(c, "target");
+    const Vec3d up = c.has("up") ? numbers3(c, "up") : Vec3d(0, 1, 0);
+    if (eye == target) c.fail("'eye' and 'target' coincide");
     p = Pinhole::look_at(width, height, fx, eye, target, up);
   }
-  if (keys.has("fy")) p.fy = keys.positive("fy");
-  if (keys.has("cx")) p.cx = keys.number("cx");
-  if (keys.has("cy")) p.cy = keys.number("cy");
-  if (keys.has("distortion")) {
-    const auto d = keys.list("distortion", 4, 5);  // OpenCV accepts k1 k2 p1 p2 [k3]
+  if (c.has("fy")) p.fy = c.require_positive("fy");
+  p.cx = c.get<double>("cx", p.cx);
+  p.cy = c.get<double>("cy", p.cy);
+  if (c.has("distortion")) {
+    const auto d = c.require_numbers("distortion", 4, 5);  // OpenCV accepts k1 k2 p1 p2 [k3]
     for (std::size_t i = 0; i < 5; ++i) p.distortion[i] = i < d.size() ? d[i] : 0.0;
   }
   return p;
@@ -323,15 +238,17 @@ Camera parse_pinhole(const YAML::Node& node, const std::string& at) {
 
 }  // namespace
 
+Camera parse_camera(const ConfigSection& c) {
+  if (!c.has("type")) c.fail("missing key 'type' (orthographic or pinhole)");
+  const std::string type = c.get_choice("type", "", {"orthographic", "pinhole"});
+  return type == "orthographic" ? parse_orthographic(c) : parse_pinhole(c);
+}
+
 Camera parse_camera(const YAML::Node& node, const std::string& source) {
-  const std::string at = where_of(source, node);
-  if (!node.IsMap()) throw InputError(fmt::format("{}: must be a mapping with a 'type' key", at));
-  if (!node["type"]) throw InputError(fmt::format("{}: missing key 'type' (orthographic or pinhole)", at));
-  const YAML::Node t = node["type"];
-  const std::string type = t.IsScalar() ? t.Scalar() : std::string("?");
-  if (type == "orthographic") return parse_orthographic(node, at);
-  if (type == "pinhole") return parse_pinhole(node, at);
-  throw InputError(fmt::format("{}: 'type' must be orthographic or pinhole (got '{}')", at, type));
+  const ConfigSection c(node, source, "camera");
+  const Camera camera = parse_camera(c);
+  c.finish();
+  return camera;
 }
 
 std::string describe_camera_json(const Camera& c) {

@@ -112,8 +112,10 @@ TEST(Catalog, BadFilesAreInputErrorsNamingTheFile) {
       {head + "  - {name: a, kind: cgal, source: x.off, description: x, triangles: 1, closed_manifold: false}\n",
        "'problem'"},
       {"datasets: []\n", "archive"},
-      {head + "  - [1, 2\n", "catalog.yaml:4: invalid YAML"},
-      {"archive: x\ndatasets:\n" + ok + "extra: 1\n", "unknown top-level key 'extra'"},
+      {head + "  - [1, 2\n", "catalog.yaml:4: YAML syntax error"},
+      {"archive: x\ndatasets:\n" + ok + "extra: 1\n", "catalog.yaml:4: unknown key 'extra' (allowed: archive, datasets)"},
+      {head + ok + "  - {name: b, kind: procedural, source: cube_triangles, description: x, triangles: 0}\n",
+       "catalog.yaml:4: datasets[1]: dataset 'b': 'triangles' must be positive"},
   };
   for (const auto& c : cases) {
     write_file(f, c.text);

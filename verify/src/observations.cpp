@@ -16,11 +16,11 @@
 //  - ground_truth, mass_series and segmentation.background must exist (their errors are
 //    better found here than half-way through a comparison); the background must be a
 //    readable image of the frames' size.
-//  - duplicate keys in a mapping are errors.
+//  - duplicate keys in a mapping are errors (as in every config, core/config.h).
 
 #include "obs_detail.h"
 
-#include <meltlab/core/yaml_keys.h>
+#include <meltlab/core/config.h>
 #include <meltlab/core/input_file.h>
 #include <meltlab/render/camera.h>
 #include <meltlab/core/error.h>
@@ -46,101 +46,35 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// Context for messages: the manifest's name as given.
+/// Where the manifest is: relative paths in it are relative to its folder.
 struct Ctx {
   std::string file;
   fs::path dir;  ///< absolute folder of the manifest
 
-  std::string at(const YAML::Node& n) const {
-    const YAML::Mark m = n.Mark();
-    if (m.line >= 0) return fmt::format("{}:{}", file, m.line + 1);
-    return file;
-  }
-  std::string at(const YAML::Mark& m) const {
-    if (m.line >= 0) return fmt::format("{}:{}", file, m.line + 1);
-    return file;
-  }
-  [[noreturn]] void fail(const YAML::Node& n, const std::string& problem) const {
-    throw InputError(fmt::format("{}: {}", at(n), problem));
-  }
   fs::path resolve(const std::string& p) const {
     const fs::path path(p);
     return (path.is_absolute() ? path : dir / path).lexically_normal();
   }
 };
 
-std::string join(const std::vector<std::string>& names) {
-  std::string s;
-  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
-}
-
-/// Checks that `n` is a mapping whose keys are all in `allowed` and not repeated.
-/// Returns the key nodes by name (for the line of a key).
-std::vector<std::pair<std::string, YAML::Node>> checked_map(const Ctx& ctx, const YAML::Node& n,
-                                                            const std::string& what,
-                                                            const std::vector<std::string>& allowed) {
-  if (!n.IsMap()) ctx.fail(n, fmt::format("'{}' must be a mapping of keys", what));
-  std::vector<std::pair<std::string, YAML::Node>> keys;
-  std::set<std::string> seen;
-  for (auto it = n.begin(); it != n.end(); ++it) {
-    if (!it->first.IsScalar()) ctx.fail(it->first, fmt::format("keys of '{}' must be names", what));
-    const std::string k = it->first.Scalar();
-    if (std::find(allowed.begin(), allowed.end(), k) == allowed.end()) {
-      ctx.fail(it->first, fmt::format("unknown key '{}' in {} (allowed: {})", k, what, join(allowed)));
-    }
-    if (!seen.insert(k).second) ctx.fail(it->first, fmt::format("key '{}' appears twice in {}", k, what));
-    keys.emplace_back(k, it->first);
-  }
-  return keys;
-}
-
-double number(const Ctx& ctx, const YAML::Node& n, const std::string& key) {
-  if (!n.IsScalar()) ctx.fail(n, fmt::format("'{}' must be a number", key));
-  double x = 0;
-  try {
-    x = n.as<double>();
-  } catch (const YAML::Exception&) {
-    ctx.fail(n, fmt::format("'{}' must be a number (got '{}')", key, n.Scalar()));
-  }
-  if (!std::isfinite(x)) ctx.fail(n, fmt::format("'{}' must be a finite number (got '{}')", key, n.Scalar()));
-  return x;
-}
-
-int integer(const Ctx& ctx, const YAML::Node& n, const std::string& key) {
-  const double x = number(ctx, n, key);
-  if (x != std::floor(x) || std::abs(x) > 1e9) {
-    ctx.fail(n, fmt::format("'{}' must be an integer (got '{}')", key, n.Scalar()));
-  }
+/// An integer written as any number with an integral value ("51", "51.0", "5.1e1"): manifests
+/// come from tools that write JSON numbers as doubles.
+int whole_number(const ConfigValue& v) {
+  const double x = v.as<double>();
+  if (x != std::floor(x) || std::abs(x) > 1e9) v.fail(fmt::format("must be an integer (got '{}')", v.scalar()));
   return static_cast<int>(x);
 }
 
-bool boolean(const Ctx& ctx, const YAML::Node& n, const std::string& key) {
-  if (!n.IsScalar()) ctx.fail(n, fmt::format("'{}' must be true or false", key));
-  try {
-    return n.as<bool>();
-  } catch (const YAML::Exception&) {
-    ctx.fail(n, fmt::format("'{}' must be true or false (got '{}')", key, n.Scalar()));
-  }
-}
-
-std::string text(const Ctx& ctx, const YAML::Node& n, const std::string& key) {
-  if (!n.IsScalar()) ctx.fail(n, fmt::format("'{}' must be a text value", key));
-  return n.Scalar();
-}
-
-std::string path_text(const Ctx& ctx, const YAML::Node& n, const std::string& key) {
-  std::string s = text(ctx, n, key);
-  if (s.empty()) ctx.fail(n, fmt::format("'{}' must be a non-empty path", key));
+std::string path_text(const ConfigValue& v) {
+  std::string s = v.as<std::string>();
+  if (s.empty()) v.fail("must be a non-empty path");
   return s;
 }
 
-fs::path existing_file(const Ctx& ctx, const YAML::Node& n, const std::string& key) {
-  const fs::path p = ctx.resolve(path_text(ctx, n, key));
+fs::path existing_file(const Ctx& ctx, const ConfigValue& v) {
+  const fs::path p = ctx.resolve(path_text(v));
   std::error_code ec;
-  if (!fs::is_regular_file(p, ec)) {
-    ctx.fail(n, fmt::format("'{}': {} {}", key, p.string(), fs::exists(p, ec) ? "is not a file" : "does not exist"));
-  }
+  if (!fs::is_regular_file(p, ec)) v.fail(fmt::format("{} {}", p.string(), fs::exists(p, ec) ? "is not a file" : "does not exist"));
   return p;
 }
 
@@ -171,106 +105,74 @@ YAML::Node load_yaml(const fs::path& manifest, const std::string& file) {
   } else if (ext != ".yaml" && ext != ".yml") {
     throw InputError(fmt::format("{}: a manifest must be .yaml, .yml or .json (got '{}')", file, ext));
   }
-  try {
-    YAML::Node root = YAML::Load(content);
-    return root;
-  } catch (const YAML::Exception& e) {
-    throw yaml_error(file, e, ext == ".json" ? "JSON syntax error" : "YAML syntax error");
-  }
+  return parse_yaml_text(content, file, ext == ".json" ? "JSON syntax error" : "YAML syntax error");
 }
 
-SegmentationSettings parse_segmentation(const Ctx& ctx, const YAML::Node& n) {
-  static const std::vector<std::string> kKeys = {
-      "method",         "channel",          "threshold",     "adaptive_block_px", "adaptive_offset",
-      "background",     "background_difference", "object_darker", "blur_sigma_px", "open_radius_px",
-      "close_radius_px", "largest_component", "min_component_px", "fill_holes", "min_contrast"};
-  const auto keys = checked_map(ctx, n, "segmentation", kKeys);
+SegmentationSettings parse_segmentation(const Ctx& ctx, const ConfigSection& seg) {
   SegmentationSettings s;
-  for (const auto& [key, key_node] : keys) {
-    const YAML::Node v = n[key];
-    if (key == "method") {
-      const std::string m = text(ctx, v, key);
-      if (m == "otsu") {
-        s.method = SegmentationSettings::Method::kOtsu;
-      } else if (m == "global") {
-        s.method = SegmentationSettings::Method::kGlobal;
-      } else if (m == "adaptive") {
-        s.method = SegmentationSettings::Method::kAdaptive;
-      } else if (m == "background") {
-        s.method = SegmentationSettings::Method::kBackground;
-      } else {
-        ctx.fail(v, fmt::format("'method': unknown segmentation method '{}' (otsu, global, adaptive or background)", m));
-      }
-    } else if (key == "channel") {
-      s.channel = text(ctx, v, key);
-    } else if (key == "threshold") {
-      s.threshold = number(ctx, v, key);
-    } else if (key == "adaptive_block_px") {
-      s.adaptive_block_px = integer(ctx, v, key);
-    } else if (key == "adaptive_offset") {
-      s.adaptive_offset = number(ctx, v, key);
-    } else if (key == "background") {
-      s.background = existing_file(ctx, v, key);
-    } else if (key == "background_difference") {
-      s.background_difference = number(ctx, v, key);
-    } else if (key == "object_darker") {
-      s.object_darker = boolean(ctx, v, key);
-    } else if (key == "blur_sigma_px") {
-      s.blur_sigma_px = number(ctx, v, key);
-    } else if (key == "open_radius_px") {
-      s.open_radius_px = integer(ctx, v, key);
-    } else if (key == "close_radius_px") {
-      s.close_radius_px = integer(ctx, v, key);
-    } else if (key == "largest_component") {
-      s.largest_component = boolean(ctx, v, key);
-    } else if (key == "min_component_px") {
-      s.min_component_px = number(ctx, v, key);
-    } else if (key == "min_contrast") {
-      s.min_contrast = number(ctx, v, key);
-    } else if (key == "fill_holes") {
-      s.fill_holes = boolean(ctx, v, key);
+  if (const auto m = seg.optional<std::string>("method")) {
+    if (*m == "otsu") {
+      s.method = SegmentationSettings::Method::kOtsu;
+    } else if (*m == "global") {
+      s.method = SegmentationSettings::Method::kGlobal;
+    } else if (*m == "adaptive") {
+      s.method = SegmentationSettings::Method::kAdaptive;
+    } else if (*m == "background") {
+      s.method = SegmentationSettings::Method::kBackground;
+    } else {
+      seg.fail_at("method", fmt::format("'method': unknown segmentation method '{}' (otsu, global, adaptive or background)", *m));
     }
   }
-  if (const std::string problem = detail::segmentation_settings_problem(s); !problem.empty()) {
-    // The problem starts with the field's name; point at that field if it was given.
-    const std::string field = problem.substr(0, problem.find(':'));
-    const YAML::Node v = n[field];
-    ctx.fail(v ? v : n, fmt::format("segmentation.{}", problem));
-  }
+  const auto whole = [&](const char* key, int fallback) {
+    const auto v = seg.optional_value(key);
+    return v ? whole_number(*v) : fallback;
+  };
+  s.channel = seg.get("channel", s.channel);
+  s.threshold = seg.get("threshold", s.threshold);
+  s.adaptive_block_px = whole("adaptive_block_px", s.adaptive_block_px);
+  s.adaptive_offset = seg.get("adaptive_offset", s.adaptive_offset);
+  if (const auto bg = seg.optional_value("background")) s.background = existing_file(ctx, *bg);
+  s.background_difference = seg.get("background_difference", s.background_difference);
+  s.object_darker = seg.get("object_darker", s.object_darker);
+  s.blur_sigma_px = seg.get("blur_sigma_px", s.blur_sigma_px);
+  s.open_radius_px = whole("open_radius_px", s.open_radius_px);
+  s.close_radius_px = whole("close_radius_px", s.close_radius_px);
+  s.largest_component = seg.get("largest_component", s.largest_component);
+  s.min_component_px = seg.get("min_component_px", s.min_component_px);
+  s.fill_holes = seg.get("fill_holes", s.fill_holes);
+  s.min_contrast = seg.get("min_contrast", s.min_contrast);
+  // The problem starts with the field's name; point at that field if it was given.
+  if (const std::string problem = detail::segmentation_settings_problem(s); !problem.empty())
+    seg.fail_at(problem.substr(0, problem.find(':')), problem);
   return s;
 }
 
-std::optional<cv::Rect> parse_roi(const Ctx& ctx, const YAML::Node& n) {
-  if (!n.IsSequence() || n.size() != 4) ctx.fail(n, "'roi' must be a list of 4 integers [x, y, width, height]");
-  const int x = integer(ctx, n[0], "roi");
-  const int y = integer(ctx, n[1], "roi");
-  const int w = integer(ctx, n[2], "roi");
-  const int h = integer(ctx, n[3], "roi");
-  if (x < 0 || y < 0) ctx.fail(n, fmt::format("'roi': x and y must be >= 0 (got {}, {})", x, y));
-  if (w <= 0 || h <= 0) ctx.fail(n, fmt::format("'roi': width and height must be positive (got {}, {})", w, h));
+cv::Rect parse_roi(const ConfigValue& v) {
+  if (!v.is_sequence() || v.items().size() != 4) v.fail("must be a list of 4 integers [x, y, width, height]");
+  const std::vector<ConfigValue> xywh = v.items();
+  const int x = whole_number(xywh[0]), y = whole_number(xywh[1]), w = whole_number(xywh[2]), h = whole_number(xywh[3]);
+  if (x < 0 || y < 0) v.fail(fmt::format("x and y must be >= 0 (got {}, {})", x, y));
+  if (w <= 0 || h <= 0) v.fail(fmt::format("width and height must be positive (got {}, {})", w, h));
   return cv::Rect(x, y, w, h);
 }
 
 struct FrameEntry {
   fs::path image;
   std::optional<double> time_s;
-  YAML::Node node;
+  ConfigValue node;  ///< the list item (or the glob) it comes from, for messages
 };
 
 /// Every file in the folder matching the last component of `pattern`, sorted by name.
-std::vector<FrameEntry> glob_frames(const Ctx& ctx, const YAML::Node& glob_node) {
-  const std::string pattern = path_text(ctx, glob_node, "glob");
+std::vector<FrameEntry> glob_frames(const Ctx& ctx, const ConfigValue& glob) {
+  const std::string pattern = path_text(glob);
   const fs::path full = ctx.resolve(pattern);
   const fs::path folder = full.parent_path();
   const std::string name_pattern = full.filename().string();
-  if (folder.string().find_first_of("*?[") != std::string::npos) {
-    ctx.fail(glob_node, fmt::format("'glob': wildcards are allowed only in the file name (got '{}')", pattern));
-  }
-  if (name_pattern.empty()) ctx.fail(glob_node, fmt::format("'glob': '{}' names no files", pattern));
+  if (folder.string().find_first_of("*?[") != std::string::npos)
+    glob.fail(fmt::format("wildcards are allowed only in the file name (got '{}')", pattern));
+  if (name_pattern.empty()) glob.fail(fmt::format("'{}' names no files", pattern));
   std::error_code ec;
-  if (!fs::is_directory(folder, ec)) {
-    ctx.fail(glob_node, fmt::format("'glob': folder {} does not exist", folder.string()));
-  }
+  if (!fs::is_directory(folder, ec)) glob.fail(fmt::format("folder {} does not exist", folder.string()));
   std::vector<fs::path> matches;
   for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string name = it->path().filename().string();
@@ -278,117 +180,79 @@ std::vector<FrameEntry> glob_frames(const Ctx& ctx, const YAML::Node& glob_node)
     std::error_code ec2;
     if (it->is_regular_file(ec2)) matches.push_back(it->path());
   }
-  if (ec) ctx.fail(glob_node, fmt::format("'glob': cannot list {}: {}", folder.string(), ec.message()));
-  if (matches.empty()) ctx.fail(glob_node, fmt::format("'glob': '{}' matches no file", pattern));
+  if (ec) glob.fail(fmt::format("cannot list {}: {}", folder.string(), ec.message()));
+  if (matches.empty()) glob.fail(fmt::format("'{}' matches no file", pattern));
   std::sort(matches.begin(), matches.end(),
             [](const fs::path& a, const fs::path& b) { return a.filename().string() < b.filename().string(); });
   std::vector<FrameEntry> out;
-  for (const auto& m : matches) out.push_back({m.lexically_normal(), std::nullopt, glob_node});
+  for (const auto& m : matches) out.push_back({m.lexically_normal(), std::nullopt, glob});
   return out;
 }
 
-std::vector<FrameEntry> parse_frames(const Ctx& ctx, const YAML::Node& n) {
-  if (n.IsMap()) {
-    checked_map(ctx, n, "frames", {"glob"});
-    if (!n["glob"]) ctx.fail(n, "'frames' must be a list of frames or {glob: pattern}");
-    return glob_frames(ctx, n["glob"]);
+std::vector<FrameEntry> parse_frames(const Ctx& ctx, const ConfigValue& n) {
+  if (n.is_map()) {
+    const ConfigSection g = n.section();
+    if (!g.has("glob")) g.fail("must be a list of frames or {glob: pattern}");
+    return glob_frames(ctx, g.value("glob"));
   }
-  if (!n.IsSequence()) ctx.fail(n, "'frames' must be a list of frames or {glob: pattern}");
-  if (n.size() == 0) ctx.fail(n, "'frames' is empty");
+  if (!n.is_sequence()) n.fail("must be a list of frames or {glob: pattern}");
+  const std::vector<ConfigValue> items = n.items();
+  if (items.empty()) n.fail("is empty");
   std::vector<FrameEntry> out;
-  for (const YAML::Node& f : n) {
-    FrameEntry e;
-    e.node = f;
-    if (f.IsScalar()) {
-      e.image = ctx.resolve(path_text(ctx, f, "image"));
-    } else {
-      checked_map(ctx, f, "frame", {"image", "time_s"});
-      if (!f["image"]) ctx.fail(f, "frame without 'image'");
-      e.image = ctx.resolve(path_text(ctx, f["image"], "image"));
-      if (f["time_s"]) e.time_s = number(ctx, f["time_s"], "time_s");
+  for (const ConfigValue& f : items) {
+    if (f.is_scalar()) {
+      out.push_back({ctx.resolve(path_text(f)), std::nullopt, f});
+      continue;
     }
-    out.push_back(std::move(e));
+    const ConfigSection frame = f.section();
+    if (!frame.has("image")) frame.fail("frame without 'image'");
+    out.push_back({ctx.resolve(path_text(frame.value("image"))), frame.optional<double>("time_s"), f});
   }
   return out;
 }
 
 }  // namespace
 
-ObservationSequence load_observations_checked(const fs::path& manifest);
-
 ObservationSequence load_observations(const fs::path& manifest) {
-  try {
-    return load_observations_checked(manifest);
-  } catch (const YAML::Exception& e) {
-    throw yaml_error(manifest.string(), e, "bad value");
-  }
-}
-
-ObservationSequence load_observations_checked(const fs::path& manifest) {
   Ctx ctx;
   ctx.file = manifest.string();
   std::error_code ec;
   const fs::path absolute = fs::absolute(manifest, ec).lexically_normal();
   ctx.dir = absolute.parent_path();
 
-  const YAML::Node root = load_yaml(manifest, ctx.file);
-  static const std::vector<std::string> kKeys = {"meltlab_observations", "object", "frames",       "interval_s",
-                                                 "first_time_s",         "camera", "roi",          "segmentation",
-                                                 "ground_truth",         "mass_series"};
-  if (!root.IsMap()) ctx.fail(root, "a manifest must be a mapping of keys (meltlab_observations: 1, frames: ...)");
-  checked_map(ctx, root, "the manifest", kKeys);
-  if (!root["meltlab_observations"]) ctx.fail(root, "missing key 'meltlab_observations' (format version, 1)");
-  if (const YAML::Node v = root["meltlab_observations"]; !v.IsScalar() || v.Scalar() != "1") {
-    ctx.fail(v, fmt::format("'meltlab_observations': unsupported format version '{}' (this is version 1)",
-                            v.IsScalar() ? v.Scalar() : "?"));
-  }
-  if (!root["frames"]) ctx.fail(root, "missing key 'frames'");
-  if (!root["camera"]) ctx.fail(root, "missing key 'camera'");
+  const ConfigValue doc(load_yaml(manifest, ctx.file), ctx.file);
+  if (!doc.is_map()) doc.fail("a manifest must be a mapping of keys (meltlab_observations: 1, frames: ...)");
+  const ConfigSection root = doc.section();
+  if (!root.has("meltlab_observations")) root.fail("missing key 'meltlab_observations' (format version, 1)");
+  if (const ConfigValue v = root.value("meltlab_observations"); v.scalar() != "1")
+    v.fail(fmt::format("unsupported format version '{}' (this is version 1)", v.is_scalar() ? v.scalar() : "?"));
+  if (!root.has("frames")) root.fail("missing key 'frames'");
+  if (!root.has("camera")) root.fail("missing key 'camera'");
 
   ObservationSequence seq;
   seq.manifest = absolute;
-  if (root["object"]) seq.object = text(ctx, root["object"], "object");
-  if (root["interval_s"]) {
-    const double dt = number(ctx, root["interval_s"], "interval_s");
-    if (dt <= 0) ctx.fail(root["interval_s"], fmt::format("'interval_s' must be positive (got {})", dt));
+  seq.object = root.get("object", seq.object);
+  if (const auto dt = root.optional<double>("interval_s")) {
+    if (*dt <= 0) root.fail_at("interval_s", fmt::format("'interval_s' must be positive (got {})", *dt));
     seq.interval_s = dt;
   }
-  std::optional<double> first_time;
-  if (root["first_time_s"]) first_time = number(ctx, root["first_time_s"], "first_time_s");
-
-  // Camera: errors from parse_camera name the file; make sure they carry the line too.
-  {
-    const YAML::Node cam = root["camera"];
-    try {
-      seq.camera = render::parse_camera(cam, ctx.file);
-    } catch (const InputError& e) {
-      const std::string msg = e.what();
-      const std::string prefix = ctx.file + ":";
-      if (msg.rfind(prefix, 0) == 0 && msg.size() > prefix.size() && std::isdigit(static_cast<unsigned char>(msg[prefix.size()]))) {
-        throw;
-      }
-      std::string rest = msg.rfind(ctx.file, 0) == 0 ? msg.substr(ctx.file.size()) : msg;
-      if (rest.rfind(": ", 0) == 0) rest = rest.substr(2);
-      ctx.fail(cam, fmt::format("'camera': {}", rest));
-    } catch (const YAML::Exception& e) {
-      ctx.fail(cam, fmt::format("'camera': {}", one_line(e.msg)));
-    }
-  }
-  if (root["roi"]) seq.roi = parse_roi(ctx, root["roi"]);
-  if (root["segmentation"]) seq.segmentation = parse_segmentation(ctx, root["segmentation"]);
-  if (root["ground_truth"]) seq.ground_truth = existing_file(ctx, root["ground_truth"], "ground_truth");
-  if (root["mass_series"]) seq.mass_series = existing_file(ctx, root["mass_series"], "mass_series");
+  const std::optional<double> first_time = root.optional<double>("first_time_s");
+  seq.camera = render::parse_camera(root.section("camera"));
+  if (const auto roi = root.optional_value("roi")) seq.roi = parse_roi(*roi);
+  const std::optional<ConfigSection> segmentation = root.optional_section("segmentation");
+  if (segmentation) seq.segmentation = parse_segmentation(ctx, *segmentation);
+  if (const auto v = root.optional_value("ground_truth")) seq.ground_truth = existing_file(ctx, *v);
+  if (const auto v = root.optional_value("mass_series")) seq.mass_series = existing_file(ctx, *v);
+  const ConfigValue frames_node = root.value("frames");
+  const std::vector<FrameEntry> entries = parse_frames(ctx, frames_node);
+  root.finish();
 
   // Frames.
-  const YAML::Node frames_node = root["frames"];
-  const std::vector<FrameEntry> entries = parse_frames(ctx, frames_node);
   std::set<fs::path> seen;
   std::optional<double> previous_time;
   for (std::size_t i = 0; i < entries.size(); ++i) {
     const FrameEntry& e = entries[i];
-    if (!seen.insert(e.image).second) {
-      ctx.fail(e.node, fmt::format("'frames': {} is listed twice", e.image.string()));
-    }
+    if (!seen.insert(e.image).second) e.node.fail(fmt::format("{} is listed twice", e.image.string()));
     Frame f;
     f.index = static_cast<int>(i);
     f.image = e.image;
@@ -401,8 +265,8 @@ ObservationSequence load_observations_checked(const fs::path& manifest) {
     }
     if (f.time_s) {
       if (previous_time && !(*f.time_s > *previous_time)) {
-        ctx.fail(e.node, fmt::format("'time_s': frame {} ({}) has time {} s, not after the previous frame's {} s", i,
-                                     e.image.filename().string(), *f.time_s, *previous_time));
+        e.node.fail(fmt::format("frame {} ({}) has time_s {} s, not after the previous frame's {} s", i,
+                                e.image.filename().string(), *f.time_s, *previous_time));
       }
       previous_time = f.time_s;
     }
@@ -425,32 +289,29 @@ ObservationSequence load_observations_checked(const fs::path& manifest) {
     }
   }
   if (existing == 0) {
-    ctx.fail(frames_node, fmt::format("'frames': none of the {} frames exists (first: {})", seq.frames.size(),
-                                      seq.frames.front().image.string()));
+    frames_node.fail(fmt::format("none of the {} frames exists (first: {})", seq.frames.size(),
+                                 seq.frames.front().image.string()));
   }
-  if (!size) {
-    ctx.fail(frames_node, fmt::format("'frames': no frame is a readable image ({})", first_problem));
-  }
+  if (!size) frames_node.fail(fmt::format("no frame is a readable image ({})", first_problem));
   const int cam_w = render::camera_width(seq.camera), cam_h = render::camera_height(seq.camera);
   if (cam_w != size->width || cam_h != size->height) {
-    ctx.fail(root["camera"], fmt::format("'camera': renders {}x{} but the frames are {}x{}", cam_w, cam_h, size->width,
-                                         size->height));
+    root.fail_at("camera", fmt::format("'camera': renders {}x{} but the frames are {}x{}", cam_w, cam_h, size->width,
+                                       size->height));
   }
   if (seq.roi && (*seq.roi & cv::Rect(0, 0, size->width, size->height)) != *seq.roi) {
-    ctx.fail(root["roi"], fmt::format("'roi' [{}, {}, {}, {}] is outside the {}x{} frames", seq.roi->x, seq.roi->y,
-                                      seq.roi->width, seq.roi->height, size->width, size->height));
+    root.fail_at("roi", fmt::format("'roi' [{}, {}, {}, {}] is outside the {}x{} frames", seq.roi->x, seq.roi->y,
+                                    seq.roi->width, seq.roi->height, size->width, size->height));
   }
   if (!seq.segmentation.background.empty()) {
-    const YAML::Node bg = root["segmentation"]["background"];
     cv::Size bg_size;
     try {
       bg_size = detail::read_image_size(seq.segmentation.background);
     } catch (const InputError& err) {
-      ctx.fail(bg, fmt::format("'background': {}", err.what()));
+      segmentation->fail_at("background", fmt::format("'background': {}", err.what()));
     }
     if (bg_size != *size) {
-      ctx.fail(bg, fmt::format("'background' is {}x{} but the frames are {}x{}", bg_size.width, bg_size.height,
-                               size->width, size->height));
+      segmentation->fail_at("background", fmt::format("'background' is {}x{} but the frames are {}x{}", bg_size.width,
+                                                      bg_size.height, size->width, size->height));
     }
   }
   return seq;

@@ -3,8 +3,8 @@
 
 #include <meltlab/core/input_file.h>
 #include <meltlab/core/limits.h>
+#include <meltlab/core/config.h>
 #include <meltlab/core/error.h>
-#include <meltlab/core/yaml_keys.h>
 #include <meltlab/sim/kl_field.h>
 
 #include <fmt/format.h>
@@ -14,7 +14,6 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
-#include <set>
 #include <sstream>
 
 namespace meltlab::sim {
@@ -183,56 +182,6 @@ class CombinedKl final : public KlField {
   bool constant_ = false;
 };
 
-// ---- YAML parsing -------------------------------------------------------------------
-
-std::string where_of(const std::string& source, const YAML::Node& n) {
-  const YAML::Mark mark = n.Mark();
-  if (mark.line >= 0) return fmt::format("{}:{}", source, mark.line + 1);
-  return source;
-}
-
-double read_number(const YAML::Node& n, const std::string& at, const std::string& key) {
-  try {
-    const double x = n.as<double>();
-    if (!std::isfinite(x)) throw InputError(fmt::format("{}: '{}' must be a finite number", at, key));
-    return x;
-  } catch (const YAML::Exception&) {
-    throw InputError(fmt::format("{}: '{}' must be a number (got '{}')", at, key, n.IsScalar() ? n.Scalar() : "?"));
-  }
-}
-
-Vec3<double> read_vec3(const YAML::Node& n, const std::string& at, const std::string& key) {
-  if (!n.IsSequence() || n.size() != 3) throw InputError(fmt::format("{}: '{}' must be a list of 3 numbers", at, key));
-  return {read_number(n[0], at, key), read_number(n[1], at, key), read_number(n[2], at, key)};
-}
-
-// Reads keys of a mapping, refusing unknown ones (a typo must not pass silently).
-class Keys {
- public:
-  Keys(const YAML::Node& n, std::string at, std::set<std::string> allowed) : n_(n), at_(std::move(at)) {
-    refuse_unknown_keys(n, at_, allowed);
-  }
-  bool has(const std::string& k) const { return static_cast<bool>(n_[k]); }
-  double number(const std::string& k, double def) const { return has(k) ? read_number(n_[k], at_, k) : def; }
-  double required_number(const std::string& k) const {
-    if (!has(k)) throw InputError(fmt::format("{}: missing key '{}'", at_, k));
-    return read_number(n_[k], at_, k);
-  }
-  Vec3<double> vec3(const std::string& k) const {
-    if (!has(k)) throw InputError(fmt::format("{}: missing key '{}'", at_, k));
-    return read_vec3(n_[k], at_, k);
-  }
-  std::string text(const std::string& k, const std::string& def) const {
-    return has(k) ? n_[k].as<std::string>() : def;
-  }
-  YAML::Node node(const std::string& k) const { return n_[k]; }
-  const std::string& at() const { return at_; }
-
- private:
-  YAML::Node n_;
-  std::string at_;
-};
-
 }  // namespace
 
 KlFieldPtr make_constant_kl(double value) {
@@ -354,105 +303,97 @@ KlGrid read_kl_grid(const std::filesystem::path& file) {
   return g;
 }
 
-KlFieldPtr parse_kl_field(const YAML::Node& node, const std::string& source, const KlContext& ctx) {
-  const std::string at = where_of(source, node);
-  if (!node || node.IsNull()) throw InputError(fmt::format("{}: empty kl field", at));
-  if (node.IsScalar()) return make_constant_kl(read_number(node, at, "kl"));
-  if (!node.IsMap()) throw InputError(fmt::format("{}: a kl field is a number or a mapping with 'type'", at));
-  if (!node["type"]) throw InputError(fmt::format("{}: kl field without 'type'", at));
-  const std::string type = node["type"].as<std::string>();
-  try {
-    if (type == "constant") {
-      Keys k(node, at, {"type", "value"});
-      return make_constant_kl(k.required_number("value"));
-    }
-    if (type == "point_source") {
-      Keys k(node, at, {"type", "position", "base", "strength", "radius", "falloff"});
-      const std::string f = k.text("falloff", "gaussian");
-      Falloff falloff;
-      if (f == "gaussian") falloff = Falloff::kGaussian;
-      else if (f == "inverse_square") falloff = Falloff::kInverseSquare;
-      else if (f == "linear") falloff = Falloff::kLinear;
-      else if (f == "exponential") falloff = Falloff::kExponential;
-      else throw InputError(fmt::format("{}: unknown falloff '{}' (gaussian, inverse_square, linear, exponential)", at, f));
-      return make_point_source_kl(k.vec3("position"), k.number("base", 0.0), k.number("strength", 1.0),
-                                  k.required_number("radius"), falloff);
-    }
-    if (type == "ground") {
-      Keys k(node, at, {"type", "up", "height", "base", "strength", "height_scale"});
-      const Vec3<double> up = k.has("up") ? k.vec3("up") : Vec3<double>(0, 0, 1);
-      if (!(up.norm() > 0)) throw InputError(fmt::format("{}: 'up' must be non-zero", at));
-      double height = 0.0;
-      if (!k.has("height") || k.text("height", "") == "auto") {
-        // The ground touches the mesh's lowest point along `up` (bbox corner extreme).
-        const Vec3<double> u = up.normalized();
-        double lo = 0.0;
-        for (int c = 0; c < 8; ++c) {
-          const Vec3<double> corner((c & 1) ? ctx.bbox_max.x() : ctx.bbox_min.x(), (c & 2) ? ctx.bbox_max.y() : ctx.bbox_min.y(),
-                                    (c & 4) ? ctx.bbox_max.z() : ctx.bbox_min.z());
-          lo = c == 0 ? u.dot(corner) : std::min(lo, u.dot(corner));
-        }
-        height = lo;
-      } else {
-        height = k.required_number("height");
-      }
-      return make_ground_kl(up, height, k.number("base", 0.0), k.number("strength", 1.0), k.required_number("height_scale"));
-    }
-    if (type == "grid") {
-      Keys k(node, at, {"type", "file", "outside"});
-      if (!k.has("file")) throw InputError(fmt::format("{}: grid needs 'file'", at));
-      std::filesystem::path file = k.text("file", "");
-      if (file.is_relative()) file = ctx.base_dir / file;
-      KlGrid g = read_kl_grid(file);
-      const std::string outside = k.text("outside", "clamp");
-      if (outside == "clamp") {
-        g.clamp_outside = true;
-      } else {
-        g.clamp_outside = false;
-        g.outside_value = read_number(k.node("outside"), at, "outside");
-      }
-      return make_grid_kl(std::move(g), file.string());
-    }
-    if (type == "product" || type == "max" || type == "min") {
-      Keys k(node, at, {"type", "of"});
-      const YAML::Node of = k.node("of");
-      if (!of || !of.IsSequence() || of.size() == 0)
-        throw InputError(fmt::format("{}: '{}' needs a non-empty list 'of'", at, type));
-      std::vector<KlFieldPtr> parts;
-      for (const auto& child : of) parts.push_back(parse_kl_field(child, source, ctx));
-      const Combine op = type == "product" ? Combine::kProduct : (type == "max" ? Combine::kMax : Combine::kMin);
-      return make_combined_kl(op, std::move(parts));
-    }
-  } catch (const InputError& e) {
-    const std::string msg = e.what();
-    if (msg.rfind(source, 0) == 0) throw;  // already names the file
-    throw InputError(fmt::format("{}: {}", at, msg));
+namespace {
+
+// The mesh's lowest point along `up` (its bounding box's extreme corner): "height: auto".
+double lowest_along(const Vec3<double>& up, const KlContext& ctx) {
+  const Vec3<double> u = up.normalized();
+  double lo = 0.0;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3<double> corner((c & 1) ? ctx.bbox_max.x() : ctx.bbox_min.x(), (c & 2) ? ctx.bbox_max.y() : ctx.bbox_min.y(),
+                              (c & 4) ? ctx.bbox_max.z() : ctx.bbox_min.z());
+    lo = c == 0 ? u.dot(corner) : std::min(lo, u.dot(corner));
   }
-  throw InputError(fmt::format("{}: unknown kl field type '{}' (constant, point_source, ground, grid, product, max, min)", at, type));
+  return lo;
+}
+
+Falloff falloff_from(const ConfigSection& k) {
+  const std::string f = k.get<std::string>("falloff", "gaussian");
+  if (f == "gaussian") return Falloff::kGaussian;
+  if (f == "inverse_square") return Falloff::kInverseSquare;
+  if (f == "linear") return Falloff::kLinear;
+  if (f == "exponential") return Falloff::kExponential;
+  k.fail_at("falloff", fmt::format("unknown falloff '{}' (gaussian, inverse_square, linear, exponential)", f));
+}
+
+KlFieldPtr parse_field(const ConfigValue& node, const KlContext& ctx);
+
+KlFieldPtr parse_mapping(const ConfigSection& k, const KlContext& ctx) {
+  if (!k.has("type")) k.fail("kl field without 'type'");
+  const std::string type = k.require<std::string>("type");
+  if (type == "constant") return make_constant_kl(k.require<double>("value"));
+  if (type == "point_source") {
+    const Falloff falloff = falloff_from(k);
+    return make_point_source_kl(k.require_vec3("position"), k.get("base", 0.0), k.get("strength", 1.0),
+                                k.require<double>("radius"), falloff);
+  }
+  if (type == "ground") {
+    const Vec3<double> up = k.get_vec3("up", Vec3<double>(0, 0, 1));
+    if (!(up.norm() > 0)) k.fail_at("up", "'up' must be non-zero");
+    const auto height = k.optional_value("height");
+    const double h = !height || height->scalar() == "auto" ? lowest_along(up, ctx) : height->as<double>();
+    return make_ground_kl(up, h, k.get("base", 0.0), k.get("strength", 1.0), k.require<double>("height_scale"));
+  }
+  if (type == "grid") {
+    std::filesystem::path file = k.require<std::string>("file");
+    if (file.is_relative()) file = ctx.base_dir / file;
+    KlGrid g = read_kl_grid(file);
+    const auto outside = k.optional_value("outside");
+    g.clamp_outside = !outside || outside->scalar() == "clamp";
+    if (!g.clamp_outside) g.outside_value = outside->as<double>();
+    return make_grid_kl(std::move(g), file.string());
+  }
+  if (type == "product" || type == "max" || type == "min") {
+    const auto of = k.optional_value("of");
+    if (!of || !of->is_sequence() || of->items().empty()) k.fail(fmt::format("'{}' needs a non-empty list 'of'", type));
+    std::vector<KlFieldPtr> parts;
+    for (const ConfigValue& child : of->items()) parts.push_back(parse_field(child, ctx));
+    const Combine op = type == "product" ? Combine::kProduct : (type == "max" ? Combine::kMax : Combine::kMin);
+    return make_combined_kl(op, std::move(parts));
+  }
+  k.fail_at("type", fmt::format("unknown kl field type '{}' (constant, point_source, ground, grid, product, max, min)", type));
+}
+
+KlFieldPtr parse_field(const ConfigValue& node, const KlContext& ctx) {
+  if (node.is_null()) node.fail("empty kl field");
+  if (!node.is_scalar() && !node.is_map()) node.fail("a kl field is a number or a mapping with 'type'");
+  try {
+    return node.is_scalar() ? make_constant_kl(node.as<double>()) : parse_mapping(node.section(), ctx);
+  } catch (const InputError& e) {
+    // The make_* checks name the field, not the file: say where it is.
+    const std::string msg = e.what();
+    if (msg.rfind(node.file(), 0) == 0) throw;
+    node.fail(msg);
+  }
+}
+
+}  // namespace
+
+KlFieldPtr parse_kl_field(const YAML::Node& node, const std::string& source, const KlContext& ctx) {
+  const ConfigValue kl(node, source, "kl");
+  KlFieldPtr field = parse_field(kl, ctx);
+  kl.finish();
+  return field;
 }
 
 KlFieldPtr load_kl_field(const std::filesystem::path& file, const KlContext& ctx) {
-  const std::string name = file.string();
-  const std::string text = read_text_file(file, "kl field");
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw yaml_error(name, e);
-  }
-  if (!root || !root.IsMap() || !root["kl"])
-    throw InputError(fmt::format("{}: expected a top-level key 'kl'", name));
-  for (auto it = root.begin(); it != root.end(); ++it) {
-    const std::string key = it->first.as<std::string>();
-    if (key != "kl") throw InputError(fmt::format("{}: unknown top-level key '{}' (only 'kl')", name, key));
-  }
+  const ConfigSection root = load_config(file, "kl field");
+  if (!root.has("kl")) root.fail("expected a top-level key 'kl'");
   KlContext c = ctx;
   if (c.base_dir.empty()) c.base_dir = file.parent_path();
-  try {
-    return parse_kl_field(root["kl"], name, c);
-  } catch (const YAML::Exception& e) {
-    throw yaml_error(name, e, "bad value");
-  }
+  KlFieldPtr field = parse_field(root.value("kl"), c);
+  root.finish();
+  return field;
 }
 
 }  // namespace meltlab::sim

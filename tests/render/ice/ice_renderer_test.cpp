@@ -396,11 +396,13 @@ TEST(RenderScene, ParsesAndRefusesUnknownKeys) {
     }
     return std::string("(no error)");
   };
-  EXPECT_NE(message("{ice: {cx: 1}}").find("unknown key 'cx'"), std::string::npos) << message("{ice: {cx: 1}}");
-  EXPECT_NE(message("{ice: {fresnel: exact}}").find("'fresnel' must be one of"), std::string::npos);
+  EXPECT_NE(message("{ice: {cx: 1}}").find("scene.yaml:1: ice: unknown key 'cx'"), std::string::npos) << message("{ice: {cx: 1}}");
+  EXPECT_NE(message("{ice: {fresnel: exact}}").find("'ice.fresnel' must be one of"), std::string::npos);
   EXPECT_NE(message("{texture_filter: trilinear}").find("'texture_filter' must be one of"), std::string::npos);
-  EXPECT_NE(message("{environment: {layout: sphere}}").find("'layout' must be one of"), std::string::npos);
-  EXPECT_NE(message("{ground: {a: -1}}").find("'a' must be in"), std::string::npos);
+  EXPECT_NE(message("{environment: {layout: sphere}}").find("'environment.layout' must be one of"), std::string::npos);
+  EXPECT_NE(message("{ground: {a: -1}}").find("'ground.a' must be in"), std::string::npos);
+  EXPECT_EQ(message("width: 64\nice:\n  eta: 1.3\n  ct: 0\n  eta: 1.4\n"), "scene.yaml:5: ice: key 'eta' appears twice");
+  EXPECT_EQ(message("outputs:\n  exr: false\n  png: no\n"), "scene.yaml:2: outputs: at least one of 'exr' and 'png' must be true");
   EXPECT_NE(message("{lights: [{to_light: [0, 0, 0]}]}").find("zero vector"), std::string::npos);
 }
 

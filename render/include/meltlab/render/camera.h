@@ -19,6 +19,9 @@
 namespace YAML {
 class Node;
 }
+namespace meltlab {
+class ConfigSection;
+}
 
 namespace meltlab::render {
 
@@ -125,11 +128,13 @@ class RayGenerator {
 /// by Newton's method from (xd, yd). False if it does not converge to a regular solution.
 bool undistort_normalized(const std::array<double, 5>& distortion, double xd, double yd, double& x_out, double& y_out);
 
-/// Reads a camera from YAML (unknown keys are errors; `source` names the file):
+/// Reads a camera from a config section (keys below; the caller's finish() refuses the others):
 ///   {type: orthographic, width: 2048, height: 1536, pixels_per_mm: 10, centre_m: [0, 0]}
 ///   {type: orthographic, width: W, height: H, pixels_per_unit: 1e4, centre: [x, y]}
 ///   {type: pinhole, width: W, height: H, fx: .., fy: .., cx: .., cy: .., distortion: [k1,k2,p1,p2,k3],
 ///    eye: [x,y,z], target: [x,y,z], up: [x,y,z]}       (or camera_from_world: 4x4 row-major list)
+Camera parse_camera(const ConfigSection& section);
+/// The same from a YAML node of the file `source`, refusing unknown keys.
 Camera parse_camera(const YAML::Node& node, const std::string& source);
 /// The camera as YAML/JSON text (round-trips through parse_camera).
 std::string describe_camera_json(const Camera& c);
