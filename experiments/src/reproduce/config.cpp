@@ -1,0 +1,244 @@
+// meltlab reproduce, stage 1: the experiment configs (format: meltlab/experiments/reproduce.h).
+#include "stages.h"
+
+#include <meltlab/core/config.h>
+#include <meltlab/core/error.h>
+#include <meltlab/core/hash.h>
+#include <meltlab/core/input_file.h>
+#include <meltlab/version.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <map>
+#include <regex>
+#include <set>
+
+namespace meltlab::experiments {
+namespace fs = std::filesystem;
+
+namespace {
+
+using Vars = std::map<std::string, std::string>;
+
+std::string read_file(const fs::path& p) { return read_text_file(p, "experiment"); }
+
+bool valid_name(const std::string& s) {
+  static const std::regex re("[a-z0-9_]+");
+  return std::regex_match(s, re);
+}
+
+/// Replaces ${var} in `s`; unknown names are an error naming the config.
+std::string substitute(const std::string& s, const Vars& vars, const fs::path& config) {
+  std::string out;
+  std::size_t i = 0;
+  while (i < s.size()) {
+    const auto open = s.find("${", i);
+    if (open == std::string::npos) {
+      out += s.substr(i);
+      break;
+    }
+    const auto close = s.find('}', open);
+    if (close == std::string::npos) throw InputError(fmt::format("{}: unterminated '${{' in '{}'", config.string(), s));
+    out += s.substr(i, open - i);
+    const std::string key = s.substr(open + 2, close - open - 2);
+    const auto it = vars.find(key);
+    if (it == vars.end()) throw InputError(fmt::format("{}: unknown variable '${{{}}}' in '{}'", config.string(), key, s));
+    out += it->second;
+    i = close + 1;
+  }
+  return out;
+}
+
+/// The texts of a list of scalars.
+std::vector<std::string> texts(const ConfigValue& list) {
+  std::vector<std::string> out;
+  for (const ConfigValue& item : list.items()) out.push_back(item.as<std::string>());
+  return out;
+}
+
+/// The Python files in the folder of `script` and below it, sorted (the modules it may import).
+std::vector<fs::path> python_modules_beside(const fs::path& script) {
+  std::vector<fs::path> modules;
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(script.parent_path(), ec), end; !ec && it != end; it.increment(ec))
+    if (it->is_regular_file(ec) && it->path().extension() == ".py" && it->path() != script) modules.push_back(it->path());
+  std::sort(modules.begin(), modules.end());
+  return modules;
+}
+
+/// A path of a config: absolute as written, otherwise relative to the repository.
+fs::path resolve(const std::string& p, const ReproduceOptions& o) {
+  const fs::path path(p);
+  return path.is_absolute() ? path : o.source_dir / path;
+}
+
+/// `modes:` (default both); sets e.modes and e.in_mode.
+void read_modes(const ConfigSection& root, const std::string& mode, ReproduceExperiment& e) {
+  if (const auto modes = root.optional_value("modes")) {
+    if (!modes->is_sequence() || modes->items().empty()) modes->fail("must be a non-empty list of quick and/or full");
+    e.modes.clear();
+    for (const ConfigValue& m : modes->items()) {
+      const std::string v = m.as<std::string>();
+      if (v != "quick" && v != "full") m.fail(fmt::format("must be quick or full (got '{}')", v));
+      e.modes.push_back(v);
+    }
+  }
+  e.in_mode = std::find(e.modes.begin(), e.modes.end(), mode) != e.modes.end();
+}
+
+/// The reserved variables and the config's `vars:` (a scalar, or {quick, full} by mode).
+Vars read_vars(const ConfigSection& root, const fs::path& config, const std::string& mode, const ReproduceExperiment& e,
+               const ReproduceOptions& o) {
+  Vars vars{{"out", e.out_dir.string()},
+            {"repo", o.source_dir.string()},
+            {"config_dir", config.parent_path().string()},
+            {"bin", o.self_exe.parent_path().string()},
+            {"mode", mode}};
+  const auto var_section = root.optional_section("vars");
+  if (!var_section) return vars;
+  for (const std::string& key : var_section->keys()) {
+    if (vars.count(key) || key == "step") var_section->fail_at(key, fmt::format("var '{}' is reserved", key));
+    const ConfigValue v = var_section->value(key);
+    if (!v.is_map()) {
+      vars[key] = v.as<std::string>();
+      continue;
+    }
+    // {quick: a, full: b}: this mode's value; the other one must be there too.
+    const ConfigSection by_mode = v.section();
+    if (!by_mode.has("quick") || !by_mode.has("full")) v.fail("needs both 'quick' and 'full'");
+    vars[key] = by_mode.require<std::string>(mode);
+    by_mode.ignore(mode == "quick" ? "full" : "quick");
+  }
+  return vars;
+}
+
+/// One entry of `steps:`; adds the files it names (script, its sibling modules, file
+/// arguments outside the output folder) to e.hashed_files.
+ReproduceStep read_step(const ConfigValue& item, const Vars& vars, const fs::path& config, const ReproduceOptions& o,
+                        std::set<std::string>& step_names, ReproduceExperiment& e) {
+  const ConfigSection s = item.section();
+  ReproduceStep step;
+  if (!s.has("name")) s.fail("every step needs a 'name'");
+  step.name = s.require<std::string>("name");
+  if (!valid_name(step.name) || !step_names.insert(step.name).second)
+    s.fail_at("name", fmt::format("step name '{}' must be [a-z0-9_]+ and unique", step.name));
+  if (s.has("meltlab") == s.has("python")) s.fail(fmt::format("step '{}' needs exactly one of 'meltlab' and 'python'", step.name));
+  step.kind = s.has("meltlab") ? "meltlab" : "python";
+  const ConfigValue args = s.value(step.kind);
+  if (!args.is_sequence() || args.items().empty())
+    args.fail(fmt::format("step '{}': '{}' must be a non-empty list", step.name, step.kind));
+  auto step_vars = vars;
+  step_vars["step"] = (e.out_dir / step.name).string();
+  for (const std::string& a : texts(args)) step.args.push_back(substitute(a, step_vars, config));
+  if (step.kind == "python") {
+    step.args[0] = resolve(step.args[0], o).string();
+    if (!fs::is_regular_file(step.args[0]))
+      args.fail(fmt::format("step '{}': script '{}' does not exist", step.name, step.args[0]));
+    // A script imports its siblings (report/experiment_report.py dispatches to
+    // report/experiments/<kind>.py): every Python file of its folder is an input too.
+    for (const fs::path& module : python_modules_beside(step.args[0])) e.hashed_files.push_back(module);
+  }
+  if (const auto out = s.optional<std::string>("stdout")) step.stdout_file = substitute(*out, step_vars, config);
+  // Files named by the arguments (a mesh, a kl field, a script) are inputs too; what lies
+  // under the output folder is not.
+  for (const auto& a : step.args) {
+    std::error_code ec;
+    const fs::path p(a);
+    if (!p.is_absolute() || !fs::is_regular_file(p, ec)) continue;
+    const auto rel = fs::relative(p, o.out_dir, ec);
+    if (!ec && !rel.empty() && rel.begin()->string() != "..") continue;
+    e.hashed_files.push_back(p);
+  }
+  return step;
+}
+
+/// The content hash that decides whether a finished folder is reused: config text, mode,
+/// meltlab version, the substituted arguments and every hashed file (name and content).
+std::string experiment_hash(const ReproduceExperiment& e, const std::string& config_text, const std::string& mode) {
+  ContentHash f;
+  f.add_field("meltlab-reproduce-2");
+  f.add_field(kVersion);
+  f.add_field(kGitRevision);
+  f.add_field(mode);
+  f.add_field(config_text);
+  for (const auto& step : e.steps)
+    for (const auto& a : step.args) f.add_field(a);
+  for (const auto& p : e.hashed_files) {
+    f.add_field(p.string());
+    f.add_field(read_file(p));
+  }
+  return f.hex();
+}
+
+ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) {
+  const std::string text = read_file(config);
+  const ConfigSection root(parse_yaml_text(text, config.string()), config.string());
+  ReproduceExperiment e;
+  e.config_file = config;
+  e.name = root.require<std::string>("name");
+  if (!valid_name(e.name) || e.name == "report" || e.name == "logs")
+    root.fail_at("name", fmt::format("name '{}' must be [a-z0-9_]+ and not 'report' or 'logs'", e.name));
+  e.title = root.get("title", e.name);
+  if (const auto sources = root.optional_value("sources")) e.sources = texts(*sources);
+  root.ignore("notes");  // free text for whoever reads the config
+  e.out_dir = o.out_dir / e.name;
+  e.exclusive = root.get("exclusive", e.exclusive);
+
+  const std::string mode = o.quick ? "quick" : "full";
+  read_modes(root, mode, e);
+  const Vars vars = read_vars(root, config, mode, e, o);
+  if (const auto inputs = root.optional_value("inputs"))
+    for (const ConfigValue& in : inputs->items()) {
+      const fs::path p = resolve(substitute(in.as<std::string>(), vars, config), o);
+      if (!fs::is_regular_file(p)) in.fail(fmt::format("input '{}' does not exist", p.string()));
+      e.hashed_files.push_back(p);
+    }
+  if (!root.has("steps")) root.fail("missing key 'steps' (a non-empty list)");
+  const std::vector<ConfigValue> steps = root.value("steps").items();
+  if (steps.empty()) root.fail_at("steps", "'steps' must be a non-empty list");
+  std::set<std::string> step_names;
+  for (const ConfigValue& item : steps) e.steps.push_back(read_step(item, vars, config, o, step_names, e));
+  root.finish();
+  e.hash = experiment_hash(e, text, mode);
+  return e;
+}
+
+}  // namespace
+
+std::vector<ReproduceExperiment> load_reproduce_experiments(const ReproduceOptions& o) {
+  std::vector<fs::path> files;
+  for (const auto& dir : o.config_dirs) {
+    if (!fs::is_directory(dir)) throw InputError(fmt::format("--configs: '{}' is not a folder", dir.string()));
+    for (const auto& entry : fs::directory_iterator(dir))
+      if (entry.is_regular_file() && (entry.path().extension() == ".yaml" || entry.path().extension() == ".yml"))
+        files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  std::vector<ReproduceExperiment> all;
+  std::set<std::string> names;
+  for (const auto& f : files) {
+    ReproduceExperiment e = load_one(f, o);
+    if (!names.insert(e.name).second) throw InputError(fmt::format("{}: experiment name '{}' used twice", f.string(), e.name));
+    all.push_back(std::move(e));
+  }
+  if (o.only.empty()) {
+    all.erase(std::remove_if(all.begin(), all.end(), [](const auto& e) { return !e.in_mode; }), all.end());
+    return all;
+  }
+  std::vector<ReproduceExperiment> picked;
+  for (const auto& want : o.only) {
+    auto it = std::find_if(all.begin(), all.end(), [&](const auto& e) { return e.name == want; });
+    if (it == all.end()) {
+      std::string known;
+      for (const auto& e : all) known += (known.empty() ? "" : ", ") + e.name;
+      throw InputError(fmt::format("--only: no experiment '{}' (known: {})", want, known));
+    }
+    if (!it->in_mode)
+      throw InputError(fmt::format("--only: experiment '{}' runs only in {} mode", want, it->modes.front()));
+    if (std::none_of(picked.begin(), picked.end(), [&](const auto& p) { return p.name == want; })) picked.push_back(*it);
+  }
+  return picked;
+}
+
+}  // namespace meltlab::experiments
