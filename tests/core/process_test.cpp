@@ -8,6 +8,8 @@
 #include <unistd.h>
 #include <sstream>
 
+#include "test_files.h"
+
 namespace meltlab {
 namespace {
 
@@ -29,17 +31,8 @@ ProcessStatus run_argv(std::vector<std::string> argv) {
 
 class ProcessTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / fmt_name();
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  static std::string fmt_name() {
-    return "meltlab_process_test_" + std::to_string(::getpid()) + "_" +
-           ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  }
-  fs::path dir_;
+  test::TempFolder folder_;
+  const fs::path dir_ = folder_.path();
 };
 
 TEST_F(ProcessTest, ReturnsTheExitStatus) {

@@ -9,6 +9,8 @@
 #include <fstream>
 #include <random>
 
+#include "test_files.h"
+
 namespace meltlab::sim {
 namespace {
 
@@ -98,12 +100,6 @@ TEST(KlField, BadConfigsNameTheProblem) {
 
 class KlGridFile : public ::testing::Test {
  protected:
-  void SetUp() override {
-    std::random_device rd;
-    dir_ = fs::temp_directory_path() / ("meltlab_kl_test_" + std::to_string(rd()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   fs::path write(const std::string& name, const std::string& text) {
     std::ofstream(dir_ / name) << text;
     return dir_ / name;
@@ -116,7 +112,8 @@ class KlGridFile : public ::testing::Test {
     }
     return "no error";
   }
-  fs::path dir_;
+  test::TempFolder folder_;
+  const fs::path dir_ = folder_.path();
 };
 
 // Trilinear interpolation reproduces any function that is linear in x, y and z exactly.

@@ -5,8 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
-#include <random>
 
+#include "test_files.h"
 #include "hand_meshes.h"
 
 namespace meltlab::sim {
@@ -18,12 +18,6 @@ using ::testing::HasSubstr;
 
 class MeshIo : public ::testing::Test {
  protected:
-  void SetUp() override {
-    std::random_device rd;
-    dir_ = fs::temp_directory_path() / ("meltlab_io_test_" + std::to_string(rd()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   fs::path write(const std::string& name, const std::string& text) {
     const fs::path p = dir_ / name;
     std::ofstream(p, std::ios::binary) << text;
@@ -37,7 +31,8 @@ class MeshIo : public ::testing::Test {
     }
     return "no error";
   }
-  fs::path dir_;
+  test::TempFolder folder_;
+  const fs::path dir_ = folder_.path();
 };
 
 // OBJ and STL store float32 coordinates.
