@@ -277,18 +277,10 @@ IndexedMesh indexed_mesh(const Mesh& mesh) {
   return out;
 }
 
-RepairResult repair(const PolygonMesh& in, const std::string& source) {
-  RepairResult result;
-  auto& actions = result.actions;
+using Actions = std::vector<std::string>;
 
-  // ---- 1. soup repair (the steps of PMP::repair_polygon_soup, in its order) ----
-  std::vector<Point> points;
-  points.reserve(in.V.size());
-  for (const auto& p : in.V) points.emplace_back(p.x(), p.y(), p.z());
-  Soup polygons;
-  polygons.reserve(in.faces.size());
-  for (const PolygonFace& f : in.faces) polygons.emplace_back(f.outer.begin(), f.outer.end());
-
+/// Step 1: the steps of PMP::repair_polygon_soup, in its order, each counted.
+void repair_soup(std::vector<Point>& points, Soup& polygons, Actions& actions, const std::string& source) {
   const Kernel traits;
   const std::size_t merged_points = PMP::merge_duplicate_points_in_polygon_soup(points, polygons);
   // These three are CGAL 5.5 internals of repair_polygon_soup; called directly for counts.
@@ -308,10 +300,13 @@ RepairResult repair(const PolygonMesh& in, const std::string& source) {
   if (duplicates) actions.push_back("removed " + count_of(duplicates, "duplicate polygon", "duplicate polygons"));
   if (isolated) actions.push_back("dropped " + count_of(isolated, "unused vertex", "unused vertices"));
   if (polygons.empty()) refuse(source, "no polygon has 3 distinct corners");
+}
 
-  // ---- 2. consistent orientation, non-manifold vertices split ----
-  const std::size_t n_polygons = polygons.size();
-  std::vector<std::uint8_t> reversed_in_soup(n_polygons, 0);
+/// Step 2: consistent orientation, non-manifold edges cut and vertices split. Returns, per
+/// polygon, whether it was reversed.
+std::vector<std::uint8_t> orient_soup(std::vector<Point>& points, Soup& polygons, Actions& actions,
+                                      const std::string& source) {
+  std::vector<std::uint8_t> reversed_in_soup(polygons.size(), 0);
   std::set<std::pair<std::size_t, std::size_t>> nonmanifold_edges;
   std::size_t nonmanifold_vertices = 0, vertex_copies = 0;
   OrientationObserver observer;
@@ -330,9 +325,14 @@ RepairResult repair(const PolygonMesh& in, const std::string& source) {
   }
   if (!PMP::is_polygon_soup_a_polygon_mesh(polygons))
     refuse(source, "the polygons cannot be made into a manifold surface");
+  return reversed_in_soup;
+}
 
-  // ---- 3. Surface_mesh, triangulated; every face remembers its soup polygon ----
-  Mesh mesh;
+/// Step 3: the soup as a Surface_mesh, triangulated; every face remembers its soup polygon
+/// in the returned property map (face i = polygon i before triangulation).
+SourceMap triangulated_mesh(const std::vector<Point>& points, const Soup& polygons, Mesh& mesh,
+                            const std::string& source) {
+  const std::size_t n_polygons = polygons.size();
   PMP::polygon_soup_to_polygon_mesh(points, polygons, mesh);
   if (mesh.number_of_faces() != n_polygons || mesh.number_of_vertices() != points.size())
     throw InvariantError(fmt::format("{}: repair: the soup of {} polygons became a mesh of {} faces", source,
@@ -363,12 +363,15 @@ RepairResult repair(const PolygonMesh& in, const std::string& source) {
     refuse(source,
            count_of(left, "polygon", "polygons") + " cannot be triangulated (self-crossing or enclosing no area)");
   }
+  return source_of;
+}
 
-  // ---- 4./5. stitch what can be stitched, fill every remaining hole ----
+/// Steps 4-5: stitch what can be stitched, fill every remaining hole. Patch faces remember
+/// their hole (returned map) and soup vertices are marked (`v:meltlab_from_soup`), so that
+/// the fill can be reported for what is kept after drop_flat_parts.
+HoleMap close_holes(Mesh& mesh, Actions& actions, const std::string& source) {
   const std::size_t stitched = PMP::stitch_borders(mesh);
   if (stitched) actions.push_back("stitched " + count_of(stitched, "border edge", "border edges"));
-  // Patch faces remember their hole and soup vertices are marked, so that the fill can be
-  // reported for what is kept after step 5b.
   HoleMap hole_of = mesh.add_property_map<Mesh::Face_index, std::int64_t>("f:meltlab_hole", -1).first;
   auto from_soup = mesh.add_property_map<Mesh::Vertex_index, std::uint8_t>("v:meltlab_from_soup", 0).first;
   for (Mesh::Vertex_index v : mesh.vertices()) from_soup[v] = 1;
@@ -386,51 +389,55 @@ RepairResult repair(const PolygonMesh& in, const std::string& source) {
     refuse(source, fmt::format("{} of {} could not be filled", left.size(), count_of(holes.size(), "hole", "holes")));
   }
   mesh.collect_garbage();  // PMP's face index maps assume contiguous indices
+  return hole_of;
+}
 
-  // ---- 5b. drop closed parts that enclose no volume (a stray triangle closed by its own
-  // back side, a fin cut off a non-manifold edge, a two-sided sheet) ----
-  {
-    const Parts parts = parts_of(mesh);
-    std::vector<std::uint8_t> flat(parts.volume.size(), 0);
-    for (std::size_t c = 0; c < flat.size(); ++c) flat[c] = is_flat(parts.volume[c], parts.diagonal[c]);
-    const auto n_flat = static_cast<std::size_t>(std::count(flat.begin(), flat.end(), 1));
-    if (n_flat == flat.size()) refuse(source, "the closed surface encloses no volume");
-    if (n_flat > 0) {
-      std::set<std::int64_t> dropped_polygons;
-      std::vector<Mesh::Face_index> doomed;
-      for (Mesh::Face_index f : mesh.faces())
-        if (flat[parts.of_face[f.idx()]]) {
-          doomed.push_back(f);
-          if (source_of[f] >= 0) dropped_polygons.insert(source_of[f]);
-        }
-      // Whole closed components go, so nothing left behind becomes non-manifold; vertices
-      // left without faces are removed by remove_face.
-      for (Mesh::Face_index f : doomed) CGAL::Euler::remove_face(mesh.halfedge(f), mesh);
-      mesh.collect_garbage();
-      actions.push_back(fmt::format("removed {} enclosing no volume ({} of the input)",
-                                    count_of(n_flat, "part", "parts"),
-                                    count_of(dropped_polygons.size(), "polygon", "polygons")));
+/// Step 5b: drop closed parts that enclose no volume (a stray triangle closed by its own
+/// back side, a fin cut off a non-manifold edge, a two-sided sheet).
+void drop_flat_parts(Mesh& mesh, const SourceMap& source_of, Actions& actions, const std::string& source) {
+  const Parts parts = parts_of(mesh);
+  std::vector<std::uint8_t> flat(parts.volume.size(), 0);
+  for (std::size_t c = 0; c < flat.size(); ++c) flat[c] = is_flat(parts.volume[c], parts.diagonal[c]);
+  const auto n_flat = static_cast<std::size_t>(std::count(flat.begin(), flat.end(), 1));
+  if (n_flat == flat.size()) refuse(source, "the closed surface encloses no volume");
+  if (n_flat == 0) return;
+  std::set<std::int64_t> dropped_polygons;
+  std::vector<Mesh::Face_index> doomed;
+  for (Mesh::Face_index f : mesh.faces())
+    if (flat[parts.of_face[f.idx()]]) {
+      doomed.push_back(f);
+      if (source_of[f] >= 0) dropped_polygons.insert(source_of[f]);
     }
-  }
-  {
-    std::set<std::int64_t> filled;
-    std::size_t patch_faces = 0, new_vertices = 0;
-    for (Mesh::Face_index f : mesh.faces())
-      if (hole_of[f] >= 0) {
-        filled.insert(hole_of[f]);
-        ++patch_faces;
-      }
-    for (Mesh::Vertex_index v : mesh.vertices())
-      if (!from_soup[v]) ++new_vertices;
-    if (!filled.empty()) {
-      std::string line = fmt::format("filled {} with {}", count_of(filled.size(), "hole", "holes"),
-                                     count_of(patch_faces, "triangle", "triangles"));
-      if (new_vertices) line += fmt::format(" and {}", count_of(new_vertices, "new vertex", "new vertices"));
-      actions.push_back(line);
-    }
-  }
+  // Whole closed components go, so nothing left behind becomes non-manifold; vertices
+  // left without faces are removed by remove_face.
+  for (Mesh::Face_index f : doomed) CGAL::Euler::remove_face(mesh.halfedge(f), mesh);
+  mesh.collect_garbage();
+  actions.push_back(fmt::format("removed {} enclosing no volume ({} of the input)", count_of(n_flat, "part", "parts"),
+                                count_of(dropped_polygons.size(), "polygon", "polygons")));
+}
 
-  // ---- 6. outward orientation; net orientation change of each input polygon ----
+/// The hole fill as far as it is kept: holes, patch triangles and new vertices.
+void report_filled_holes(const Mesh& mesh, const HoleMap& hole_of, Actions& actions) {
+  const auto from_soup = mesh.property_map<Mesh::Vertex_index, std::uint8_t>("v:meltlab_from_soup").first;
+  std::set<std::int64_t> filled;
+  std::size_t patch_faces = 0, new_vertices = 0;
+  for (Mesh::Face_index f : mesh.faces())
+    if (hole_of[f] >= 0) {
+      filled.insert(hole_of[f]);
+      ++patch_faces;
+    }
+  for (Mesh::Vertex_index v : mesh.vertices())
+    if (!from_soup[v]) ++new_vertices;
+  if (filled.empty()) return;
+  std::string line = fmt::format("filled {} with {}", count_of(filled.size(), "hole", "holes"),
+                                 count_of(patch_faces, "triangle", "triangles"));
+  if (new_vertices) line += fmt::format(" and {}", count_of(new_vertices, "new vertex", "new vertices"));
+  actions.push_back(line);
+}
+
+/// Step 6: outward orientation, reported as the net orientation change of each input polygon.
+void orient_outward(Mesh& mesh, const SourceMap& source_of, const std::vector<std::uint8_t>& reversed_in_soup,
+                    Actions& actions) {
   const auto before = face_directions(mesh);
   bool oriented = true;
   try {
@@ -450,6 +457,7 @@ RepairResult repair(const PolygonMesh& in, const std::string& source) {
       if (parts.volume[parts.of_face[f.idx()]] < 0.0) inside_out.push_back(f);
     PMP::reverse_face_orientations(inside_out, mesh);
   }
+  const std::size_t n_polygons = reversed_in_soup.size();
   std::vector<std::int8_t> net_reversed(n_polygons, -1);
   for (Mesh::Face_index f : mesh.faces()) {
     const std::int64_t p = source_of[f];
@@ -466,8 +474,28 @@ RepairResult repair(const PolygonMesh& in, const std::string& source) {
   else if (n_reversed > 0)
     actions.push_back(
         fmt::format("reversed orientation of {} of {}", n_reversed, count_of(n_kept, "polygon", "polygons")));
+}
 
-  // ---- 7. result, checked with the project's own definition of a valid solid ----
+/// The pipeline of the file comment, one stage per step.
+RepairResult repair(const PolygonMesh& in, const std::string& source) {
+  RepairResult result;
+  std::vector<Point> points;
+  points.reserve(in.V.size());
+  for (const auto& p : in.V) points.emplace_back(p.x(), p.y(), p.z());
+  Soup polygons;
+  polygons.reserve(in.faces.size());
+  for (const PolygonFace& f : in.faces) polygons.emplace_back(f.outer.begin(), f.outer.end());
+
+  repair_soup(points, polygons, result.actions, source);
+  const std::vector<std::uint8_t> reversed_in_soup = orient_soup(points, polygons, result.actions, source);
+  Mesh mesh;
+  const SourceMap source_of = triangulated_mesh(points, polygons, mesh, source);
+  const HoleMap hole_of = close_holes(mesh, result.actions, source);
+  drop_flat_parts(mesh, source_of, result.actions, source);
+  report_filled_holes(mesh, hole_of, result.actions);
+  orient_outward(mesh, source_of, reversed_in_soup, result.actions);
+
+  // Step 7: the result, checked with the project's own definition of a valid solid.
   result.mesh = indexed_mesh(mesh);
   const TriMesh<double> check = TriMesh<double>::from_indexed(result.mesh);
   const TopologyReport topo = check_topology(check);
