@@ -71,11 +71,14 @@ void add_problem(TopologyReport& r, std::size_t max_problems, TopologyProblem p)
   if (r.problems.size() < max_problems) r.problems.push_back(p);
 }
 
-TopologyReport analyse(const Loops& L, std::size_t max_problems) {
-  TopologyReport r;
-  const std::size_t n = L.n_slots;
+/// The vertices used by some loop, and the components (S) joined through loop edges.
+struct Components {
+  std::vector<std::uint8_t> used;
+  UnionFind uf;
+};
 
-  // ---- vertices used, components (S) through loop edges ----
+Components components_of(const Loops& L) {
+  const std::size_t n = L.n_slots;
   std::vector<std::uint8_t> used(n, 0);
   UnionFind uf(n);
   for (std::size_t k = 0; k < L.count(); ++k) {
@@ -88,7 +91,15 @@ TopologyReport analyse(const Loops& L, std::size_t max_problems) {
     if (k > 0 && L.face_of[k] == L.face_of[k - 1]) uf.unite(L.verts[s], L.verts[L.start[k - 1]]);
   }
 
-  // ---- directed edges: key (lo, hi), forward = (from < to) ----
+  return {std::move(used), std::move(uf)};
+}
+
+/// Every edge with the number of loops that use it in each direction: boundary, non-manifold
+/// and misoriented edges into `r`; each edge counted once in its component's V - E + F - H.
+/// Returns E.
+std::int64_t check_edges(const Loops& L, UnionFind& uf, std::vector<std::int64_t>& comp_sum, TopologyReport& r,
+                         std::size_t max_problems) {
+  // Directed edges: key (lo, hi), forward = (from < to).
   struct DirEdge {
     std::uint64_t key;
     bool forward;
@@ -108,8 +119,6 @@ TopologyReport analyse(const Loops& L, std::size_t max_problems) {
     return a.key != b.key ? a.key < b.key : a.forward < b.forward;
   });
 
-  // Per-component tallies for the derived genus.
-  std::vector<std::int64_t> comp_sum(n, 0);  // V - E + F - H per component root
   std::int64_t E = 0;
   for (std::size_t i = 0; i < edges.size();) {
     std::size_t j = i;
@@ -136,7 +145,11 @@ TopologyReport analyse(const Loops& L, std::size_t max_problems) {
     i = j;
   }
 
-  // ---- corners per vertex: fans and valence ----
+  return E;
+}
+
+/// The corners around each vertex: low valence, and more than one fan (non-manifold vertex).
+void check_vertex_fans(const Loops& L, TopologyReport& r, std::size_t max_problems) {
   struct Corner {
     Index v, prev, next;
   };
@@ -177,8 +190,14 @@ TopologyReport analyse(const Loops& L, std::size_t max_problems) {
     i = j;
   }
 
-  // ---- Euler counts (Eq. 2.3), genus derived per component ----
-  EulerCounts& c = r.counts;
+}
+
+/// The Euler counts (Eq. 2.3), the genus derived per component from its V - E + F - H.
+void euler_counts(const Loops& L, std::int64_t E, Components& parts, std::vector<std::int64_t>& comp_sum,
+                  EulerCounts& c) {
+  const std::size_t n = L.n_slots;
+  const std::vector<std::uint8_t>& used = parts.used;
+  UnionFind& uf = parts.uf;
   c.E = E;
   c.F = L.n_faces;
   c.H = L.n_holes;
@@ -207,6 +226,15 @@ TopologyReport analyse(const Loops& L, std::size_t max_problems) {
   c.chi = c.V - c.E + c.F - c.H - 2 * (c.S - c.G);
   if (c.chi != 0) c.genus_valid = false;
 
+}
+
+TopologyReport analyse(const Loops& L, std::size_t max_problems) {
+  TopologyReport r;
+  Components parts = components_of(L);
+  std::vector<std::int64_t> comp_sum(L.n_slots, 0);  // V - E + F - H per component root
+  const std::int64_t E = check_edges(L, parts.uf, comp_sum, r, max_problems);
+  check_vertex_fans(L, r, max_problems);
+  euler_counts(L, E, parts, comp_sum, r.counts);
   r.closed = r.boundary_edges == 0;
   r.oriented = r.misoriented_edges == 0;
   r.manifold = r.nonmanifold_edges == 0 && r.nonmanifold_vertices == 0;
