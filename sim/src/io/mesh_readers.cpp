@@ -344,9 +344,15 @@ class PlyBody {
   std::size_t pos_;
 };
 
-PolygonMesh read_ply_file(const fs::path& file, std::int64_t file_size) {
-  const std::string name = file.string();
-  std::ifstream in(file, std::ios::binary);
+/// The header of a PLY file: its format, its elements with their properties, and where the
+/// body starts (bytes from the beginning of the file).
+struct PlyHeader {
+  PlyFormat format{};
+  std::vector<PlyElement> elements;
+  std::size_t body_start = 0;
+};
+
+PlyHeader read_ply_header(std::ifstream& in, const std::string& name, std::int64_t file_size) {
   std::string line;
   int line_no = 0;
   auto next_line = [&] {
@@ -408,74 +414,86 @@ PolygonMesh read_ply_file(const fs::path& file, std::int64_t file_size) {
   if (!format) throw InputError(fmt::format("{}: PLY header has no 'format' line", name));
   // tellg() fails (-1) when the header's last line ended the file.
   const std::streamoff header_pos = in.tellg();
-  in.clear();
   const std::size_t header_end = header_pos < 0 ? static_cast<std::size_t>(file_size) : static_cast<std::size_t>(header_pos);
+  return {*format, std::move(elements), header_end};
+}
+
+/// The instances of one element into `mesh`: vertices (x, y, z) and faces (vertex_indices);
+/// other elements and properties are read and skipped.
+void read_ply_element(PlyBody& body, const PlyElement& e, std::int64_t vertex_count, const std::string& name,
+                      PolygonMesh& mesh) {
+  const bool is_vertex = e.name == "vertex", is_face = e.name == "face";
+  std::array<int, 3> xyz{-1, -1, -1};
+  int corners = -1;
+  for (std::size_t k = 0; k < e.properties.size(); ++k) {
+    const auto& p = e.properties[k];
+    if (is_vertex && !p.count_type && (p.name == "x" || p.name == "y" || p.name == "z")) xyz[static_cast<std::size_t>(p.name[0] - 'x')] = static_cast<int>(k);
+    if (is_face && p.count_type && (p.name == "vertex_indices" || p.name == "vertex_index")) corners = static_cast<int>(k);
+  }
+  if (is_vertex && (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0))
+    throw InputError(fmt::format("{}:{}: element 'vertex' lacks scalar properties x, y and z", name, e.line));
+  if (is_face && corners < 0)
+    throw InputError(fmt::format("{}:{}: element 'face' lacks the list property vertex_indices", name, e.line));
+  if (is_vertex) mesh.V.reserve(static_cast<std::size_t>(e.count));  // bounded by the file size above
+  if (is_face) mesh.faces.reserve(static_cast<std::size_t>(e.count));
+  for (std::int64_t i = 0; i < e.count; ++i) {
+    std::array<double, 3> p{};
+    PolygonFace face;
+    for (std::size_t k = 0; k < e.properties.size(); ++k) {
+      const auto& prop = e.properties[k];
+      double value = 0;
+      if (!prop.count_type) {
+        if (!body.read(prop.type, value))
+          throw InputError(fmt::format("{}: truncated or corrupt PLY: element '{}' {} property '{}' cannot be read", name,
+                                       e.name, i, prop.name));
+        for (std::size_t c = 0; c < 3; ++c)
+          if (static_cast<int>(k) == xyz[c]) p[c] = static_cast<double>(static_cast<float>(value));
+        continue;
+      }
+      double count = 0;
+      if (!body.read(*prop.count_type, count) || count < 0)
+        throw InputError(fmt::format("{}: truncated or corrupt PLY: element '{}' {} list '{}' has no valid count", name,
+                                     e.name, i, prop.name));
+      const auto n = static_cast<std::int64_t>(count);
+      const bool is_corners = static_cast<int>(k) == corners;
+      if (is_corners && n < 3)
+        throw InputError(fmt::format("{}: PLY face {} has {} corners (at least 3)", name, i, n));
+      // A list cannot hold more values than bytes (binary) or characters (ASCII) are left.
+      if (static_cast<std::size_t>(n) > body.left())
+        throw InputError(fmt::format("{}: PLY element '{}' {} lists {} values; the file ends first", name, e.name, i, n));
+      if (is_corners) face.outer.reserve(static_cast<std::size_t>(n));
+      for (std::int64_t j = 0; j < n; ++j) {
+        if (!body.read(prop.type, value))
+          throw InputError(fmt::format("{}: truncated or corrupt PLY: element '{}' {} list '{}' ends after {} of {} values",
+                                       name, e.name, i, prop.name, j, n));
+        if (!is_corners) continue;
+        if (!(value >= 0) || (vertex_count >= 0 && value >= static_cast<double>(vertex_count)) || value != std::floor(value))
+          throw InputError(fmt::format("{}: PLY face {} corner {} is not a vertex index in [0, {})", name, i, value,
+                                       vertex_count));
+        face.outer.push_back(static_cast<Index>(value));
+      }
+    }
+    if (is_vertex) mesh.V.emplace_back(p[0], p[1], p[2]);
+    if (is_face) mesh.faces.push_back(std::move(face));
+  }
+}
+
+PolygonMesh read_ply_file(const fs::path& file, std::int64_t file_size) {
+  const std::string name = file.string();
+  std::ifstream in(file, std::ios::binary);
+  const PlyHeader header = read_ply_header(in, name, file_size);
+  in.clear();
   in.seekg(0);
   std::string bytes(static_cast<std::size_t>(file_size), '\0');
   in.read(bytes.data(), file_size);
   bytes.resize(static_cast<std::size_t>(in.gcount()));
-  PlyBody body(*format, std::move(bytes), header_end);
+  PlyBody body(header.format, std::move(bytes), header.body_start);
 
   PolygonMesh mesh;
   std::int64_t vertex_count = -1;
-  for (const auto& e : elements)
+  for (const auto& e : header.elements)
     if (e.name == "vertex") vertex_count = e.count;
-  for (const auto& e : elements) {
-    const bool is_vertex = e.name == "vertex", is_face = e.name == "face";
-    std::array<int, 3> xyz{-1, -1, -1};
-    int corners = -1;
-    for (std::size_t k = 0; k < e.properties.size(); ++k) {
-      const auto& p = e.properties[k];
-      if (is_vertex && !p.count_type && (p.name == "x" || p.name == "y" || p.name == "z")) xyz[static_cast<std::size_t>(p.name[0] - 'x')] = static_cast<int>(k);
-      if (is_face && p.count_type && (p.name == "vertex_indices" || p.name == "vertex_index")) corners = static_cast<int>(k);
-    }
-    if (is_vertex && (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0))
-      throw InputError(fmt::format("{}:{}: element 'vertex' lacks scalar properties x, y and z", name, e.line));
-    if (is_face && corners < 0)
-      throw InputError(fmt::format("{}:{}: element 'face' lacks the list property vertex_indices", name, e.line));
-    if (is_vertex) mesh.V.reserve(static_cast<std::size_t>(e.count));  // bounded by the file size above
-    if (is_face) mesh.faces.reserve(static_cast<std::size_t>(e.count));
-    for (std::int64_t i = 0; i < e.count; ++i) {
-      std::array<double, 3> p{};
-      PolygonFace face;
-      for (std::size_t k = 0; k < e.properties.size(); ++k) {
-        const auto& prop = e.properties[k];
-        double value = 0;
-        if (!prop.count_type) {
-          if (!body.read(prop.type, value))
-            throw InputError(fmt::format("{}: truncated or corrupt PLY: element '{}' {} property '{}' cannot be read", name,
-                                         e.name, i, prop.name));
-          for (std::size_t c = 0; c < 3; ++c)
-            if (static_cast<int>(k) == xyz[c]) p[c] = static_cast<double>(static_cast<float>(value));
-          continue;
-        }
-        double count = 0;
-        if (!body.read(*prop.count_type, count) || count < 0)
-          throw InputError(fmt::format("{}: truncated or corrupt PLY: element '{}' {} list '{}' has no valid count", name,
-                                       e.name, i, prop.name));
-        const auto n = static_cast<std::int64_t>(count);
-        const bool is_corners = static_cast<int>(k) == corners;
-        if (is_corners && n < 3)
-          throw InputError(fmt::format("{}: PLY face {} has {} corners (at least 3)", name, i, n));
-        // A list cannot hold more values than bytes (binary) or characters (ASCII) are left.
-        if (static_cast<std::size_t>(n) > body.left())
-          throw InputError(fmt::format("{}: PLY element '{}' {} lists {} values; the file ends first", name, e.name, i, n));
-        if (is_corners) face.outer.reserve(static_cast<std::size_t>(n));
-        for (std::int64_t j = 0; j < n; ++j) {
-          if (!body.read(prop.type, value))
-            throw InputError(fmt::format("{}: truncated or corrupt PLY: element '{}' {} list '{}' ends after {} of {} values",
-                                         name, e.name, i, prop.name, j, n));
-          if (!is_corners) continue;
-          if (!(value >= 0) || (vertex_count >= 0 && value >= static_cast<double>(vertex_count)) || value != std::floor(value))
-            throw InputError(fmt::format("{}: PLY face {} corner {} is not a vertex index in [0, {})", name, i, value,
-                                         vertex_count));
-          face.outer.push_back(static_cast<Index>(value));
-        }
-      }
-      if (is_vertex) mesh.V.emplace_back(p[0], p[1], p[2]);
-      if (is_face) mesh.faces.push_back(std::move(face));
-    }
-  }
+  for (const auto& e : header.elements) read_ply_element(body, e, vertex_count, name, mesh);
   return mesh;
 }
 
