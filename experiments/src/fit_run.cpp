@@ -10,6 +10,7 @@
 #include <meltlab/sim/mesh_sequence.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/experiments/provenance.h>
+#include <meltlab/verify/fit_parameters.h>
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
@@ -86,7 +87,7 @@ class EmpiricalModel final : public verify::FitModel {
         params.kg = v;
       } else if (name == "kn") {  // in the --kn units: relative to L0 unless --units absolute
         params.kN = v * p_->coefficient_unit();
-      } else if (name.rfind("kl.", 0) == 0) {
+      } else if (verify::fit_parameter_role(name) == verify::FitParameterRole::kKlField) {
         YAML::Node leaf = node_at(doc, name, p_->opt.kl_file.string());
         leaf = v;
         kl_changed = true;
@@ -117,32 +118,22 @@ void require(bool ok, const std::string& message) {
 
 std::vector<verify::FitParameter> fit_parameters(const FitRunOptions& o, double kg_initial,
                                                  const std::map<std::string, double>& kl_values) {
-  // Name -> (initial, lower, upper, scale). Scales are the size of a change that moves the
-  // contours by about a pixel or more (the central-difference step is a fraction of it).
-  std::map<std::string, std::array<double, 4>> known{
-      {"kg", {kg_initial, 0.01, 1.0, 0.05}},
-      {"cycles_per_photo", {o.cycles_per_photo, 0.25, 1000.0, 0.5}},
-      {"reg.tx_px", {0, -500, 500, 1.0}},
-      {"reg.ty_px", {0, -500, 500, 1.0}},
-      {"reg.angle_deg", {0, -45, 45, 0.2}},
-      {"reg.scale", {1, 0.7, 1.4, 0.004}},
-  };
-  // kn, the weight of the normal term M_N (Eq. 3.6): flat faces creep at kg·kN per cycle while
-  // convex features move at up to kg·kE, so kN/kE shapes how thin parts melt against broad
-  // ones. Bounded by kE (the monograph's kN << kE). A change of kE/200 moves a flat side by
-  // ≈ 0.5 L0 over 100 photos of 7 cycles, many pixels.
-  const double kn_initial = o.simulation.kN.value_or(o.simulation.kE / 100.0);
-  known["kn"] = {kn_initial, 0.0, std::max(o.simulation.kE, kn_initial), std::max(o.simulation.kE / 200.0, 1e-9)};
-  for (const auto& [name, v] : kl_values)
-    known[name] = {v, v >= 0 ? 0.0 : -kInf, kInf, std::max(std::abs(v) * 0.05, 1e-4)};
+  verify::FitParameterContext context;
+  context.kg_initial = kg_initial;
+  context.kE = o.simulation.kE;
+  context.kn_initial = o.simulation.kN.value_or(o.simulation.kE / 100.0);
+  context.cycles_per_photo = o.cycles_per_photo;
+  // By name: the order of the fit's parameter vector.
+  std::map<std::string, verify::FitParameterSpec> known;
+  for (verify::FitParameterSpec& spec : verify::fit_parameter_table(context)) known[spec.name] = std::move(spec);
+  for (const auto& [name, v] : kl_values) known[name] = verify::kl_fit_parameter(name, v);
 
   std::set<std::string> free;
   for (const std::string& f : o.fit) {
-    if (f == "reg") {
-      free.insert({"reg.tx_px", "reg.ty_px", "reg.angle_deg", "reg.scale"});
+    if (f == verify::kRegistrationGroup) {
+      for (const std::string& r : verify::registration_parameter_names()) free.insert(r);
     } else {
-      require(known.count(f) > 0, fmt::format("--fit: unknown parameter '{}' (kg, kn, cycles_per_photo, reg, reg.tx_px, reg.ty_px, "
-                                              "reg.angle_deg, reg.scale, kl.<path in the --kl file>)", f));
+      require(known.count(f) > 0, fmt::format("--fit: unknown parameter '{}' ({})", f, verify::fit_parameter_names()));
       free.insert(f);
     }
   }
@@ -151,13 +142,13 @@ std::vector<verify::FitParameter> fit_parameters(const FitRunOptions& o, double 
     free.erase(name);
   }
   std::vector<verify::FitParameter> out;
-  for (const auto& [name, v] : known) {
+  for (const auto& [name, spec] : known) {
     verify::FitParameter p;
     p.name = name;
-    p.initial = v[0];
-    p.lower = v[1];
-    p.upper = v[2];
-    p.scale = v[3];
+    p.initial = spec.initial;
+    p.lower = spec.lower;
+    p.upper = spec.upper;
+    p.scale = spec.scale;
     if (auto it = o.initial.find(name); it != o.initial.end()) p.initial = it->second;
     if (auto it = o.fix.find(name); it != o.fix.end()) p.initial = it->second;
     if (auto it = o.bounds.find(name); it != o.bounds.end()) {
@@ -191,7 +182,7 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
   for (const auto& m : {o.fix, o.initial}) for (const auto& [k, v] : m) names.push_back(k);
   for (const auto& [k, v] : o.bounds) names.push_back(k);
   for (const std::string& name : names) {
-    if (name.rfind("kl.", 0) != 0) continue;
+    if (verify::fit_parameter_role(name) != verify::FitParameterRole::kKlField) continue;
     require(!o.simulation.kl_file.empty(), fmt::format("{}: fitting a kl parameter needs --kl FILE", name));
     // (A default YAML::Node is a defined null node, so `!kl_doc` would never be true.)
     if (kl_doc.IsNull()) kl_doc = load_yaml_file(prepared->opt.kl_file, "kl field");
@@ -235,7 +226,7 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
   // The fitted run against every frame (held-out frames included).
   std::map<std::string, double> model_values;
   for (const auto& e : fit.estimates)
-    if (e.name == "kg" || e.name == "kn" || e.name.rfind("kl.", 0) == 0) model_values[e.name] = e.value;
+    if (verify::is_model_parameter(e.name)) model_values[e.name] = e.value;
   auto meshes = model.start(model_values);
   verify::CompareOptions copt;
   copt.mapping.cycles_per_photo = fit.cycles_per_photo();
