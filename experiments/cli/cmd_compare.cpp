@@ -16,7 +16,7 @@ Run add_compare(CLI::App& app, const std::vector<std::string>& command_line) {
   auto* sub = app.add_subcommand(
       "compare", "Compare a simulate run with an observed photo sequence: P (Eq. 8.1) per photo, overlays, P curve");
   auto o = std::make_shared<experiments::CompareRunOptions>();
-  auto cycles_per_photo = std::make_shared<double>(7.0);
+  auto cycles_per_photo = std::make_shared<double>(verify::kDefaultCyclesPerPhoto);
   auto seconds_per_cycle = std::make_shared<double>(0.0);
   auto no_exact = std::make_shared<bool>(false);
   auto fixed_scale = std::make_shared<bool>(false);
@@ -27,7 +27,8 @@ Run add_compare(CLI::App& app, const std::vector<std::string>& command_line) {
   sub->add_option("--observations", o->observations, "Observation manifest (.yaml/.yml/.json)")->required();
   sub->add_option("--out", o->out_dir, "Output folder (per_frame.csv, overlays/, p_curve.png, compare.json)")->required();
   auto* cpp = sub->add_option("--cycles-per-photo", *cycles_per_photo,
-                              "Simulation cycles between consecutive photos (default 7: ~700 cycles per 100 photos, §8.2)");
+                              fmt::format("Simulation cycles between consecutive photos (default {}: ~700 cycles per 100 photos, §8.2)",
+                                          verify::kDefaultCyclesPerPhoto));
   auto* spc = sub->add_option("--seconds-per-cycle", *seconds_per_cycle,
                               "Real seconds per simulation cycle (uses the photos' time stamps)");
   cpp->excludes(spc);

@@ -2,6 +2,7 @@
 
 #include <meltlab/experiments/fit_run.h>
 #include <meltlab/core/error.h>
+#include <meltlab/verify/fit_parameters.h>
 
 #include <fmt/format.h>
 
@@ -59,8 +60,7 @@ Run add_fit(CLI::App& app, const std::vector<std::string>& command_line) {
   sub->add_option("--observations", o->observations, "Observation manifest (.yaml/.yml/.json)")->required();
   sub->add_option("--out", o->out_dir, "Output folder (fit.json, comparison/)")->required();
   sub->add_option("--fit", *fit,
-                  "Parameters to fit, comma separated: kg, kn (weight of M_N, --kn units), cycles_per_photo, reg "
-                  "(= reg.tx_px,reg.ty_px,reg.angle_deg,reg.scale), kl.<path in the --kl YAML, e.g. kl.of.0.strength>")
+                  "Parameters to fit, comma separated: " + verify::fit_parameter_names_help())
       ->default_val("kg,reg");
   sub->add_option("--fix", *fix, "Fixed values: name=value[,name=value...]");
   sub->add_option("--initial", *initial, "Starting values: name=value[,...]");
@@ -72,7 +72,8 @@ Run add_fit(CLI::App& app, const std::vector<std::string>& command_line) {
   melt.kn = false;
   melt.kl_help = "YAML file with the local coefficient field (its numbers can be fitted)";
   const auto store_melt_options = add_melt_options(*sub, s, melt);
-  sub->add_option("--cycles-per-photo", o->cycles_per_photo, "Cycles between photos (start value when fitted)")->default_val(7.0);
+  sub->add_option("--cycles-per-photo", o->cycles_per_photo, "Cycles between photos (start value when fitted)")
+      ->default_val(verify::kDefaultCyclesPerPhoto);
   sub->add_option("--first-cycle", o->first_cycle, "Cycle shown by the first photo")->default_val(0);
   sub->add_option("--holdout", o->holdout, "Fraction of the last photos kept out of the fit and predicted")->default_val(0.0);
   sub->add_option("--volume-weight", o->volume_weight,

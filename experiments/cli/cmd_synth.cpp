@@ -49,7 +49,8 @@ Run add_synth_sequence(CLI::App& app, const std::vector<std::string>& command_li
   sub->add_option("--mesh", s.mesh, "Mesh file or dataset name (the object at cycle 0)")->required();
   const auto store_melt_options = add_melt_options(*sub, s, MeltOptionSet{});
   sub->add_option("--photos", o->photos, "Number of photos")->default_val(100);
-  sub->add_option("--cycles-per-photo", o->cycles_per_photo, "Simulation cycles between photos")->default_val(7.0);
+  sub->add_option("--cycles-per-photo", o->cycles_per_photo, "Simulation cycles between photos")
+      ->default_val(verify::kDefaultCyclesPerPhoto);
   sub->add_option("--interval-s", o->interval_s, "Seconds between photos")->default_val(40.0);
   sub->add_option("--width", o->width, "Image width of the default top-down camera (px)")->default_val(2048);
   sub->add_option("--height", o->height, "Image height of the default top-down camera (px)")->default_val(1536);

@@ -167,7 +167,7 @@ CompareRunResult run_compare(const CompareRunOptions& o, const std::function<voi
   if (m.seconds_per_cycle)
     mapping["seconds_per_cycle"] = *m.seconds_per_cycle;
   else
-    mapping["cycles_per_photo"] = m.cycles_per_photo.value_or(7.0);
+    mapping["cycles_per_photo"] = m.cycles_per_photo.value_or(verify::kDefaultCyclesPerPhoto);
   mapping["first_cycle"] = m.first_cycle;
   j["options"] = {{"mapping", mapping},
                   {"registration", registration_name(copt.registration)},

@@ -10,6 +10,7 @@
 #include <meltlab/sim/mesh_sequence.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/experiments/provenance.h>
+#include <meltlab/verify/fit_parameters.h>
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
@@ -86,7 +87,7 @@ class EmpiricalModel final : public verify::FitModel {
         params.kg = v;
       } else if (name == "kn") {  // in the --kn units: relative to L0 unless --units absolute
         params.kN = v * p_->coefficient_unit();
-      } else if (name.rfind("kl.", 0) == 0) {
+      } else if (verify::fit_parameter_role(name) == verify::FitParameterRole::kKlField) {
         YAML::Node leaf = node_at(doc, name, p_->opt.kl_file.string());
         leaf = v;
         kl_changed = true;
@@ -117,32 +118,22 @@ void require(bool ok, const std::string& message) {
 
 std::vector<verify::FitParameter> fit_parameters(const FitRunOptions& o, double kg_initial,
                                                  const std::map<std::string, double>& kl_values) {
-  // Name -> (initial, lower, upper, scale). Scales are the size of a change that moves the
-  // contours by about a pixel or more (the central-difference step is a fraction of it).
-  std::map<std::string, std::array<double, 4>> known{
-      {"kg", {kg_initial, 0.01, 1.0, 0.05}},
-      {"cycles_per_photo", {o.cycles_per_photo, 0.25, 1000.0, 0.5}},
-      {"reg.tx_px", {0, -500, 500, 1.0}},
-      {"reg.ty_px", {0, -500, 500, 1.0}},
-      {"reg.angle_deg", {0, -45, 45, 0.2}},
-      {"reg.scale", {1, 0.7, 1.4, 0.004}},
-  };
-  // kn, the weight of the normal term M_N (Eq. 3.6): flat faces creep at kg·kN per cycle while
-  // convex features move at up to kg·kE, so kN/kE shapes how thin parts melt against broad
-  // ones. Bounded by kE (the monograph's kN << kE). A change of kE/200 moves a flat side by
-  // ≈ 0.5 L0 over 100 photos of 7 cycles, many pixels.
-  const double kn_initial = o.simulation.kN.value_or(o.simulation.kE / 100.0);
-  known["kn"] = {kn_initial, 0.0, std::max(o.simulation.kE, kn_initial), std::max(o.simulation.kE / 200.0, 1e-9)};
-  for (const auto& [name, v] : kl_values)
-    known[name] = {v, v >= 0 ? 0.0 : -kInf, kInf, std::max(std::abs(v) * 0.05, 1e-4)};
+  verify::FitParameterContext context;
+  context.kg_initial = kg_initial;
+  context.kE = o.simulation.kE;
+  context.kn_initial = o.simulation.kN.value_or(o.simulation.kE / 100.0);
+  context.cycles_per_photo = o.cycles_per_photo;
+  // By name: the order of the fit's parameter vector.
+  std::map<std::string, verify::FitParameterSpec> known;
+  for (verify::FitParameterSpec& spec : verify::fit_parameter_table(context)) known[spec.name] = std::move(spec);
+  for (const auto& [name, v] : kl_values) known[name] = verify::kl_fit_parameter(name, v);
 
   std::set<std::string> free;
   for (const std::string& f : o.fit) {
-    if (f == "reg") {
-      free.insert({"reg.tx_px", "reg.ty_px", "reg.angle_deg", "reg.scale"});
+    if (f == verify::kRegistrationGroup) {
+      for (const std::string& r : verify::registration_parameter_names()) free.insert(r);
     } else {
-      require(known.count(f) > 0, fmt::format("--fit: unknown parameter '{}' (kg, kn, cycles_per_photo, reg, reg.tx_px, reg.ty_px, "
-                                              "reg.angle_deg, reg.scale, kl.<path in the --kl file>)", f));
+      require(known.count(f) > 0, fmt::format("--fit: unknown parameter '{}' ({})", f, verify::fit_parameter_names()));
       free.insert(f);
     }
   }
@@ -151,13 +142,13 @@ std::vector<verify::FitParameter> fit_parameters(const FitRunOptions& o, double 
     free.erase(name);
   }
   std::vector<verify::FitParameter> out;
-  for (const auto& [name, v] : known) {
+  for (const auto& [name, spec] : known) {
     verify::FitParameter p;
     p.name = name;
-    p.initial = v[0];
-    p.lower = v[1];
-    p.upper = v[2];
-    p.scale = v[3];
+    p.initial = spec.initial;
+    p.lower = spec.lower;
+    p.upper = spec.upper;
+    p.scale = spec.scale;
     if (auto it = o.initial.find(name); it != o.initial.end()) p.initial = it->second;
     if (auto it = o.fix.find(name); it != o.fix.end()) p.initial = it->second;
     if (auto it = o.bounds.find(name); it != o.bounds.end()) {
@@ -175,67 +166,53 @@ std::vector<verify::FitParameter> fit_parameters(const FitRunOptions& o, double 
   return out;
 }
 
-json run_fit(const FitRunOptions& o, const std::function<void(const std::string&)>& log) {
-  require(o.holdout >= 0 && o.holdout < 1, fmt::format("--holdout: must be in [0, 1) (got {})", o.holdout));
-  require(o.volume_weight >= 0 && std::isfinite(o.volume_weight), "--volume-weight: must be >= 0");
-  require(std::isfinite(o.first_cycle) && o.first_cycle >= 0, "--first-cycle: must be >= 0");
-  RunFolder folder(o.out_dir, {"--out", "fit.json", "fit", o.overwrite});
-  Provenance provenance = start_provenance("fit", o.command_line);
-  const verify::ObservationSequence obs = verify::load_observations(o.observations);
-  std::shared_ptr<const PreparedSimulation> prepared = prepare_simulation(o.simulation, /*check_output=*/false);
+namespace {
 
-  // kl parameters named on the command line, read from the kl file.
-  YAML::Node kl_doc;
+/// The kl field numbers named by --fit, --fix, --initial or --bound, read from the --kl file
+/// (loaded into `kl_doc` when one is named).
+std::map<std::string, double> kl_parameter_values(const FitRunOptions& o, const PreparedSimulation& prepared, YAML::Node& kl_doc) {
   std::map<std::string, double> kl_values;
   std::vector<std::string> names = o.fit;
   for (const auto& m : {o.fix, o.initial}) for (const auto& [k, v] : m) names.push_back(k);
   for (const auto& [k, v] : o.bounds) names.push_back(k);
   for (const std::string& name : names) {
-    if (name.rfind("kl.", 0) != 0) continue;
+    if (verify::fit_parameter_role(name) != verify::FitParameterRole::kKlField) continue;
     require(!o.simulation.kl_file.empty(), fmt::format("{}: fitting a kl parameter needs --kl FILE", name));
     // (A default YAML::Node is a defined null node, so `!kl_doc` would never be true.)
-    if (kl_doc.IsNull()) kl_doc = load_yaml_file(prepared->opt.kl_file, "kl field");
+    if (kl_doc.IsNull()) kl_doc = load_yaml_file(prepared.opt.kl_file, "kl field");
     kl_values[name] = number_at(kl_doc, name, o.simulation.kl_file.string());
   }
-  const std::vector<verify::FitParameter> params = fit_parameters(o, o.simulation.kg, kl_values);
+  return kl_values;
+}
 
-  // Frames: all, minus the held-out tail.
-  const int n_frames = static_cast<int>(obs.frames.size());
-  const int n_fit = std::max(1, static_cast<int>(std::floor(n_frames * (1.0 - o.holdout))));
-  verify::FitOptions fo = o.fit_options;
-  fo.first_cycle = o.first_cycle;
-  fo.frames.clear();
-  for (int k = 0; k < n_fit; ++k) fo.frames.push_back(k);
-  fo.log = log;
-
-  std::optional<verify::VolumeSeries> volume;
-  if (o.volume_weight > 0) {
-    require(obs.mass_series.has_value(), fmt::format("{}: --volume-weight needs a mass_series in the manifest", obs.manifest.string()));
-    const verify::TimeSeries ts = verify::read_time_series(*obs.mass_series);
-    verify::VolumeSeries vs;
-    const double held_out_time = obs.interval_s ? *obs.interval_s * n_fit : kInf;
-    for (std::size_t i = 0; i < ts.time_s.size(); ++i) {
-      if (ts.time_s[i] >= held_out_time) break;
-      double v = ts.value[i];
-      if (ts.quantity == "mass_g") v = v / 1000.0 / kIceDensity;
-      else if (ts.quantity == "mass_kg") v = v / kIceDensity;
-      else if (ts.quantity == "volume_cm3") v = v * 1e-6;
-      vs.time_s.push_back(ts.time_s[i]);
-      vs.volume_m3.push_back(v);
-    }
-    require(!vs.time_s.empty() && vs.volume_m3.front() > 0,
-            fmt::format("{}: no usable volume sample in the fitted time range", obs.mass_series->string()));
-    volume = vs;
-    fo.volume_weight = o.volume_weight;
+/// The manifest's mass/volume series in m³ over the fitted photos (before the held-out ones).
+verify::VolumeSeries volume_series(const verify::ObservationSequence& obs, int n_fit) {
+  require(obs.mass_series.has_value(), fmt::format("{}: --volume-weight needs a mass_series in the manifest", obs.manifest.string()));
+  const verify::TimeSeries ts = verify::read_time_series(*obs.mass_series);
+  verify::VolumeSeries vs;
+  const double held_out_time = obs.interval_s ? *obs.interval_s * n_fit : kInf;
+  for (std::size_t i = 0; i < ts.time_s.size(); ++i) {
+    if (ts.time_s[i] >= held_out_time) break;
+    double v = ts.value[i];
+    if (ts.quantity == "mass_g") v = v / 1000.0 / kIceDensity;
+    else if (ts.quantity == "mass_kg") v = v / kIceDensity;
+    else if (ts.quantity == "volume_cm3") v = v * 1e-6;
+    vs.time_s.push_back(ts.time_s[i]);
+    vs.volume_m3.push_back(v);
   }
+  require(!vs.time_s.empty() && vs.volume_m3.front() > 0,
+          fmt::format("{}: no usable volume sample in the fitted time range", obs.mass_series->string()));
+  return vs;
+}
 
-  EmpiricalModel model(prepared, kl_doc);
-  const verify::FitResult fit = verify::fit_sequence(obs, model, params, fo, volume);
-
-  // The fitted run against every frame (held-out frames included).
+/// The fitted run (model at the estimates, the fitted time scale and registration) against
+/// every photo, held-out ones included; writes DIR/comparison.
+verify::CompareResult compare_fitted_run(const verify::ObservationSequence& obs, verify::FitModel& model,
+                                         const verify::FitResult& fit, const FitRunOptions& o, const fs::path& dir,
+                                         const std::function<void(const std::string&)>& log) {
   std::map<std::string, double> model_values;
   for (const auto& e : fit.estimates)
-    if (e.name == "kg" || e.name == "kn" || e.name.rfind("kl.", 0) == 0) model_values[e.name] = e.value;
+    if (verify::is_model_parameter(e.name)) model_values[e.name] = e.value;
   auto meshes = model.start(model_values);
   verify::CompareOptions copt;
   copt.mapping.cycles_per_photo = fit.cycles_per_photo();
@@ -243,9 +220,15 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
   copt.registration = verify::RegistrationMode::kGiven;
   copt.given_registration = fit.registration();
   if (log) log("comparing the fitted run with every photo");
-  const verify::CompareResult cmp = compare_and_write(obs, *meshes, copt, folder.path() / "comparison", o.overlay_every, {});
+  return compare_and_write(obs, *meshes, copt, dir, o.overlay_every, {});
+}
 
+/// fit.json without its provenance: the library's FitResult and CompareResult, written here
+/// at the edge.
+json fit_json(const verify::ObservationSequence& obs, const FitRunOptions& o, const verify::FitResult& fit,
+              const verify::CompareResult& cmp, int n_fit) {
   json j;
+  const int n_frames = static_cast<int>(obs.frames.size());
   j["observations"] = {{"manifest", fs::absolute(obs.manifest).string()}, {"manifest_hash", file_hash(obs.manifest)},
                        {"frames", n_frames}, {"object", obs.object}};
   j["simulation"] = options_to_json(o.simulation);
@@ -305,6 +288,42 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
       j["truth"] = {{"error", e.what()}};
     }
   }
+  return j;
+}
+
+}  // namespace
+
+json run_fit(const FitRunOptions& o, const std::function<void(const std::string&)>& log) {
+  require(o.holdout >= 0 && o.holdout < 1, fmt::format("--holdout: must be in [0, 1) (got {})", o.holdout));
+  require(o.volume_weight >= 0 && std::isfinite(o.volume_weight), "--volume-weight: must be >= 0");
+  require(std::isfinite(o.first_cycle) && o.first_cycle >= 0, "--first-cycle: must be >= 0");
+  RunFolder folder(o.out_dir, {"--out", "fit.json", "fit", o.overwrite});
+  Provenance provenance = start_provenance("fit", o.command_line);
+  const verify::ObservationSequence obs = verify::load_observations(o.observations);
+  std::shared_ptr<const PreparedSimulation> prepared = prepare_simulation(o.simulation, /*check_output=*/false);
+  YAML::Node kl_doc;
+  const std::map<std::string, double> kl_values = kl_parameter_values(o, *prepared, kl_doc);
+  const std::vector<verify::FitParameter> params = fit_parameters(o, o.simulation.kg, kl_values);
+
+  // Frames: all, minus the held-out tail.
+  const int n_frames = static_cast<int>(obs.frames.size());
+  const int n_fit = std::max(1, static_cast<int>(std::floor(n_frames * (1.0 - o.holdout))));
+  verify::FitOptions fo = o.fit_options;
+  fo.first_cycle = o.first_cycle;
+  fo.frames.clear();
+  for (int k = 0; k < n_fit; ++k) fo.frames.push_back(k);
+  fo.log = log;
+  std::optional<verify::VolumeSeries> volume;
+  if (o.volume_weight > 0) {
+    volume = volume_series(obs, n_fit);
+    fo.volume_weight = o.volume_weight;
+  }
+
+  EmpiricalModel model(prepared, kl_doc);
+  const verify::FitResult fit = verify::fit_sequence(obs, model, params, fo, volume);
+  const verify::CompareResult cmp = compare_fitted_run(obs, model, fit, o, folder.path() / "comparison", log);
+
+  json j = fit_json(obs, o, fit, cmp, n_fit);
   provenance.timings_s.emplace_back("fit", fit.time_s);
   j["provenance"] = finish_provenance(provenance);
   write_text_atomically(folder.path() / "fit.json", j.dump(2) + "\n");

@@ -20,7 +20,7 @@ std::int64_t FrameMapping::cycle_of(const Frame& f, const std::string& manifest)
                                    manifest, f.index, f.image.filename().string()));
     return static_cast<std::int64_t>(std::llround(first_cycle + *f.time_s / *seconds_per_cycle));
   }
-  const double k = cycles_per_photo.value_or(7.0);
+  const double k = cycles_per_photo.value_or(kDefaultCyclesPerPhoto);
   return static_cast<std::int64_t>(std::llround(first_cycle + k * f.index));
 }
 

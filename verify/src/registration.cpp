@@ -182,17 +182,12 @@ Similarity2D fit_similarity(const std::vector<Vec2d>& p, const std::vector<Vec2d
 
 }  // namespace
 
-RegistrationResult register_masks(const cv::Mat& photo, const cv::Mat& render, const RegistrationOptions& options) {
-  if (photo.empty() || render.empty() || photo.size() != render.size() || photo.type() != CV_8UC1 ||
-      render.type() != CV_8UC1)
-    throw std::invalid_argument("register_masks: masks must be non-empty CV_8UC1 images of the same size");
-  const Moments mp = mask_moments(photo), mr = mask_moments(render);
-  if (mp.area <= 0) throw InputError("registration: the photo mask is empty");
-  if (mr.area <= 0) throw InputError("registration: the rendered mask is empty");
-  RegistrationResult result;
-  result.P_before = p_of(photo, render, Similarity2D::identity());
+namespace {
 
-  // ---- moments: scale from areas, rotation from principal axes, centroids aligned ----
+/// Scale from the areas, rotation from the principal axes (both senses) or none, centroids
+/// aligned: the candidate with the lowest P; `best_p` receives it.
+Similarity2D moment_estimate(const cv::Mat& photo, const cv::Mat& render, const Moments& mp, const Moments& mr,
+                             const RegistrationOptions& options, double& best_p) {
   const double scale = options.allow_scale ? std::sqrt(mp.area / mr.area) : 1.0;
   std::vector<double> angles = {0.0};
   // The principal axis is only meaningful for elongated shapes; it is ambiguous by 180°.
@@ -201,7 +196,7 @@ RegistrationResult register_masks(const cv::Mat& photo, const cv::Mat& render, c
     angles = {d, d + std::numbers::pi};
   }
   Similarity2D best;
-  double best_p = std::numeric_limits<double>::infinity();
+  best_p = std::numeric_limits<double>::infinity();
   for (double a : angles) {
     Similarity2D t;
     t.scale = scale;
@@ -219,90 +214,119 @@ RegistrationResult register_masks(const cv::Mat& photo, const cv::Mat& render, c
     const double p = p_of(photo, render, t);
     if (p <= best_p) best_p = p, best = t;
   }
-  result.render_to_photo = best;
-  result.method = "moments";
+  return best;
+}
 
-  if (options.refine == RegistrationOptions::Refine::kIcp) {
-    result.method = "moments+icp";
-    const std::vector<Vec2d> target = boundary_points(photo, 4000);
-    const std::vector<Vec2d> source = boundary_points(render, 4000);
-    PointGrid grid(target, 8.0);
-    Similarity2D t = best;
-    for (int it = 0; it < options.max_iterations; ++it) {
-      std::vector<Vec2d> dst(source.size());
-      std::vector<double> dist(source.size());
-      for (std::size_t i = 0; i < source.size(); ++i) {
-        const Vec2d p = t.apply(source[i]);
-        dst[i] = target[static_cast<std::size_t>(grid.nearest(p))];
-        dist[i] = (p - dst[i]).norm();
-      }
-      // Trim the worst 10% of correspondences (parts present in one contour only).
-      std::vector<double> sorted = dist;
-      std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() * 9 / 10), sorted.end());
-      const double cut = sorted[sorted.size() * 9 / 10];
-      std::vector<Vec2d> s2, d2;
-      s2.reserve(source.size());
-      d2.reserve(source.size());
-      for (std::size_t i = 0; i < dist.size(); ++i) {
-        if (dist[i] > cut) continue;
-        s2.push_back(source[i]);
-        d2.push_back(dst[i]);
-      }
-      const Similarity2D next = fit_similarity(s2, d2, options.allow_scale, options.allow_rotation);
-      double move = 0;
-      for (const auto& p : source) move = std::max(move, (next.apply(p) - t.apply(p)).norm());
-      t = next;
-      result.iterations = it + 1;
-      if (move < options.tolerance_px) {
-        result.converged = true;
-        break;
-      }
+/// Trimmed ICP of the rendered boundary onto the photo's from `best`; replaces
+/// result.render_to_photo (and best_p) if it lowers P.
+void refine_icp(const cv::Mat& photo, const cv::Mat& render, const Similarity2D& best, const RegistrationOptions& options,
+                RegistrationResult& result, double& best_p) {
+  const std::vector<Vec2d> target = boundary_points(photo, 4000);
+  const std::vector<Vec2d> source = boundary_points(render, 4000);
+  PointGrid grid(target, 8.0);
+  Similarity2D t = best;
+  for (int it = 0; it < options.max_iterations; ++it) {
+    std::vector<Vec2d> dst(source.size());
+    std::vector<double> dist(source.size());
+    for (std::size_t i = 0; i < source.size(); ++i) {
+      const Vec2d p = t.apply(source[i]);
+      dst[i] = target[static_cast<std::size_t>(grid.nearest(p))];
+      dist[i] = (p - dst[i]).norm();
     }
+    // Trim the worst 10% of correspondences (parts present in one contour only).
+    std::vector<double> sorted = dist;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() * 9 / 10), sorted.end());
+    const double cut = sorted[sorted.size() * 9 / 10];
+    std::vector<Vec2d> s2, d2;
+    s2.reserve(source.size());
+    d2.reserve(source.size());
+    for (std::size_t i = 0; i < dist.size(); ++i) {
+      if (dist[i] > cut) continue;
+      s2.push_back(source[i]);
+      d2.push_back(dst[i]);
+    }
+    const Similarity2D next = fit_similarity(s2, d2, options.allow_scale, options.allow_rotation);
+    double move = 0;
+    for (const auto& p : source) move = std::max(move, (next.apply(p) - t.apply(p)).norm());
+    t = next;
+    result.iterations = it + 1;
+    if (move < options.tolerance_px) {
+      result.converged = true;
+      break;
+    }
+  }
+  const double p = p_of(photo, render, t);
+  if (p <= best_p) {
+    best_p = p;
+    result.render_to_photo = t;
+  }
+}
+
+/// ECC on blurred masks from `best`; replaces result.render_to_photo (and best_p) if it
+/// lowers P, keeps the moment estimate if ECC fails.
+void refine_ecc(const cv::Mat& photo, const cv::Mat& render, const Similarity2D& best, const RegistrationOptions& options,
+                RegistrationResult& result, double& best_p) {
+  // ECC estimates a Euclidean warp between blurred masks; the moment scale is applied first.
+  Similarity2D scale_only;
+  scale_only.scale = best.scale;
+  const Vec2d c = Vec2d(photo.cols / 2.0, photo.rows / 2.0);
+  scale_only.translation = c - best.scale * c;
+  const cv::Mat scaled = warp_mask(render, scale_only, photo.size());
+  cv::Mat a, b;
+  photo.convertTo(a, CV_32F, 1.0 / 255);
+  scaled.convertTo(b, CV_32F, 1.0 / 255);
+  const int k = 2 * static_cast<int>(std::ceil(3 * options.ecc_blur_sigma_px)) + 1;
+  cv::GaussianBlur(a, a, cv::Size(k, k), options.ecc_blur_sigma_px);
+  cv::GaussianBlur(b, b, cv::Size(k, k), options.ecc_blur_sigma_px);
+  // Initial guess from the moments: the remaining rotation and translation.
+  Similarity2D rest = compose(best, scale_only.inverse());
+  cv::Mat warp = (cv::Mat_<float>(2, 3) << static_cast<float>(std::cos(rest.angle_rad)), static_cast<float>(-std::sin(rest.angle_rad)),
+                  static_cast<float>(rest.translation.x()), static_cast<float>(std::sin(rest.angle_rad)),
+                  static_cast<float>(std::cos(rest.angle_rad)), static_cast<float>(rest.translation.y()));
+  // findTransformECC maps template (photo) coordinates into the input image: invert.
+  cv::Mat inv;
+  cv::invertAffineTransform(warp, inv);
+  try {
+    cv::findTransformECC(a, b, inv, cv::MOTION_EUCLIDEAN,
+                         cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, options.max_iterations, 1e-7),
+                         cv::noArray(), 1);
+    cv::invertAffineTransform(inv, warp);
+    Similarity2D e;
+    e.angle_rad = std::atan2(warp.at<float>(1, 0), warp.at<float>(0, 0));
+    e.translation = Vec2d(warp.at<float>(0, 2), warp.at<float>(1, 2));
+    const Similarity2D t = compose(e, scale_only);
+    result.converged = true;
     const double p = p_of(photo, render, t);
     if (p <= best_p) {
       best_p = p;
       result.render_to_photo = t;
     }
+  } catch (const cv::Exception&) {
+    result.converged = false;  // keep the moment estimate
+  }
+}
+
+}  // namespace
+
+RegistrationResult register_masks(const cv::Mat& photo, const cv::Mat& render, const RegistrationOptions& options) {
+  if (photo.empty() || render.empty() || photo.size() != render.size() || photo.type() != CV_8UC1 ||
+      render.type() != CV_8UC1)
+    throw std::invalid_argument("register_masks: masks must be non-empty CV_8UC1 images of the same size");
+  const Moments mp = mask_moments(photo), mr = mask_moments(render);
+  if (mp.area <= 0) throw InputError("registration: the photo mask is empty");
+  if (mr.area <= 0) throw InputError("registration: the rendered mask is empty");
+  RegistrationResult result;
+  result.P_before = p_of(photo, render, Similarity2D::identity());
+  double best_p = std::numeric_limits<double>::infinity();
+  const Similarity2D best = moment_estimate(photo, render, mp, mr, options, best_p);
+  result.render_to_photo = best;
+  result.method = "moments";
+  if (options.refine == RegistrationOptions::Refine::kIcp) {
+    result.method = "moments+icp";
+    refine_icp(photo, render, best, options, result, best_p);
   } else if (options.refine == RegistrationOptions::Refine::kEcc) {
     result.method = "moments+ecc";
-    // ECC estimates a Euclidean warp between blurred masks; the moment scale is applied first.
-    Similarity2D scale_only;
-    scale_only.scale = best.scale;
-    const Vec2d c = Vec2d(photo.cols / 2.0, photo.rows / 2.0);
-    scale_only.translation = c - best.scale * c;
-    const cv::Mat scaled = warp_mask(render, scale_only, photo.size());
-    cv::Mat a, b;
-    photo.convertTo(a, CV_32F, 1.0 / 255);
-    scaled.convertTo(b, CV_32F, 1.0 / 255);
-    const int k = 2 * static_cast<int>(std::ceil(3 * options.ecc_blur_sigma_px)) + 1;
-    cv::GaussianBlur(a, a, cv::Size(k, k), options.ecc_blur_sigma_px);
-    cv::GaussianBlur(b, b, cv::Size(k, k), options.ecc_blur_sigma_px);
-    // Initial guess from the moments: the remaining rotation and translation.
-    Similarity2D rest = compose(best, scale_only.inverse());
-    cv::Mat warp = (cv::Mat_<float>(2, 3) << static_cast<float>(std::cos(rest.angle_rad)), static_cast<float>(-std::sin(rest.angle_rad)),
-                    static_cast<float>(rest.translation.x()), static_cast<float>(std::sin(rest.angle_rad)),
-                    static_cast<float>(std::cos(rest.angle_rad)), static_cast<float>(rest.translation.y()));
-    // findTransformECC maps template (photo) coordinates into the input image: invert.
-    cv::Mat inv;
-    cv::invertAffineTransform(warp, inv);
-    try {
-      cv::findTransformECC(a, b, inv, cv::MOTION_EUCLIDEAN,
-                           cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, options.max_iterations, 1e-7),
-                           cv::noArray(), 1);
-      cv::invertAffineTransform(inv, warp);
-      Similarity2D e;
-      e.angle_rad = std::atan2(warp.at<float>(1, 0), warp.at<float>(0, 0));
-      e.translation = Vec2d(warp.at<float>(0, 2), warp.at<float>(1, 2));
-      const Similarity2D t = compose(e, scale_only);
-      result.converged = true;
-      const double p = p_of(photo, render, t);
-      if (p <= best_p) {
-        best_p = p;
-        result.render_to_photo = t;
-      }
-    } catch (const cv::Exception&) {
-      result.converged = false;  // keep the moment estimate
-    }
+    refine_ecc(photo, render, best, options, result, best_p);
   }
   result.P_after = best_p;
   return result;

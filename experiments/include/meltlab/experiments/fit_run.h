@@ -29,7 +29,7 @@ struct FitRunOptions {
   std::map<std::string, double> fix;     ///< fixed values
   std::map<std::string, double> initial; ///< starting values
   std::map<std::string, std::pair<double, double>> bounds;
-  double cycles_per_photo = 7.0;         ///< initial / fixed K
+  double cycles_per_photo = verify::kDefaultCyclesPerPhoto;  ///< initial / fixed K
   double first_cycle = 0;
   double holdout = 0;                    ///< fraction of the last frames kept out of the fit
   double volume_weight = 0;              ///< > 0: fit the manifest's mass/volume series too

@@ -16,6 +16,7 @@
 
 #include <meltlab/experiments/simulate_run.h>
 #include <meltlab/render/camera.h>
+#include <meltlab/verify/compare.h>
 #include <meltlab/verify/registration.h>
 
 #include <filesystem>
@@ -29,7 +30,7 @@ namespace meltlab::experiments {
 struct SyntheticSequenceOptions {
   SimulateOptions simulation;            ///< mesh and melt coefficients (out_dir unused)
   int photos = 100;
-  double cycles_per_photo = 7.0;         ///< §8.2: ~700 cycles per 100 photos
+  double cycles_per_photo = verify::kDefaultCyclesPerPhoto;
   double interval_s = 40.0;              ///< §8.2: a photo every 40 s
   std::optional<render::Camera> camera;  ///< default: orthographic top-down framing the mesh
   int width = 2048, height = 1536;       ///< for the default camera (Coolpix 995)

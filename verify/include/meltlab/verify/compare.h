@@ -21,10 +21,15 @@
 
 namespace meltlab::verify {
 
+/// The time scale when none is given: the monograph's photographed melts run ~700 simulation
+/// cycles per 100 photos (§8.2). Written once here; the fit, the comparison, the synthetic
+/// sequences and the CLI defaults all use it.
+inline constexpr double kDefaultCyclesPerPhoto = 7.0;
+
 /// Which cycle shows the state of photo k (0-based): either k photos × K cycles, or the
 /// photo's time divided by the seconds per cycle (monograph §9.4: ~7 cycles per 40 s photo).
 struct FrameMapping {
-  std::optional<double> cycles_per_photo;   ///< K
+  std::optional<double> cycles_per_photo;   ///< K (kDefaultCyclesPerPhoto when neither is set)
   std::optional<double> seconds_per_cycle;  ///< S (needs frame times)
   double first_cycle = 0;                   ///< cycle of photo 0 (t = 0)
   /// The cycle of a frame (rounded to the nearest); throws InputError if times are needed

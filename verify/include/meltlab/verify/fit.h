@@ -20,7 +20,8 @@
 // characteristic scale (FitParameter::scale x step_fraction), chosen to move the contours by
 // well over the 1/k² px quantisation of the rendered contour (see fit.cpp and the tests).
 //
-// Parameters (physical units; bounds; any can be fixed):
+// Parameters (physical units; bounds; any can be fixed; registered with their roles,
+// defaults, bounds and scales in fit_parameters.h):
 //   kg, kl.<yaml path> (model parameters, passed to FitModel::start)
 //   cycles_per_photo   photo k shows cycle first_cycle + k * K (fractional cycles blend the
 //                      residuals of the two neighbouring cycles, so K is fitted smoothly)
@@ -30,6 +31,7 @@
 //                      p_photo = pivot + scale R(angle) (p_render - pivot) + (tx, ty)
 
 #include <meltlab/verify/compare.h>
+#include <meltlab/verify/fit_parameters.h>
 #include <meltlab/verify/observations.h>
 
 #include <functional>
@@ -52,7 +54,9 @@ struct FitParameter {
 };
 
 /// The simulation side of a fit: a mesh sequence for given model-parameter values (every
-/// parameter whose name does not start with "reg." and is not "cycles_per_photo").
+/// parameter for which is_model_parameter holds: melt settings and kl field numbers). Any
+/// model fits behind it — the melt simulator in `meltlab fit`, an analytic shrinking disc in
+/// tests/verify/fit_test.cpp.
 class FitModel {
  public:
   virtual ~FitModel() = default;
