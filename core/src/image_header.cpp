@@ -67,11 +67,15 @@ std::optional<DeclaredImageSize> declared_image_size(const std::filesystem::path
 }
 
 void check_declared_image_size(const std::filesystem::path& file) {
+  check_declared_image_size(file, input_limits().image_pixels);
+}
+
+void check_declared_image_size(const std::filesystem::path& file, std::int64_t max_pixels) {
   const auto size = declared_image_size(file);
   if (!size) return;
   if (size->width <= 0 || size->height <= 0)
     throw InputError(fmt::format("{}: the header declares an image of {}x{} pixels", file.string(), size->width, size->height));
-  const std::int64_t limit = input_limits().image_pixels;
+  const std::int64_t limit = max_pixels;
   if (size->width > limit || size->height > limit || size->width * size->height > limit)
     throw InputError(fmt::format("{}: the header declares {}x{} pixels, more than the limit of {} (raise it with "
                                  "--limits image_pixels=N)",

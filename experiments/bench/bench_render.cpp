@@ -74,7 +74,7 @@ void time_frames(benchmark::State& state, render::IceRenderer& r) {
   render::RgbImage img = r.render();
   for (auto _ : state) {
     img = r.render();
-    benchmark::DoNotOptimize(img.rgb.data());
+    benchmark::DoNotOptimize(img.data());
   }
 }
 
@@ -161,7 +161,7 @@ void BM_TextureLookup(benchmark::State& state) {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (const auto& p : st) {
       switch (state.range(0)) {
-        case 0: sum += tex.bilinear(p.x() * 256 - 0.5, p.y() * 256 - 0.5, true); break;
+        case 0: sum += sample_bilinear_rgb(tex, p.x() * 256 - 0.5, p.y() * 256 - 0.5, ImageWrap::kRepeat, ImageWrap::kRepeat); break;
         case 1: sum += ft.texture(id, p.x(), p.y(), Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()); break;
         default: sum += ft.texture(id, p.x(), p.y(), dx, dy); break;
       }

@@ -6,11 +6,11 @@
 #include <meltlab/render/silhouette.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
+#include <meltlab/core/image.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/verify/observations.h>
 #include <meltlab/experiments/provenance.h>
 
-#include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
@@ -66,17 +66,7 @@ void write_photo(const fs::path& file, const cv::Mat& bgr, int jpeg_quality) {
     verify::write_image(file, bgr);
     return;
   }
-  cv::Mat rgb;
-  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-  write_atomically(file, [&](const fs::path& tmp) {
-    auto out = OIIO::ImageOutput::create(tmp.string());
-    if (!out) throw InputError(fmt::format("{}: cannot write: {}", file.string(), OIIO::geterror()));
-    OIIO::ImageSpec spec(rgb.cols, rgb.rows, 3, OIIO::TypeDesc::UINT8);
-    spec.attribute("Compression", fmt::format("jpeg:{}", jpeg_quality));
-    bool ok = out->open(tmp.string(), spec) && out->write_image(OIIO::TypeDesc::UINT8, rgb.data);
-    ok = out->close() && ok;
-    if (!ok) throw InputError(fmt::format("{}: cannot write: {}", file.string(), out->geterror()));
-  });
+  meltlab::write_image(file, verify::image_from_mat(bgr), PixelFormat::kUint8, jpeg_quality);
 }
 
 }  // namespace

@@ -68,10 +68,10 @@ FilteredTextures::FilteredTextures() : impl_(std::make_unique<Impl>()) {}
 FilteredTextures::~FilteredTextures() = default;
 
 int FilteredTextures::add(const RgbImage& image, Kind kind, const std::string& name) {
-  if (image.width <= 0 || image.height <= 0) throw InputError(fmt::format("{}: the image holds no pixels", name));
+  if (image.width() <= 0 || image.height() <= 0 || image.channels() != 3) throw InputError(fmt::format("{}: the image holds no pixels", name));
   const std::filesystem::path file = impl_->dir / fmt::format("{}.tx", impl_->entries.size());  // TIFF: OpenEXR would force its y-up, border-sampled lat-long convention
-  OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT);
-  const OIIO::ImageBuf src(spec, const_cast<float*>(image.rgb.data()));  // wraps, read only
+  OIIO::ImageSpec spec(image.width(), image.height(), 3, OIIO::TypeDesc::FLOAT);
+  const OIIO::ImageBuf src(spec, const_cast<float*>(image.data()));  // wraps, read only
   OIIO::ImageSpec config;
   config.tile_width = config.tile_height = 64;
   config.set_format(OIIO::TypeDesc::FLOAT);

@@ -1,10 +1,9 @@
 // Photo-like rendering of voxel ice on a textured ground (see ice_photo.h).
 
 #include <meltlab/render/ice_photo.h>
-#include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
+#include <meltlab/core/image.h>
 
-#include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 #include <tbb/blocked_range.h>
@@ -673,26 +672,15 @@ void write_jpeg(const std::filesystem::path& file, const cv::Mat& image, int qua
     throw InputError(fmt::format("{}: write_jpeg needs a non-empty 8-bit gray or BGR image", file.string()));
   if (quality < 1 || quality > 100)
     throw InputError(fmt::format("{}: JPEG quality must be in [1, 100] (got {})", file.string(), quality));
-  cv::Mat pixels;
-  if (image.channels() == 3) {
-    cv::cvtColor(image, pixels, cv::COLOR_BGR2RGB);
-  } else {
-    pixels = image.isContinuous() ? image : image.clone();
+  // OpenCV's BGR to the image type's RGB.
+  Image8 pixels(image.cols, image.rows, image.channels());
+  for (int y = 0; y < image.rows; ++y) {
+    const std::uint8_t* in = image.ptr<std::uint8_t>(y);
+    for (int x = 0; x < image.cols; ++x)
+      for (int c = 0; c < image.channels(); ++c)
+        pixels.at(x, y, c) = in[x * image.channels() + (image.channels() == 3 ? 2 - c : c)];
   }
-  write_atomically(file, [&](const std::filesystem::path& tmp) {
-    auto out = OIIO::ImageOutput::create("jpg");
-    if (!out) throw InputError(fmt::format("{}: cannot write JPEG: {}", file.string(), OIIO::geterror()));
-    OIIO::ImageSpec spec(pixels.cols, pixels.rows, pixels.channels(), OIIO::TypeDesc::UINT8);
-    spec.attribute("Compression", fmt::format("jpeg:{}", quality));
-    spec.attribute("CompressionQuality", quality);
-    bool ok = out->open(tmp.string(), spec);
-    if (ok) ok = out->write_image(OIIO::TypeDesc::UINT8, pixels.data);
-    const bool closed = out->close();
-    std::string err = out->geterror();
-    if (err.empty()) err = OIIO::geterror();
-    if (!ok || !closed || !err.empty())
-      throw InputError(fmt::format("{}: cannot write JPEG: {}", file.string(), err));
-  });
+  write_image(file, pixels, quality);
 }
 
 }  // namespace meltlab::render

@@ -109,7 +109,7 @@ IceRenderer::IceRenderer(RenderScene scene) : scene_(std::move(scene)) {
     env_id_ = filtered_->add(env_, FilteredTextures::Kind::kLatLongEnvironment, "environment");
     ground_id_ = filtered_->add(ground_tex_, FilteredTextures::Kind::kTexture, "ground texture");
     if (scene_.ice.normal_map) normal_id_ = filtered_->add(normal_tex_, FilteredTextures::Kind::kTexture, "normal map");
-    if (!ice_tex_.rgb.empty()) ice_id_ = filtered_->add(ice_tex_, FilteredTextures::Kind::kTexture, "ice texture");
+    if (!ice_tex_.empty()) ice_id_ = filtered_->add(ice_tex_, FilteredTextures::Kind::kTexture, "ice texture");
   }
 }
 IceRenderer::~IceRenderer() = default;
@@ -244,6 +244,9 @@ struct FrameContext {
   }
 
   // ---- the liquid mask ----
+  // Not sample_bilinear: the mask is sim's float grid (not an image), and with `zero_outside`
+  // texels beyond the grid read 0 (dry) rather than the border texel, so the puddle ends at the
+  // grid's edge. Without it the arithmetic is sample_bilinear's with kClamp.
   double mask_bilinear(const std::vector<float>& v, double tx, double ty, bool zero_outside) const {
     const auto& p = mask->params();
     const double x0 = std::floor(tx), y0 = std::floor(ty);
@@ -268,7 +271,9 @@ struct FrameContext {
   // A tiled image at (s, t) in periods: bilinear, or filtered (`id`) with the footprint
   // (d(s,t)/dx, d(s,t)/dy; nullptr: none, the finest level).
   Rgb image_at(const RgbImage& img, int id, const Eigen::Vector2d& st, const Eigen::Vector2d* dx, const Eigen::Vector2d* dy) const {
-    if (!filtered) return img.bilinear(st.x() * img.width - 0.5, st.y() * img.height - 0.5, true);
+    if (!filtered)
+      return sample_bilinear_rgb(img, st.x() * img.width() - 0.5, st.y() * img.height() - 0.5, ImageWrap::kRepeat,
+                                 ImageWrap::kRepeat);
     return filtered->texture(id, st.x(), st.y(), dx ? *dx : Eigen::Vector2d::Zero(), dy ? *dy : Eigen::Vector2d::Zero());
   }
   // The same for an image projected along world axis `axis` with period `tile` at point x
@@ -291,7 +296,7 @@ struct FrameContext {
 
   // The ice's tdiff at p: the milky ice, or the projected image.
   Rgb ice_tdiff(const Vector3d& p, const MeshHit& h, const Differential* dp) const {
-    if (ice_tex.rgb.empty()) return Rgb::Constant(milky_ice(p, scene.ice.texture_scale));
+    if (ice_tex.empty()) return Rgb::Constant(milky_ice(p, scene.ice.texture_scale));
     return projected_image_at(ice_tex, ids.ice, p, dominant_axis(h.ng), scene.ice.texture_tile, dp);
   }
 
@@ -536,22 +541,22 @@ RgbImage IceRenderer::render() {
   const int w = camera_width(cam), h = camera_height(cam);
   const double z_top = std::max(bvh_.upper().z(), ground_z) + object_size_;
   const RayGenerator rays(cam, z_top);
-  RgbImage img(w, h);
+  RgbImage img = rgb_image(w, h);
   tbb::parallel_for(tbb::blocked_range2d<int>(0, h, 16, 0, w, 16), [&](const tbb::blocked_range2d<int>& r) {
     for (int j = r.rows().begin(); j < r.rows().end(); ++j)
       for (int i = r.cols().begin(); i < r.cols().end(); ++i) {
         const CameraRay ray = rays.generate_ray(i, j);
         if (!ray.ok) {
-          img.set(i, j, Rgb::Zero());
+          set_rgb(img, i, j, Rgb::Zero());
         } else if (!ctx.filtered) {
-          img.set(i, j, ctx.shade(ray.origin, ray.direction, nullptr));
+          set_rgb(img, i, j, ctx.shade(ray.origin, ray.direction, nullptr));
         } else {  // the footprint: the rays through the next pixel to the right and below
           const CameraRay rx = rays.generate_ray(i + 1, j);
           const CameraRay ry = rays.generate_ray(i, j + 1);
           const RayDifferential rd{{rx.origin - ray.origin, ry.origin - ray.origin},
                                    {rx.direction - ray.direction, ry.direction - ray.direction}};
           // A neighbour whose undistortion did not converge gives no footprint (finest level).
-          img.set(i, j, ctx.shade(ray.origin, ray.direction, rx.ok && ry.ok ? &rd : nullptr));
+          set_rgb(img, i, j, ctx.shade(ray.origin, ray.direction, rx.ok && ry.ok ? &rd : nullptr));
         }
       }
   });

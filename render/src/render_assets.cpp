@@ -1,14 +1,10 @@
 // Procedural assets and image files of the ice/liquid renderer (render_assets.h).
 
-#include <meltlab/core/image_header.h>
 #include <meltlab/render/render_assets.h>
-#include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
-#include <meltlab/core/input_file.h>
+#include <meltlab/core/image.h>
 #include <meltlab/core/limits.h>
-#include <meltlab/core/stderr_capture.h>
 
-#include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -19,24 +15,6 @@
 namespace meltlab::render {
 
 using Eigen::Vector3d;
-
-Vector3d RgbImage::bilinear(double x, double y, bool wrap_y) const {
-  const double fx0 = std::floor(x), fy0 = std::floor(y);
-  const double fx = x - fx0, fy = y - fy0;
-  // One modulo per axis (the neighbour wraps by a compare): this runs for every texture,
-  // environment and normal-map lookup of a frame.
-  auto wrap = [](long k, int n) { return static_cast<int>(((k % n) + n) % n); };
-  const int i0 = wrap(static_cast<long>(fx0), width), i1 = i0 + 1 == width ? 0 : i0 + 1;
-  int j0, j1;
-  if (wrap_y) {
-    j0 = wrap(static_cast<long>(fy0), height);
-    j1 = j0 + 1 == height ? 0 : j0 + 1;
-  } else {
-    j0 = std::clamp(static_cast<int>(fy0), 0, height - 1);
-    j1 = std::clamp(static_cast<int>(fy0) + 1, 0, height - 1);
-  }
-  return (1 - fy) * ((1 - fx) * at(i0, j0) + fx * at(i1, j0)) + fy * ((1 - fx) * at(i0, j1) + fx * at(i1, j1));
-}
 
 namespace {
 
@@ -99,9 +77,9 @@ Vector3d latlong_texel_direction(int i, int j, int w, int h) {
 }  // namespace
 
 RgbImage latlong_environment(const EnvironmentOptions& o) {
-  RgbImage env(o.width, o.height);
+  RgbImage env = rgb_image(o.width, o.height);
   if (o.constant >= 0) {
-    std::fill(env.rgb.begin(), env.rgb.end(), static_cast<float>(o.constant));
+    std::fill(env.values().begin(), env.values().end(), static_cast<float>(o.constant));
     return env;
   }
   const Vector3d sun = o.to_sun.normalized();
@@ -127,7 +105,7 @@ RgbImage latlong_environment(const EnvironmentOptions& o) {
         const int check = (static_cast<int>(std::floor(d.x() * r)) + static_cast<int>(std::floor(d.y() * r))) & 1;
         c = o.floor * (check ? 1.0 : 1.0 - o.floor_checker);
       }
-      env.set(i, j, c);
+      set_rgb(env, i, j, c);
     }
   }
   return env;
@@ -137,11 +115,11 @@ Vector3d sample_latlong(const RgbImage& env, const Vector3d& dir) {
   const Vector3d d = dir.normalized();
   const double u = std::atan2(d.y(), d.x()) / (2 * std::numbers::pi) + 0.5;
   const double v = std::acos(std::clamp(d.z(), -1.0, 1.0)) / std::numbers::pi;
-  return env.bilinear(u * env.width - 0.5, v * env.height - 0.5, false);
+  return sample_bilinear_rgb(env, u * env.width() - 0.5, v * env.height() - 0.5, ImageWrap::kRepeat, ImageWrap::kClamp);
 }
 
 RgbImage ground_texture(int size, std::uint64_t seed) {
-  RgbImage img(size, size);
+  RgbImage img = rgb_image(size, size);
   const Vector3d light(0.62, 0.58, 0.52), dark(0.42, 0.40, 0.37), grout(0.25, 0.24, 0.22);
   for (int j = 0; j < size; ++j)
     for (int i = 0; i < size; ++i) {
@@ -153,13 +131,13 @@ RgbImage ground_texture(int size, std::uint64_t seed) {
       const double eu = std::min(tu - std::floor(tu), std::ceil(tu) - tu), ev = std::min(tv - std::floor(tv), std::ceil(tv) - tv);
       Vector3d c = (alt ? light : dark) * (0.75 + 0.5 * n);
       if (std::min(eu, ev) < 0.025) c = grout;
-      img.set(i, j, c.cwiseMin(1.0));
+      set_rgb(img, i, j, c.cwiseMin(1.0));
     }
   return img;
 }
 
 RgbImage normal_map(int size, double bump, std::uint64_t seed) {
-  RgbImage img(size, size);
+  RgbImage img = rgb_image(size, size);
   auto height = [&](int i, int j) {
     return periodic_fbm((((i % size) + size) % size + 0.5) / size, (((j % size) + size) % size + 0.5) / size, 6, seed);
   };
@@ -169,7 +147,7 @@ RgbImage normal_map(int size, double bump, std::uint64_t seed) {
       const double dx = (height(i + 1, j) - height(i - 1, j)) * 0.5 * size * bump / 16.0;
       const double dy = (height(i, j + 1) - height(i, j - 1)) * 0.5 * size * bump / 16.0;
       const Vector3d n = Vector3d(-dx, -dy, 1.0).normalized();
-      img.set(i, j, 0.5 * n + Vector3d::Constant(0.5));  // inverse of Eq. 6.12
+      set_rgb(img, i, j, 0.5 * n + Vector3d::Constant(0.5));  // inverse of Eq. 6.12
     }
   return img;
 }
@@ -182,74 +160,43 @@ double milky_ice(const Vector3d& p, double scale) {
 
 // ---- files ----------------------------------------------------------------------------
 
-namespace {
-void write_with_oiio(const std::filesystem::path& file, const char* format, int w, int h, int channels, OIIO::TypeDesc file_type,
-                     OIIO::TypeDesc data_type, const void* data) {
-  write_atomically(file, [&](const std::filesystem::path& tmp) {
-    auto out = OIIO::ImageOutput::create(format);
-    if (!out) throw InputError(fmt::format("{}: cannot write {}: {}", file.string(), format, OIIO::geterror()));
-    OIIO::ImageSpec spec(w, h, channels, file_type);
-    bool ok = out->open(tmp.string(), spec);
-    if (ok) ok = out->write_image(data_type, data);
-    const bool closed = out->close();
-    std::string err = out->geterror();
-    if (err.empty()) err = OIIO::geterror();
-    if (!ok || !closed || !err.empty()) throw InputError(fmt::format("{}: cannot write {}: {}", file.string(), format, err));
-  });
-}
-}  // namespace
-
-void write_exr(const std::filesystem::path& file, const RgbImage& image) {
-  write_with_oiio(file, "exr", image.width, image.height, 3, OIIO::TypeDesc::HALF, OIIO::TypeDesc::FLOAT, image.rgb.data());
-}
+void write_exr(const std::filesystem::path& file, const RgbImage& image) { write_image(file, image); }
 
 void write_png(const std::filesystem::path& file, const RgbImage& image, double exposure, double gamma) {
-  std::vector<std::uint8_t> px(image.rgb.size());
+  Image8 px(image.width(), image.height(), 3);
   for (std::size_t k = 0; k < px.size(); ++k) {
-    const double x = std::clamp(exposure * static_cast<double>(image.rgb[k]), 0.0, 1.0);
-    px[k] = static_cast<std::uint8_t>(std::lround(std::pow(x, 1.0 / gamma) * 255.0));
+    const double x = std::clamp(exposure * static_cast<double>(image.values()[k]), 0.0, 1.0);
+    px.values()[k] = static_cast<std::uint8_t>(std::lround(std::pow(x, 1.0 / gamma) * 255.0));
   }
-  write_with_oiio(file, "png", image.width, image.height, 3, OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT8, px.data());
+  write_image(file, px);
 }
 
 void write_gray_png(const std::filesystem::path& file, const std::vector<float>& values, int width, int height, float white,
                     bool flip_y) {
-  std::vector<std::uint8_t> px(static_cast<std::size_t>(width) * height);
+  Image8 px(width, height, 1);
   for (int j = 0; j < height; ++j)
     for (int i = 0; i < width; ++i) {
       const int src_row = flip_y ? height - 1 - j : j;
       const double x = static_cast<double>(values[static_cast<std::size_t>(src_row) * width + i] / white);
-      px[static_cast<std::size_t>(j) * width + i] = static_cast<std::uint8_t>(std::lround(std::clamp(x, 0.0, 1.0) * 255.0));
+      px.at(i, j) = static_cast<std::uint8_t>(std::lround(std::clamp(x, 0.0, 1.0) * 255.0));
     }
-  write_with_oiio(file, "png", width, height, 1, OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT8, px.data());
+  write_image(file, px);
 }
 
 RgbImage read_rgb_image(const std::filesystem::path& file) {
-  check_input_file(file, "image");
-  check_declared_image_size(file);  // before OpenImageIO allocates anything from the header
-  const StderrCapture quiet;  // libpng prints its errors itself; ours is the one line
-  auto in = OIIO::ImageInput::open(file.string());
-  if (!in) throw InputError(fmt::format("{}: cannot read image: {}", file.string(), one_line(OIIO::geterror())));
-  const OIIO::ImageSpec spec = in->spec();
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1)
-    throw InputError(fmt::format("{}: the image holds no pixels", file.string()));
-  const std::int64_t pixels = static_cast<std::int64_t>(spec.width) * spec.height;
-  if (pixels > input_limits().image_pixels || spec.nchannels > 64)
-    throw InputError(fmt::format("{}: image of {}x{} pixels and {} channels exceeds the limit of {} pixels (raise it with "
-                                 "--limits image_pixels=N)",
-                                 file.string(), spec.width, spec.height, spec.nchannels, input_limits().image_pixels));
-  std::vector<float> px(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data()))
-    throw InputError(fmt::format("{}: cannot read image: {}", file.string(), one_line(in->geterror())));
-  in->close();
-  RgbImage img(spec.width, spec.height);
-  const int grey = spec.nchannels < 3;  // 1 or 2 channels: grey (+ alpha)
-  for (std::size_t k = 0; k < static_cast<std::size_t>(spec.width) * spec.height; ++k)
-    for (std::size_t c = 0; c < 3; ++c) {
-      const float v = px[k * static_cast<std::size_t>(spec.nchannels) + (grey ? 0 : c)];
-      if (!std::isfinite(v)) throw InputError(fmt::format("{}: pixel {} is not finite", file.string(), k));
-      img.rgb[3 * k + c] = v;
-    }
+  // OpenImageIO's default alpha handling (colours multiplied by alpha), as this reader always had.
+  const ImageF px = read_image(file, input_limits().image_pixels, ImageAlpha::kAssociated);
+  RgbImage img = rgb_image(px.width(), px.height());
+  const int grey = px.channels() < 3;  // 1 or 2 channels: grey (+ alpha)
+  for (int j = 0; j < px.height(); ++j)
+    for (int i = 0; i < px.width(); ++i)
+      for (int c = 0; c < 3; ++c) {
+        const float v = px.at(i, j, grey ? 0 : c);
+        if (!std::isfinite(v))
+          throw InputError(fmt::format("{}: pixel {} is not finite", file.string(),
+                                       static_cast<std::size_t>(j) * static_cast<std::size_t>(px.width()) + i));
+        img.at(i, j, c) = v;
+      }
   return img;
 }
 
@@ -307,31 +254,35 @@ void cube_face(const Vector3d& c, int& face, double& s, double& t) {
 
 RgbImage latlong_from_cube(const RgbImage& img, EnvironmentLayout layout, const std::filesystem::path& file) {
   const CubeGeometry g = cube_geometry(layout);
-  const int F = img.width / g.cols;
-  if (F < 1 || img.width != g.cols * F || img.height != g.rows * F)
+  const int F = img.width() / g.cols;
+  if (F < 1 || img.width() != g.cols * F || img.height() != g.rows * F)
     throw InputError(fmt::format("{}: a {} cube map must be {} x {} square faces, not {} x {} pixels", file.string(),
-                                 environment_layout_name(layout), g.cols, g.rows, img.width, img.height));
-  auto texel = [&](int face, int x, int y) {
+                                 environment_layout_name(layout), g.cols, g.rows, img.width(), img.height()));
+  // The six faces as images of their own (a rotated cell turned upright), so each lookup
+  // clamps at its face's edge texels.
+  std::array<RgbImage, 6> faces;
+  for (int face = 0; face < 6; ++face) {
     const CubeCell& cell = g.cells[static_cast<std::size_t>(face)];
-    if (cell.rotated) {
-      x = F - 1 - x;
-      y = F - 1 - y;
-    }
-    return img.at(cell.col * F + x, cell.row * F + y);
-  };
-  RgbImage out(4 * F, 2 * F);
-  for (int j = 0; j < out.height; ++j) {
-    for (int i = 0; i < out.width; ++i) {
-      const Vector3d d = latlong_texel_direction(i, j, out.width, out.height);
+    faces[static_cast<std::size_t>(face)] = rgb_image(F, F);
+    for (int y = 0; y < F; ++y)
+      for (int x = 0; x < F; ++x) {
+        const int sx = cell.rotated ? F - 1 - x : x, sy = cell.rotated ? F - 1 - y : y;
+        for (int c = 0; c < 3; ++c)
+          faces[static_cast<std::size_t>(face)].at(x, y, c) = img.at(cell.col * F + sx, cell.row * F + sy, c);
+      }
+  }
+  RgbImage out = rgb_image(4 * F, 2 * F);
+  for (int j = 0; j < out.height(); ++j) {
+    for (int i = 0; i < out.width(); ++i) {
+      const Vector3d d = latlong_texel_direction(i, j, out.width(), out.height());
       int face = 0;
       double s = 0, t = 0;
       cube_face(Vector3d(-d.y(), d.z(), d.x()), face, s, t);  // world -> the cube's y-up frame
+      // Clamped to the face's texel centres first (not only the neighbours, as kClamp does):
+      // outside them the lookup returns the edge texel itself rather than a blend of it with itself.
       const double x = std::clamp(s * F - 0.5, 0.0, F - 1.0), y = std::clamp(t * F - 0.5, 0.0, F - 1.0);
-      const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
-      const int x1 = std::min(x0 + 1, F - 1), y1 = std::min(y0 + 1, F - 1);
-      const double fx = x - x0, fy = y - y0;
-      out.set(i, j, (1 - fy) * ((1 - fx) * texel(face, x0, y0) + fx * texel(face, x1, y0)) +
-                        fy * ((1 - fx) * texel(face, x0, y1) + fx * texel(face, x1, y1)));
+      set_rgb(out, i, j,
+              sample_bilinear_rgb(faces[static_cast<std::size_t>(face)], x, y, ImageWrap::kClamp, ImageWrap::kClamp));
     }
   }
   return out;
@@ -361,7 +312,7 @@ std::optional<EnvironmentLayout> environment_layout_from_name(const std::string&
 RgbImage read_environment(const std::filesystem::path& file, EnvironmentLayout layout) {
   RgbImage img = read_rgb_image(file);
   if (layout == EnvironmentLayout::kAuto) {
-    const int w = img.width, h = img.height;
+    const int w = img.width(), h = img.height();
     if (w == 2 * h) layout = EnvironmentLayout::kLatLong;
     else if (2 * w == 3 * h) layout = EnvironmentLayout::kCube3x2;
     else if (h == 6 * w) layout = EnvironmentLayout::kCube1x6;

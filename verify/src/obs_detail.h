@@ -11,7 +11,7 @@
 
 namespace meltlab::verify::detail {
 
-/// Width x height of an image from its header only (no pixel decoding). Throws InputError
+/// Width x height of an image from its header only (meltlab::read_image_info). Throws InputError
 /// "<file>: <problem>" like read_image for missing, empty, unrecognised or 0-size images.
 cv::Size read_image_size(const std::filesystem::path& file);
 

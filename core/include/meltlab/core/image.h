@@ -8,6 +8,8 @@
 // Values: float images are linear radiance or any scalar field; 8-bit images are encoded
 // display values 0..255.
 
+#include <meltlab/core/limits.h>
+
 #include <Eigen/Core>
 
 #include <cstddef>
@@ -70,16 +72,51 @@ enum class ImageWrap {
 /// integers, with the given addressing per axis.
 double sample_bilinear(const ImageF& image, double x, double y, int c, ImageWrap wrap_x, ImageWrap wrap_y);
 
-/// The largest image a reader accepts unless told otherwise, in pixels (width * height):
-/// 2^28 = 268 M pixels (16384 x 16384); a corrupt or hostile header must not make a reader
-/// allocate gigabytes. Readers take the limit as an argument so a user can raise it.
-inline constexpr std::int64_t kDefaultMaxImagePixels = std::int64_t{1} << 28;
+/// Bilinear lookup of channels 0..2 at (x, y), as sample_bilinear per channel (bitwise the
+/// same values) with the neighbour indices computed once: the renderer's texture lookups.
+Eigen::Vector3d sample_bilinear_rgb(const ImageF& image, double x, double y, ImageWrap wrap_x, ImageWrap wrap_y);
+
+/// How an image file stores its values (what read_image converted from, what write_image
+/// converts to). Integer files map 0..max to 0..1.
+enum class PixelFormat {
+  kUint8,   ///< 8 bits (also for signed 8-bit files, remapped by OpenImageIO)
+  kUint16,  ///< 16 bits (also for signed 16-bit files)
+  kHalf,    ///< 16-bit float (OpenEXR's default)
+  kFloat,   ///< 32-bit float (and anything wider: doubles, 32-bit integers)
+};
+
+/// Whether read_image leaves colours as stored or multiplies them by alpha.
+enum class ImageAlpha {
+  kAsStored,    ///< colours as the file stores them (no premultiplication)
+  kAssociated,  ///< OpenImageIO's default: colours multiplied by alpha for files with unassociated alpha
+};
+
+/// Reads any image OpenImageIO reads (EXR, HDR, PNG, JPEG, TIFF, ...) as float, all channels
+/// as stored (8- and 16-bit values normalised to [0, 1], no colour transform). Checks the file
+/// (check_input_file) and the size its header declares (check_declared_image_size) BEFORE
+/// OpenImageIO allocates anything, then the opened size against `max_pixels`; a truncated or
+/// corrupt file is refused, also when OpenImageIO only reports it as a pending error. If
+/// `stored` is given it receives the file's value format. Throws a one-line InputError
+/// "<file>: <problem>".
+ImageF read_image(const std::filesystem::path& file, std::int64_t max_pixels = input_limits().image_pixels,
+                  ImageAlpha alpha = ImageAlpha::kAsStored, PixelFormat* stored = nullptr);
+
+struct ImageFileInfo {
+  int width = 0, height = 0, channels = 0;
+  PixelFormat format = PixelFormat::kUint8;
+};
+/// The size, channels and value format of an image file from its header, with read_image's
+/// checks and errors (the pixels are not decoded).
+ImageFileInfo read_image_info(const std::filesystem::path& file, std::int64_t max_pixels = input_limits().image_pixels);
 
 /// Writes a float image through OpenImageIO, atomically (temporary file + rename). The format
 /// follows the extension: .exr as half float (linear values as they are); .png/.jpg/.tif as
 /// 8 bits, each value v stored as round(255 * clamp(v, 0, 1)) (no transfer curve: encode first
 /// if the values are linear radiance). 1, 3 or 4 channels. Throws InputError naming the file.
 void write_image(const std::filesystem::path& file, const ImageF& image);
+/// The same with the stored format given: kUint8/kUint16 store round(max * clamp(v, 0, 1)),
+/// kHalf/kFloat the values (for formats that hold floats: EXR, TIFF); `jpeg_quality` as below.
+void write_image(const std::filesystem::path& file, const ImageF& image, PixelFormat stored, int jpeg_quality = 95);
 /// Writes an 8-bit image (1, 3 or 4 channels) through OpenImageIO, atomically; `jpeg_quality`
 /// (1..100) is used for .jpg/.jpeg.
 void write_image(const std::filesystem::path& file, const Image8& image, int jpeg_quality = 95);

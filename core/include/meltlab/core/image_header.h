@@ -24,5 +24,7 @@ std::optional<DeclaredImageSize> declared_image_size(const std::filesystem::path
 /// Throws InputError naming the file if the declared size exceeds input_limits().image_pixels
 /// (or a side is not positive). Files whose size cannot be read from the header pass.
 void check_declared_image_size(const std::filesystem::path& file);
+/// The same against `max_pixels`.
+void check_declared_image_size(const std::filesystem::path& file, std::int64_t max_pixels);
 
 }  // namespace meltlab

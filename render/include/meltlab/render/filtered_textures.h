@@ -9,12 +9,12 @@
 // temporary directory; the destructor invalidates the files in the cache and removes them.
 // All instances share one process-wide TextureSystem that is never destroyed (see the .cpp).
 // Cost (bench_render BM_TextureLookup): ~0.6 µs per point lookup and ~1.5 µs per 8:1
-// anisotropic one, against ~30 ns for RgbImage::bilinear.
+// anisotropic one, against ~30 ns for sample_bilinear_rgb.
 //
 // Conventions equal the bilinear path of render_assets.h, so that a lookup with a zero
 // footprint is the bilinear lookup of the finest level (tested):
 //   * 2D textures at (s, t) in texture periods, texel (i, j) at ((i + ½)/w, (j + ½)/h),
-//     periodic in both directions (RgbImage::bilinear with wrap_y);
+//     periodic in both directions (sample_bilinear_rgb repeating in both);
 //   * lat-long environments in OpenImageIO's z-up convention, which is sample_latlong's.
 // Footprints are the derivatives of the lookup coordinates per pixel step in x and in y
 // (d(s,t)/dx, d(s,t)/dy; dR/dx, dR/dy for environments), from ray differentials.

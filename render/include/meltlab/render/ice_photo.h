@@ -118,8 +118,9 @@ cv::Mat render_ice_photo(const sim::physics::IceFraction& ice, const Camera& cam
 cv::Mat ice_true_mask(const sim::physics::IceFraction& ice, const Camera& camera, double threshold = 0.5,
                       double ground_z_m = 0.0);
 
-/// Writes an 8-bit BGR (or gray) image as JPEG with `quality` (1..100) through OpenImageIO,
-/// atomically (temporary file + rename). Throws InputError on failure.
+/// Writes an 8-bit BGR (or gray) image as JPEG with `quality` (1..100) through meltlab's
+/// write_image (the format follows the extension: name the file .jpg), atomically. Throws
+/// InputError on failure.
 void write_jpeg(const std::filesystem::path& file, const cv::Mat& image, int quality = 90);
 
 }  // namespace meltlab::render

@@ -7,6 +7,8 @@
 // Directions are world vectors with z up. Lat-long: u = atan2(y, x)/2π + ½ (column),
 // v = acos(z)/π (row 0 = zenith). Images are row-major RGB float, linear.
 
+#include <meltlab/core/image.h>
+
 #include <Eigen/Core>
 
 #include <cstdint>
@@ -17,26 +19,21 @@
 
 namespace meltlab::render {
 
-struct RgbImage {
-  int width = 0, height = 0;
-  std::vector<float> rgb;  ///< 3 floats per pixel, row-major, row 0 at the top
-
-  RgbImage() = default;
-  RgbImage(int w, int h) : width(w), height(h), rgb(static_cast<std::size_t>(w) * h * 3, 0.0f) {}
-  Eigen::Vector3d at(int i, int j) const {
-    const std::size_t k = 3 * (static_cast<std::size_t>(j) * width + i);
-    return {static_cast<double>(rgb[k]), static_cast<double>(rgb[k + 1]), static_cast<double>(rgb[k + 2])};
-  }
-  void set(int i, int j, const Eigen::Vector3d& c) {
-    const std::size_t k = 3 * (static_cast<std::size_t>(j) * width + i);
-    rgb[k] = static_cast<float>(c.x());
-    rgb[k + 1] = static_cast<float>(c.y());
-    rgb[k + 2] = static_cast<float>(c.z());
-  }
-  /// Bilinear lookup at continuous pixel coordinates (pixel centres at integers), wrapping
-  /// in x; in y wrapping (`wrap_y`) or clamping.
-  Eigen::Vector3d bilinear(double x, double y, bool wrap_y) const;
-};
+/// Linear RGB float image: meltlab's image type with 3 channels (lookups: sample_bilinear_rgb).
+using RgbImage = ImageF;
+/// A w x h RGB image of zeros.
+inline RgbImage rgb_image(int w, int h) { return RgbImage(w, h, 3); }
+/// Pixel (i, j) of an RGB image as a colour, and the reverse.
+inline Eigen::Vector3d rgb_at(const RgbImage& img, int i, int j) {
+  const float* p = &img.at(i, j);
+  return {static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2])};
+}
+inline void set_rgb(RgbImage& img, int i, int j, const Eigen::Vector3d& c) {
+  float* p = &img.at(i, j);
+  p[0] = static_cast<float>(c.x());
+  p[1] = static_cast<float>(c.y());
+  p[2] = static_cast<float>(c.z());
+}
 
 /// How an environment image file stores directions.
 ///   lat-long: 2:1, the convention above (OpenImageIO's z-up lat-long).
@@ -84,7 +81,7 @@ void write_png(const std::filesystem::path& file, const RgbImage& image, double 
 /// 8-bit gray PNG: clamp(value / white)·255.
 void write_gray_png(const std::filesystem::path& file, const std::vector<float>& values, int width, int height,
                     float white = 1.0f, bool flip_y = true);
-/// Reads any image OpenImageIO reads (EXR, HDR, PNG, JPEG, TIFF, ...) as RGB floats: the
+/// Reads any image meltlab::read_image reads (EXR, HDR, PNG, JPEG, TIFF, ...) as RGB floats: the
 /// stored values (linear for EXR/HDR; 8- and 16-bit files normalised to [0, 1] without a
 /// colour transform), grey replicated, alpha and extra channels dropped. Throws InputError
 /// naming the file if it cannot be read or holds no pixels.

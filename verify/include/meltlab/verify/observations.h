@@ -18,6 +18,7 @@
 //   ground_truth: ../truth/giraffe.json   # optional, kept apart from the images
 //   mass_series: mass.csv                 # optional time series (see read_time_series)
 
+#include <meltlab/core/image.h>
 #include <meltlab/render/camera.h>
 #include <meltlab/verify/region.h>
 
@@ -80,13 +81,22 @@ struct ObservationSequence {
 /// no existing file at all is. Throws InputError "<manifest>:<line>: <problem>".
 ObservationSequence load_observations(const std::filesystem::path& manifest);
 
-/// Reads an image through OpenImageIO (JPEG, PNG, TIFF, EXR, ...) as cv::Mat: 8-bit images
-/// as CV_8UC1/CV_8UC3 (BGR order, as OpenCV), 16-bit as CV_16U*, float as CV_32F*. Alpha is
-/// dropped. Throws InputError "<file>: <problem>" for missing, unreadable, truncated or
-/// zero-size images.
+/// The edge between meltlab::ImageF (RGB) and OpenCV (BGR): the first 3 channels as BGR (1 or 2
+/// channels: the first as grey, alpha dropped) of depth CV_8U/CV_16U (values 0..1 scaled to
+/// the integers, rounded) or CV_32F (kHalf, kFloat: the values).
+cv::Mat mat_from_image(const ImageF& image, PixelFormat format);
+/// The inverse: a CV_8U/CV_16U/CV_32F cv::Mat (BGR or BGRA or grey) as RGB(A) or grey floats,
+/// integers divided by their maximum; `format` receives the depth's PixelFormat. Throws
+/// InputError for an empty cv::Mat or another depth.
+ImageF image_from_mat(const cv::Mat& mat, PixelFormat* format = nullptr);
+
+/// Reads an image with meltlab::read_image as cv::Mat: 8-bit images as CV_8UC1/CV_8UC3 (BGR
+/// order, as OpenCV), 16-bit as CV_16U*, float as CV_32F*. Alpha is dropped. Throws InputError
+/// "<file>: <problem>" for missing, unreadable, truncated or zero-size images.
 cv::Mat read_image(const std::filesystem::path& file);
 
-/// Writes a CV_8U/CV_32F image through OpenImageIO (format from the extension), atomically.
+/// Writes a CV_8U/CV_16U/CV_32F image with meltlab::write_image in the depth's format (format
+/// from the extension), atomically.
 void write_image(const std::filesystem::path& file, const cv::Mat& image);
 
 struct Segmentation {
