@@ -20,7 +20,10 @@ std::int64_t check_input_file(const fs::path& file, std::string_view kind) {
       throw InputError(fmt::format("{}: cannot read: {}", name, ec.message()));
     throw InputError(fmt::format("{}: no such file", name));
   }
-  if (fs::is_directory(st)) throw InputError(fmt::format("{}: is a folder, not a {} file", name, kind));
+  if (fs::is_directory(st)) {
+    const bool vowel = !kind.empty() && std::string_view("aeiou").find(kind.front()) != std::string_view::npos;
+    throw InputError(fmt::format("{}: is a folder, not {} {} file", name, vowel ? "an" : "a", kind));
+  }
   if (!fs::is_regular_file(st)) throw InputError(fmt::format("{}: not a regular file (a {} file is expected)", name, kind));
   const auto size = fs::file_size(file, ec);
   if (ec) throw InputError(fmt::format("{}: cannot read: {}", name, ec.message()));
