@@ -1,4 +1,4 @@
-// Photo-like ice rendering time (render/ice_photo.h): a 40 x 40 x 30 mm voxel block
+// Photo-like ice rendering time (render/integrator/ice_photo.h): a 40 x 40 x 30 mm voxel block
 // (h = 0.5 mm, 120 x 120 x 70 cells) on the ground, seen by a pinhole camera at 0.35 m, at
 // 320x240 ... 1280x960 and primary step h/4, h/2, h; one sample per pixel; shadows from the
 // light-transmittance grid (default) and, at the smallest size, the per-sample shadow march
@@ -9,7 +9,7 @@
 //   --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 
 #include <meltlab/datasets/molds.h>
-#include <meltlab/render/ice_photo.h>
+#include <meltlab/render/integrator/ice_photo.h>
 #include <meltlab/sim/physics/voxelize.h>
 
 #include <benchmark/benchmark.h>

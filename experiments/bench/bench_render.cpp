@@ -1,4 +1,4 @@
-// Frame time of the ice/liquid ray tracer (ice_renderer.h) on the bunny (bunny00, 75 408
+// Frame time of the ice/liquid ray tracer (integrator/ice_surface.h) on the bunny (bunny00, 75 408
 // triangles, the monograph's "bunny ≈ 69k" of Fig. 6.10) at 1024x768, automatic camera, a wet
 // ground (the mask after 60 deposit cycles of the bunny's footprint), and the cost of the
 // terms that a scene can switch off (the skip-what-is-not-needed rule of design.md):
@@ -22,8 +22,8 @@
 #include <meltlab/datasets/catalog.h>
 #include <meltlab/datasets/mesh_transforms.h>
 #include <meltlab/render/embree/mesh_bvh.h>
-#include <meltlab/render/filtered_textures.h>
-#include <meltlab/render/ice_renderer.h>
+#include <meltlab/render/texture/filtered.h>
+#include <meltlab/render/integrator/ice_surface.h>
 #include <meltlab/sim/liquid_mask.h>
 #include <meltlab/sim/mesh_io.h>
 

@@ -10,7 +10,7 @@
 // and read the medians.
 
 #include <meltlab/datasets/molds.h>
-#include <meltlab/render/silhouette.h>
+#include <meltlab/render/raster/silhouette.h>
 
 #include <benchmark/benchmark.h>
 #include <opencv2/imgproc.hpp>

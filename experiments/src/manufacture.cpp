@@ -4,7 +4,7 @@
 #include <meltlab/experiments/sequence_manifest.h>
 #include <meltlab/experiments/simulate_run.h>
 #include <meltlab/core/atomic_file.h>
-#include <meltlab/render/silhouette.h>
+#include <meltlab/render/raster/silhouette.h>
 #include <meltlab/core/error.h>
 #include <meltlab/sim/mesh_io.h>
 #include <meltlab/sim/physics/isosurface.h>

@@ -2,8 +2,8 @@
 
 #include <meltlab/core/run_folder.h>
 #include <meltlab/experiments/render_run.h>
-#include <meltlab/render/ice_renderer.h>
-#include <meltlab/render/render_assets.h>
+#include <meltlab/render/integrator/ice_surface.h>
+#include <meltlab/render/texture/assets.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
 #include <meltlab/experiments/provenance.h>

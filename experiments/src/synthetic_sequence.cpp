@@ -3,7 +3,7 @@
 #include <meltlab/experiments/sequence_manifest.h>
 #include <meltlab/experiments/run_replay.h>
 #include <meltlab/experiments/synthetic_sequence.h>
-#include <meltlab/render/silhouette.h>
+#include <meltlab/render/raster/silhouette.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
 #include <meltlab/core/image.h>

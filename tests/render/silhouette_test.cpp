@@ -1,9 +1,9 @@
-// Silhouette rasterizer (silhouette.h): exact pixel counts, fill rule, coverage, culling,
+// Silhouette rasterizer (raster/silhouette.h): exact pixel counts, fill rule, coverage, culling,
 // parallel determinism, clipping and lens distortion.
 
 #include <meltlab/datasets/molds.h>
 #include <meltlab/datasets/procedural.h>
-#include <meltlab/render/silhouette.h>
+#include <meltlab/render/raster/silhouette.h>
 #include <meltlab/core/error.h>
 
 #include <gtest/gtest.h>

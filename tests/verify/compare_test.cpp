@@ -2,7 +2,7 @@
 // renders themselves.
 
 #include <meltlab/datasets/procedural.h>
-#include <meltlab/render/silhouette.h>
+#include <meltlab/render/raster/silhouette.h>
 #include <meltlab/core/error.h>
 #include <meltlab/verify/compare.h>
 

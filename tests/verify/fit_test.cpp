@@ -6,7 +6,7 @@
 
 #include <meltlab/core/error.h>
 #include <meltlab/datasets/procedural.h>
-#include <meltlab/render/silhouette.h>
+#include <meltlab/render/raster/silhouette.h>
 #include <meltlab/verify/fit.h>
 #include <meltlab/verify/fit_parameters.h>
 

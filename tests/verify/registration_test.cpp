@@ -1,7 +1,7 @@
 // Registration recovers known similarity transforms applied to real mold silhouettes.
 
 #include <meltlab/datasets/molds.h>
-#include <meltlab/render/silhouette.h>
+#include <meltlab/render/raster/silhouette.h>
 #include <meltlab/core/error.h>
 #include <meltlab/verify/metrics.h>
 #include <meltlab/verify/registration.h>

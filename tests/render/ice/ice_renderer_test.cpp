@@ -1,13 +1,13 @@
-// The ice/liquid ray tracer (ice_renderer.h): analytic pixels of the ground (Eq. 2.13) and the
+// The ice/liquid ray tracer (integrator/ice_surface.h): analytic pixels of the ground (Eq. 2.13) and the
 // wet ground (Eq. 7.17), the Fresnel-weighted reflection and refraction of the ice (Eq. 6.11),
 // dispersion, the physically based reference on a sphere (Beer absorption), skipping, the BVH
 // refit, and small reference images.
 
 #include <meltlab/datasets/procedural.h>
 #include <meltlab/render/embree/mesh_bvh.h>
-#include <meltlab/render/ice_renderer.h>
-#include <meltlab/render/optics.h>
-#include <meltlab/render/render_assets.h>
+#include <meltlab/render/integrator/ice_surface.h>
+#include <meltlab/render/material/optics.h>
+#include <meltlab/render/texture/assets.h>
 #include <meltlab/core/error.h>
 
 #include <gtest/gtest.h>

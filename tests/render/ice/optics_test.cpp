@@ -1,7 +1,7 @@
-// Dielectric optics (optics.h): Fresnel (Eq. 6.9), Schlick (Eq. 6.10), reflection (Eq. 6.3),
+// Dielectric optics (material/optics.h): Fresnel (Eq. 6.9), Schlick (Eq. 6.10), reflection (Eq. 6.3),
 // refraction with total internal reflection (Eq. 6.7) and dispersion (Eq. 6.8).
 
-#include <meltlab/render/optics.h>
+#include <meltlab/render/material/optics.h>
 
 #include <gtest/gtest.h>
 

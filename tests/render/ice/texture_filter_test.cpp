@@ -1,13 +1,13 @@
-// Filtered texture lookups (filtered_textures.h), cube-map environments (render_assets.h),
-// the ray differentials that give the footprints (optics.h, MeshBvh), and the point of it all:
+// Filtered texture lookups (texture/filtered.h), cube-map environments (texture/assets.h),
+// the ray differentials that give the footprints (material/optics.h, MeshBvh), and the point of it all:
 // MIP-mapping brings a 1-sample-per-pixel frame closer to a supersampled one.
 
 #include <meltlab/datasets/procedural.h>
 #include <meltlab/render/embree/mesh_bvh.h>
-#include <meltlab/render/filtered_textures.h>
-#include <meltlab/render/ice_renderer.h>
-#include <meltlab/render/optics.h>
-#include <meltlab/render/render_assets.h>
+#include <meltlab/render/texture/filtered.h>
+#include <meltlab/render/integrator/ice_surface.h>
+#include <meltlab/render/material/optics.h>
+#include <meltlab/render/texture/assets.h>
 #include <meltlab/core/error.h>
 
 #include <fmt/format.h>
@@ -148,7 +148,7 @@ TEST(RayDifferentials, ShadingNormalDifferentialMatchesFiniteDifferences) {
 Vector3d analytic_sky(const Vector3d& d) { return Vector3d(0.5 + 0.4 * d.x(), 0.5 + 0.4 * d.y(), 0.5 + 0.4 * d.z()); }
 
 // The world direction through the centre of texel (x, y) of face f (px nx py ny pz nz) in the
-// cube frame of render_assets.h, written out from the face table (major axis, +column, +row).
+// cube frame of texture/assets.h, written out from the face table (major axis, +column, +row).
 Vector3d face_texel_direction(int f, double s, double t) {
   const double a = 2 * s - 1, b = 2 * t - 1;  // along +column and +row
   const Vector3d X = Vector3d::UnitX(), Y = Vector3d::UnitY(), Z = Vector3d::UnitZ();

@@ -1,10 +1,10 @@
-// Photo-like ice renderer (render/ice_photo.h): closed-form slabs (Beer–Lambert, shadowed
+// Photo-like ice renderer (render/integrator/ice_photo.h): closed-form slabs (Beer–Lambert, shadowed
 // ground, single scattering with the HG phase), ground texture through thin/thick ice,
 // determinism, camera geometry against the mesh rasterizer, and the segmentation round trip.
 
 #include <meltlab/datasets/procedural.h>
-#include <meltlab/render/ice_photo.h>
-#include <meltlab/render/silhouette.h>
+#include <meltlab/render/integrator/ice_photo.h>
+#include <meltlab/render/raster/silhouette.h>
 #include <meltlab/core/error.h>
 #include <meltlab/verify/metrics.h>
 #include <meltlab/verify/observations.h>

@@ -4,7 +4,7 @@
 //
 // The mesh (a mold or any closed mesh) is scaled to the requested ice mass, put on the
 // ground (z = 0) and voxelised; the solver melts it in warm air on an absorbent ground and
-// every interval a perspective camera above it takes a photo (render/ice_photo.h:
+// every interval a perspective camera above it takes a photo (render/integrator/ice_photo.h:
 // absorption and scattering in the ice, textured ground, blur, noise, JPEG).
 //   DIR/frames/frame_0001.jpg ...   the photos
 //   DIR/manifest.yaml               observation manifest (pinhole camera, interval, defaults)
@@ -17,7 +17,7 @@
 //   DIR/truth/meshes/frame_NNNN.ply ice surface (marching tetrahedra) every K-th photo
 // The manifest is written last.
 
-#include <meltlab/render/ice_photo.h>
+#include <meltlab/render/integrator/ice_photo.h>
 #include <meltlab/sim/physics/enthalpy.h>
 
 #include <filesystem>

@@ -10,8 +10,8 @@
 // Colours are linear RGB.
 
 #include <meltlab/render/camera.h>
-#include <meltlab/render/optics.h>
-#include <meltlab/render/render_assets.h>
+#include <meltlab/render/material/optics.h>
+#include <meltlab/render/texture/assets.h>
 #include <meltlab/sim/mesh.h>
 
 #include <array>
@@ -57,7 +57,7 @@ struct IceMaterial {
   /// axis of the geometric normal (as the normal map) with period `texture_tile`.
   std::filesystem::path texture_file;
   double texture_tile = 0.0;      ///< ice texture image period, mesh units; 0 = 20 % of the object's size
-  bool normal_map = false;        ///< Eq. 6.12 (replaces the normal; triplanar, see ice_renderer.h)
+  bool normal_map = false;        ///< Eq. 6.12 (replaces the normal; triplanar, see integrator/ice_surface.h)
   double normal_map_tile = 0.0;   ///< normal-map period, mesh units; 0 = 20 % of the object's size
   double normal_map_bump = 1.0;
   std::filesystem::path normal_map_file;  ///< non-empty: the normal map (rgb = N/2 + ½) read from this image

@@ -6,7 +6,7 @@
 // A frame whose photo is missing, unreadable or segments to nothing is reported and
 // skipped — never counted as P = 0 or 1.
 
-#include <meltlab/render/silhouette.h>
+#include <meltlab/render/raster/silhouette.h>
 #include <meltlab/sim/mesh.h>
 #include <meltlab/sim/mesh_sequence.h>
 #include <meltlab/verify/metrics.h>

@@ -11,7 +11,7 @@
 // Cost (bench_render BM_TextureLookup): ~0.6 µs per point lookup and ~1.5 µs per 8:1
 // anisotropic one, against ~30 ns for sample_bilinear_rgb.
 //
-// Conventions equal the bilinear path of render_assets.h, so that a lookup with a zero
+// Conventions equal the bilinear path of texture/assets.h, so that a lookup with a zero
 // footprint is the bilinear lookup of the finest level (tested):
 //   * 2D textures at (s, t) in texture periods, texel (i, j) at ((i + ½)/w, (j + ½)/h),
 //     periodic in both directions (sample_bilinear_rgb repeating in both);
@@ -20,7 +20,7 @@
 // (d(s,t)/dx, d(s,t)/dy; dR/dx, dR/dy for environments), from ray differentials.
 // Lookups are thread-safe (the TextureSystem keeps per-thread state).
 
-#include <meltlab/render/render_assets.h>
+#include <meltlab/render/texture/assets.h>
 
 #include <Eigen/Core>
 

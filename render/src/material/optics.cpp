@@ -1,6 +1,6 @@
-// Dielectric optics (optics.h).
+// Dielectric optics (material/optics.h).
 
-#include <meltlab/render/optics.h>
+#include <meltlab/render/material/optics.h>
 
 #include <algorithm>
 #include <cmath>

@@ -37,10 +37,10 @@
 //
 // Texture lookups (scene `texture_filter`): `bilinear` (default) point-samples the environment,
 // the ground texture and the normal map bilinearly at their finest level, as the monograph's GPU
-// did; `mipmap` looks them up through OpenImageIO's TextureSystem (filtered_textures.h) with
+// did; `mipmap` looks them up through OpenImageIO's TextureSystem (texture/filtered.h) with
 // the pixel's footprint: ray differentials of the primary rays (the rays through the next pixel
 // to the right and below), carried to the ground plane and to the ice's tangent plane, and
-// through reflection and refraction with the change of the interpolated normal (optics.h's
+// through reflection and refraction with the change of the interpolated normal (material/optics.h's
 // reflect_differential / refract_differential; pbrt's scheme). The physical model's paths
 // through the ice look up the finest level. The milky-ice texture is solid and procedural
 // (not filtered).
@@ -54,7 +54,7 @@
 
 #include <meltlab/render/camera.h>
 #include <meltlab/render/embree/mesh_bvh.h>
-#include <meltlab/render/render_assets.h>
+#include <meltlab/render/texture/assets.h>
 #include <meltlab/render/render_scene.h>
 #include <meltlab/sim/liquid_mask.h>
 

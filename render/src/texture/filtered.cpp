@@ -1,6 +1,6 @@
-// Filtered lookups through OpenImageIO's TextureSystem (filtered_textures.h).
+// Filtered lookups through OpenImageIO's TextureSystem (texture/filtered.h).
 
-#include <meltlab/render/filtered_textures.h>
+#include <meltlab/render/texture/filtered.h>
 #include <meltlab/core/error.h>
 
 #include <OpenImageIO/imagebuf.h>

@@ -1,4 +1,4 @@
-// Silhouette rasterizer (see silhouette.h for the conventions).
+// Silhouette rasterizer (see raster/silhouette.h for the conventions).
 //
 // Pipeline of one frame:
 //  1. every vertex is projected to homogeneous "grid" coordinates (xh, yh, w): the grid is the
@@ -17,7 +17,7 @@
 //  5. distorted pinhole: steps 1-4 render an ideal (undistorted) canvas, resampled through maps
 //     built once per renderer.
 
-#include <meltlab/render/silhouette.h>
+#include <meltlab/render/raster/silhouette.h>
 #include <meltlab/core/error.h>
 
 #include <fmt/format.h>

@@ -1,6 +1,6 @@
-// Procedural assets and image files of the ice/liquid renderer (render_assets.h).
+// Procedural assets and image files of the ice/liquid renderer (texture/assets.h).
 
-#include <meltlab/render/render_assets.h>
+#include <meltlab/render/texture/assets.h>
 #include <meltlab/core/error.h>
 #include <meltlab/core/image.h>
 #include <meltlab/core/limits.h>
@@ -228,7 +228,7 @@ CubeGeometry cube_geometry(EnvironmentLayout layout) {
 }
 
 // The face of cube-frame direction c and its coordinates on it, s to the right and t down,
-// in [0, 1] (the face table of render_assets.h).
+// in [0, 1] (the face table of texture/assets.h).
 void cube_face(const Vector3d& c, int& face, double& s, double& t) {
   const Vector3d a = c.cwiseAbs();
   double sc = 0, tc = 0, major = 0;

@@ -1,8 +1,8 @@
-// Ray tracer of melting ice on a wet ground (ice_renderer.h).
+// Ray tracer of melting ice on a wet ground (integrator/ice_surface.h).
 
-#include <meltlab/render/ice_renderer.h>
-#include <meltlab/render/filtered_textures.h>
-#include <meltlab/render/optics.h>
+#include <meltlab/render/integrator/ice_surface.h>
+#include <meltlab/render/texture/filtered.h>
+#include <meltlab/render/material/optics.h>
 #include <meltlab/core/error.h>
 
 #include <fmt/format.h>

@@ -1,6 +1,6 @@
-// Photo-like rendering of voxel ice on a textured ground (see ice_photo.h).
+// Photo-like rendering of voxel ice on a textured ground (see integrator/ice_photo.h).
 
-#include <meltlab/render/ice_photo.h>
+#include <meltlab/render/integrator/ice_photo.h>
 #include <meltlab/core/error.h>
 #include <meltlab/core/image.h>
 
