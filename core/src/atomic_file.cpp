@@ -11,8 +11,7 @@ namespace meltlab {
 
 std::filesystem::path temporary_path_for(const std::filesystem::path& target) {
   const auto dir = target.parent_path();
-  const auto name =
-      fmt::format(".{}.partial-{}{}", target.stem().string(), ::getpid(), target.extension().string());
+  const auto name = fmt::format(".{}.partial-{}{}", target.stem().string(), ::getpid(), target.extension().string());
   return dir.empty() ? std::filesystem::path(name) : dir / name;
 }
 

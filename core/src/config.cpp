@@ -19,8 +19,8 @@ struct SectionState {
   YAML::Node node;  ///< the mapping; undefined for the holder of a free-standing value
   std::shared_ptr<const std::string> file;
   std::string path;
-  int line = 0;             ///< 1-based; 0 unknown
-  bool is_section = false;  ///< false: only a holder of sections made from a free-standing value
+  int line = 0;                    ///< 1-based; 0 unknown
+  bool is_section = false;         ///< false: only a holder of sections made from a free-standing value
   std::vector<std::string> asked;  ///< keys asked for (present or not), in order
   std::set<std::string> read;
   std::vector<std::shared_ptr<SectionState>> children;
@@ -98,7 +98,9 @@ std::shared_ptr<SectionState> make_section(const YAML::Node& node, std::shared_p
   return s;
 }
 
-std::string child_path(const std::string& parent, const std::string& key) { return parent.empty() ? key : parent + "." + key; }
+std::string child_path(const std::string& parent, const std::string& key) {
+  return parent.empty() ? key : parent + "." + key;
+}
 
 void finish_state(const SectionState& s) {
   if (s.is_section) {
@@ -244,7 +246,8 @@ std::vector<double> ConfigValue::as_numbers(std::size_t n_min, std::size_t n_max
 }
 
 Eigen::Vector3d ConfigValue::as_vec3() const {
-  if (!node_.IsSequence() || node_.size() != 3) fail_value(fmt::format("must be a list of 3 numbers (got {})", got(node_)));
+  if (!node_.IsSequence() || node_.size() != 3)
+    fail_value(fmt::format("must be a list of 3 numbers (got {})", got(node_)));
   const std::vector<ConfigValue> e = items();
   return {e[0].as<double>(), e[1].as<double>(), e[2].as<double>()};
 }

@@ -63,7 +63,8 @@ namespace {
 
 std::string lower_extension(const fs::path& file) {
   std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
   return ext;
 }
 
@@ -114,8 +115,8 @@ void write_image(const fs::path& file, const ImageF& image, PixelFormat stored, 
     case PixelFormat::kHalf:
     case PixelFormat::kFloat:
       write_with_oiio(file, image.width(), image.height(), image.channels(),
-                      stored == PixelFormat::kHalf ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT, OIIO::TypeDesc::FLOAT,
-                      image.data(), jpeg_quality);
+                      stored == PixelFormat::kHalf ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT,
+                      OIIO::TypeDesc::FLOAT, image.data(), jpeg_quality);
       return;
     case PixelFormat::kUint8: {
       Image8 bytes(image.width(), image.height(), image.channels());
@@ -161,11 +162,15 @@ std::string pending_error(const OIIO::ImageInput* in) {
 PixelFormat pixel_format_of(OIIO::TypeDesc type) {
   switch (type.basetype) {
     case OIIO::TypeDesc::UINT8:
-    case OIIO::TypeDesc::INT8: return PixelFormat::kUint8;
+    case OIIO::TypeDesc::INT8:
+      return PixelFormat::kUint8;
     case OIIO::TypeDesc::UINT16:
-    case OIIO::TypeDesc::INT16: return PixelFormat::kUint16;
-    case OIIO::TypeDesc::HALF: return PixelFormat::kHalf;
-    default: return PixelFormat::kFloat;
+    case OIIO::TypeDesc::INT16:
+      return PixelFormat::kUint16;
+    case OIIO::TypeDesc::HALF:
+      return PixelFormat::kHalf;
+    default:
+      return PixelFormat::kFloat;
   }
 }
 
@@ -176,7 +181,8 @@ std::unique_ptr<OIIO::ImageInput> open_image(const fs::path& file, std::int64_t 
   OIIO::ImageSpec config;
   if (alpha == ImageAlpha::kAsStored) config.attribute("oiio:UnassociatedAlpha", 1);
   auto in = OIIO::ImageInput::open(file.string(), &config);
-  if (!in) throw InputError(fmt::format("{}: not a readable image: {}", file.string(), one_line(pending_error(nullptr))));
+  if (!in)
+    throw InputError(fmt::format("{}: not a readable image: {}", file.string(), one_line(pending_error(nullptr))));
   const OIIO::ImageSpec& spec = in->spec();
   auto refuse = [&](const std::string& problem) {
     pending_error(in.get());
@@ -218,8 +224,8 @@ ImageF read_image(const fs::path& file, std::int64_t max_pixels, ImageAlpha alph
   in->close();
   const std::string close_err = pending_error(in.get());
   if (!ok || !err.empty() || !close_err.empty())
-    throw InputError(fmt::format("{}: truncated or corrupt image: {}", file.string(),
-                                 one_line(!err.empty() ? err : close_err)));
+    throw InputError(
+        fmt::format("{}: truncated or corrupt image: {}", file.string(), one_line(!err.empty() ? err : close_err)));
   if (stored) *stored = pixel_format_of(spec.format);
   return image;
 }

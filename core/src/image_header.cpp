@@ -37,12 +37,13 @@ std::optional<DeclaredImageSize> exr_size(const std::string& b, std::int64_t fil
     const std::uint32_t size = le32(p + type_end + 1);
     const std::size_t value = type_end + 5;
     if (static_cast<std::int64_t>(size) > file_size - static_cast<std::int64_t>(value))
-      throw InputError(fmt::format("{}: corrupt OpenEXR header: attribute '{}' declares {} bytes, more than the file holds",
-                                   file, name, size));
+      throw InputError(fmt::format(
+          "{}: corrupt OpenEXR header: attribute '{}' declares {} bytes, more than the file holds", file, name, size));
     if (size > b.size() - value) return std::nullopt;  // beyond what we read: cannot say
     if (name == "dataWindow" && size == 16) {
       const auto x0 = static_cast<std::int32_t>(le32(p + value)), y0 = static_cast<std::int32_t>(le32(p + value + 4));
-      const auto x1 = static_cast<std::int32_t>(le32(p + value + 8)), y1 = static_cast<std::int32_t>(le32(p + value + 12));
+      const auto x1 = static_cast<std::int32_t>(le32(p + value + 8)),
+                 y1 = static_cast<std::int32_t>(le32(p + value + 12));
       return DeclaredImageSize{std::int64_t{x1} - x0 + 1, std::int64_t{y1} - y0 + 1};
     }
     at = value + size;
@@ -60,7 +61,8 @@ std::optional<DeclaredImageSize> declared_image_size(const std::filesystem::path
   const auto* p = reinterpret_cast<const unsigned char*>(b.data());
   std::error_code ec;
   const auto file_size = static_cast<std::int64_t>(std::filesystem::file_size(file, ec));
-  if (b.size() >= 8 && std::memcmp(p, "\x76\x2f\x31\x01", 4) == 0) return exr_size(b, ec ? 0 : file_size, file.string());
+  if (b.size() >= 8 && std::memcmp(p, "\x76\x2f\x31\x01", 4) == 0)
+    return exr_size(b, ec ? 0 : file_size, file.string());
   if (b.size() >= 24 && std::memcmp(p, "\x89PNG\r\n\x1a\n", 8) == 0 && std::memcmp(p + 12, "IHDR", 4) == 0)
     return DeclaredImageSize{be32(p + 16), be32(p + 20)};
   return std::nullopt;
@@ -74,12 +76,14 @@ void check_declared_image_size(const std::filesystem::path& file, std::int64_t m
   const auto size = declared_image_size(file);
   if (!size) return;
   if (size->width <= 0 || size->height <= 0)
-    throw InputError(fmt::format("{}: the header declares an image of {}x{} pixels", file.string(), size->width, size->height));
+    throw InputError(
+        fmt::format("{}: the header declares an image of {}x{} pixels", file.string(), size->width, size->height));
   const std::int64_t limit = max_pixels;
   if (size->width > limit || size->height > limit || size->width * size->height > limit)
-    throw InputError(fmt::format("{}: the header declares {}x{} pixels, more than the limit of {} (raise it with "
-                                 "--limits image_pixels=N)",
-                                 file.string(), size->width, size->height, limit));
+    throw InputError(
+        fmt::format("{}: the header declares {}x{} pixels, more than the limit of {} (raise it with "
+                    "--limits image_pixels=N)",
+                    file.string(), size->width, size->height, limit));
 }
 
 }  // namespace meltlab

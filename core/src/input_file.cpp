@@ -24,7 +24,8 @@ std::int64_t check_input_file(const fs::path& file, std::string_view kind) {
     const bool vowel = !kind.empty() && std::string_view("aeiou").find(kind.front()) != std::string_view::npos;
     throw InputError(fmt::format("{}: is a folder, not {} {} file", name, vowel ? "an" : "a", kind));
   }
-  if (!fs::is_regular_file(st)) throw InputError(fmt::format("{}: not a regular file (a {} file is expected)", name, kind));
+  if (!fs::is_regular_file(st))
+    throw InputError(fmt::format("{}: not a regular file (a {} file is expected)", name, kind));
   const auto size = fs::file_size(file, ec);
   if (ec) throw InputError(fmt::format("{}: cannot read: {}", name, ec.message()));
   {
@@ -39,8 +40,9 @@ std::string read_text_file(const fs::path& file, std::string_view kind) {
   const std::int64_t size = check_input_file(file, kind);
   const std::int64_t limit = input_limits().text_bytes;
   if (size > limit)
-    throw InputError(fmt::format("{}: {} file of {} bytes exceeds the limit of {} (raise it with --limits text_bytes=N)",
-                                 file.string(), kind, size, limit));
+    throw InputError(
+        fmt::format("{}: {} file of {} bytes exceeds the limit of {} (raise it with --limits text_bytes=N)",
+                    file.string(), kind, size, limit));
   std::ifstream in(file, std::ios::binary);
   std::string text(static_cast<std::size_t>(size), '\0');
   in.read(text.data(), static_cast<std::streamsize>(size));

@@ -50,11 +50,13 @@ class OwnedFd {
 OwnedFd open_redirection(const fs::path& file, int flags, const char* stream) {
   OwnedFd fd(::open(file.c_str(), flags | O_CLOEXEC, 0644));
   if (fd.get() < 0)
-    throw InputError(fmt::format("{}: cannot open for the child's {}: {}", file.string(), stream, std::strerror(errno)));
+    throw InputError(
+        fmt::format("{}: cannot open for the child's {}: {}", file.string(), stream, std::strerror(errno)));
   if (fd.get() <= STDERR_FILENO) {
     OwnedFd high(::fcntl(fd.get(), F_DUPFD_CLOEXEC, STDERR_FILENO + 1));
     if (high.get() < 0)
-      throw InputError(fmt::format("{}: cannot open for the child's {}: {}", file.string(), stream, std::strerror(errno)));
+      throw InputError(
+          fmt::format("{}: cannot open for the child's {}: {}", file.string(), stream, std::strerror(errno)));
     return high;
   }
   return fd;

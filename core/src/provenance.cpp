@@ -32,7 +32,8 @@ void Provenance::start() {
 
 void Provenance::finish() {
   finished = std::chrono::system_clock::now();
-  timings_s.emplace_back("total", std::chrono::duration<double>(std::chrono::steady_clock::now() - steady_start_).count());
+  timings_s.emplace_back("total",
+                         std::chrono::duration<double>(std::chrono::steady_clock::now() - steady_start_).count());
 }
 
 nlohmann::json Provenance::to_json() const {

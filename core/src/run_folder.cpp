@@ -30,7 +30,8 @@ bool is_empty_folder(const fs::path& dir) {
 
 }  // namespace
 
-RunFolder::RunFolder(fs::path target, RunFolderOptions options) : target_(std::move(target)), options_(std::move(options)) {
+RunFolder::RunFolder(fs::path target, RunFolderOptions options)
+    : target_(std::move(target)), options_(std::move(options)) {
   const std::string& opt = options_.option;
   if (target_.empty()) throw InputError(fmt::format("{}: an output folder is required", opt));
   // "runs/a/" names the folder "a": drop a trailing separator so the staging name is a sibling.
@@ -40,15 +41,17 @@ RunFolder::RunFolder(fs::path target, RunFolderOptions options) : target_(std::m
   if (ec && ec != std::errc::no_such_file_or_directory)
     throw InputError(output_error_message(opt, target_, "use this path", ec));
   if (fs::exists(st)) {
-    if (!fs::is_directory(st)) throw InputError(fmt::format("{} {}: exists and is not a folder", opt, target_.string()));
+    if (!fs::is_directory(st))
+      throw InputError(fmt::format("{} {}: exists and is not a folder", opt, target_.string()));
     const bool holds_run = !options_.marker.empty() && fs::exists(target_ / options_.marker, ec);
     if (holds_run && !options_.overwrite)
       throw InputError(fmt::format("{} {}: already holds a {} ({}); choose another {} or pass --overwrite", opt,
                                    target_.string(), options_.kind, options_.marker, opt));
     if (!holds_run && !is_empty_folder(target_))
-      throw InputError(fmt::format("{} {}: the folder is not empty and holds no previous {} ({}); choose an empty or "
-                                   "new folder",
-                                   opt, target_.string(), options_.kind, options_.marker));
+      throw InputError(
+          fmt::format("{} {}: the folder is not empty and holds no previous {} ({}); choose an empty or "
+                      "new folder",
+                      opt, target_.string(), options_.kind, options_.marker));
   }
   const fs::path parent = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
   // Remember the first folder of the chain that this run creates, to remove it again if the run
@@ -62,8 +65,11 @@ RunFolder::RunFolder(fs::path target, RunFolderOptions options) : target_(std::m
 }
 
 RunFolder::RunFolder(RunFolder&& other) noexcept
-    : target_(std::move(other.target_)), staging_(std::move(other.staging_)),
-      created_root_(std::move(other.created_root_)), options_(std::move(other.options_)), committed_(other.committed_) {
+    : target_(std::move(other.target_)),
+      staging_(std::move(other.staging_)),
+      created_root_(std::move(other.created_root_)),
+      options_(std::move(other.options_)),
+      committed_(other.committed_) {
   other.committed_ = true;  // the moved-from folder owns nothing
 }
 

@@ -51,5 +51,4 @@ std::string StderrCapture::text() const {
   return out;
 }
 
-
 }  // namespace meltlab

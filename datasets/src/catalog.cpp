@@ -105,7 +105,8 @@ CatalogFile read_catalog(const fs::path& yaml_file) {
   CatalogFile out;
   if (!root.has("archive")) root.fail("missing key 'archive' (path of CGAL's data.tar.gz)");
   out.archive = root.require<std::string>("archive");
-  const std::vector<ConfigSection> list = root.has("datasets") ? root.sections("datasets") : std::vector<ConfigSection>{};
+  const std::vector<ConfigSection> list =
+      root.has("datasets") ? root.sections("datasets") : std::vector<ConfigSection>{};
   if (list.empty()) root.fail_at("datasets", "'datasets' must be a non-empty list");
   std::set<std::string> names;
   for (const ConfigSection& d : list) {
@@ -117,11 +118,11 @@ CatalogFile read_catalog(const fs::path& yaml_file) {
   for (std::size_t i = 0; i < out.entries.size(); ++i) {
     const DatasetEntry& e = out.entries[i];
     if (e.kind != DatasetKind::kRefined) continue;
-    const auto src = std::find_if(out.entries.begin(), out.entries.end(),
-                                  [&](const DatasetEntry& s) { return s.name == e.source; });
+    const auto src =
+        std::find_if(out.entries.begin(), out.entries.end(), [&](const DatasetEntry& s) { return s.name == e.source; });
     if (src == out.entries.end())
-      list[i].fail_at("source", fmt::format("refined dataset '{}': source '{}' is not a dataset of the catalog", e.name,
-                                            e.source));
+      list[i].fail_at(
+          "source", fmt::format("refined dataset '{}': source '{}' is not a dataset of the catalog", e.name, e.source));
     if (src->kind == DatasetKind::kRefined)
       list[i].fail_at("source", fmt::format("refined dataset '{}': source '{}' is itself refined", e.name, e.source));
   }

@@ -146,7 +146,8 @@ IndexedMesh mold_entry_mesh(const DatasetEntry& entry, Params& p) {
 fs::path generated_file_name(const DatasetEntry& e) {
   std::string key = fmt::format("{}\n{}\nrevision={}\n", dataset_kind_name(e.kind), e.source, kGeneratorRevision);
   for (const auto& [k, v] : e.params) key += fmt::format("{}={}\n", k, v);
-  return fmt::format("{}-{:08x}.off", e.name, static_cast<std::uint32_t>(ContentHash().add_bytes(key).value() & 0xffffffffu));
+  return fmt::format("{}-{:08x}.off", e.name,
+                     static_cast<std::uint32_t>(ContentHash().add_bytes(key).value() & 0xffffffffu));
 }
 
 bool usable_file(const fs::path& p) {

@@ -320,7 +320,8 @@ IndexedMesh uv_sphere(int segments, int rings, double radius) {
 
 IndexedMesh geodesic_sphere(int frequency, double radius) {
   detail::require_at_least("geodesic_sphere", "frequency", frequency, 1);
-  if (frequency > 2000) throw InputError(fmt::format("geodesic_sphere: frequency must be at most 2000, got {}", frequency));
+  if (frequency > 2000)
+    throw InputError(fmt::format("geodesic_sphere: frequency must be at most 2000, got {}", frequency));
   detail::require_positive_length("geodesic_sphere", "radius", radius);
   const IndexedMesh ico = icosphere(0, 1.0);  // outward-oriented icosahedron
   const auto f = static_cast<std::int64_t>(frequency);

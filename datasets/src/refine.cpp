@@ -32,7 +32,8 @@ OmMesh to_openmesh(const sim::IndexedMesh& in) {
     const auto& t = in.F[f];
     const auto h = m.add_face(vh[t[0]], vh[t[1]], vh[t[2]]);
     if (!h.is_valid())
-      throw InputError(fmt::format("refine: triangle {} ({}, {}, {}) makes the mesh non-manifold", f, t[0], t[1], t[2]));
+      throw InputError(
+          fmt::format("refine: triangle {} ({}, {}, {}) makes the mesh non-manifold", f, t[0], t[1], t[2]));
   }
   for (const auto eh : m.edges())
     if (m.is_boundary(eh)) throw InputError("refine: the mesh is open (it has a boundary edge)");
@@ -67,8 +68,8 @@ sim::IndexedMesh refined(const sim::IndexedMesh& mesh, int loop_levels, std::int
   if (subdivided > kMaxTriangles || target_triangles > kMaxTriangles)
     throw InputError(fmt::format("refine: more than {} triangles asked for", kMaxTriangles));
   if (target_triangles != 0 && (target_triangles < subdivided || (target_triangles - subdivided) % 2 != 0))
-    throw InputError(fmt::format("refine: target_triangles {} must be 0 or {} plus an even number", target_triangles,
-                                 subdivided));
+    throw InputError(
+        fmt::format("refine: target_triangles {} must be 0 or {} plus an even number", target_triangles, subdivided));
 
   OmMesh m = to_openmesh(mesh);
   if (loop_levels > 0) {

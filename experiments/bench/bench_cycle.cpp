@@ -44,20 +44,36 @@ const sim::IndexedMesh& input_mesh(int id) {
   if (it != cache.end()) return it->second;
   sim::IndexedMesh m;
   switch (id) {
-    case 0: m = datasets::benchmark_object('A'); break;
-    case 1: m = datasets::benchmark_object('B'); break;
-    case 2: m = datasets::benchmark_object('C'); break;
-    case 3: m = datasets::geodesic_sphere(71, 0.05); break;   // 100820 triangles
-    case 4: m = datasets::geodesic_sphere(224, 0.05); break;  // 1003520 triangles
-    case 5: m = sim::reorder_for_locality(sim::load_mesh(datasets::dataset_path("bunny00")).mesh).mesh; break;
-    case 6: m = datasets::geodesic_sphere(40, 0.05); break;   // 32000 triangles, uniform
-    default: break;
+    case 0:
+      m = datasets::benchmark_object('A');
+      break;
+    case 1:
+      m = datasets::benchmark_object('B');
+      break;
+    case 2:
+      m = datasets::benchmark_object('C');
+      break;
+    case 3:
+      m = datasets::geodesic_sphere(71, 0.05);
+      break;  // 100820 triangles
+    case 4:
+      m = datasets::geodesic_sphere(224, 0.05);
+      break;  // 1003520 triangles
+    case 5:
+      m = sim::reorder_for_locality(sim::load_mesh(datasets::dataset_path("bunny00")).mesh).mesh;
+      break;
+    case 6:
+      m = datasets::geodesic_sphere(40, 0.05);
+      break;  // 32000 triangles, uniform
+    default:
+      break;
   }
   return cache.emplace(id, std::move(m)).first->second;
 }
 
 const char* mesh_label(int id) {
-  static const char* labels[] = {"A_192", "B_16k", "C_32k", "geodesic_100k", "geodesic_1M", "bunny_75k", "geodesic_32k"};
+  static const char* labels[] = {"A_192",       "B_16k",     "C_32k",       "geodesic_100k",
+                                 "geodesic_1M", "bunny_75k", "geodesic_32k"};
   return labels[id];
 }
 
@@ -135,7 +151,8 @@ void BM_OpenMeshPeer(benchmark::State& state) {
     ++since_restart;
   }
   state.counters["triangles"] = benchmark::Counter(triangles, benchmark::Counter::kAvgIterations);
-  state.SetLabel(std::string(mesh_label(id)) + " openmesh-peer serial " + (std::is_same_v<Real, float> ? "float" : "double"));
+  state.SetLabel(std::string(mesh_label(id)) + " openmesh-peer serial " +
+                 (std::is_same_v<Real, float> ? "float" : "double"));
 }
 
 void meshes_and_modes(benchmark::internal::Benchmark* b) {

@@ -61,10 +61,15 @@ void BM_IcePhoto(benchmark::State& state) {
                  (state.range(2) ? " march" : " grid"));
 }
 BENCHMARK(BM_IcePhoto)
-    ->Args({0, 2, 0})->Args({1, 2, 0})->Args({2, 2, 0})
-    ->Args({1, 1, 0})->Args({1, 4, 0})
+    ->Args({0, 2, 0})
+    ->Args({1, 2, 0})
+    ->Args({2, 2, 0})
+    ->Args({1, 1, 0})
+    ->Args({1, 4, 0})
     ->Args({0, 2, 1})
-    ->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 // The production case: a 250 g giraffe mold block (153 x 184 x 30.5 mm) voxelized at h = arg mm
 // (2 → 81 x 96 x 18 cells with the margin), seen from 0.7 m above, slightly oblique, at
@@ -90,13 +95,18 @@ void BM_IcePhotoGiraffe(benchmark::State& state) {
     cv::Mat img = render::render_ice_photo(g, cam, o);
     benchmark::DoNotOptimize(img.data);
   }
-  state.SetLabel("giraffe h=" + std::to_string(state.range(0) / 10.0).substr(0, 3) + "mm " + std::to_string(g.nx) + "x" +
-                 std::to_string(g.ny) + "x" + std::to_string(g.nz) + " " + std::to_string(w) + "x" +
+  state.SetLabel("giraffe h=" + std::to_string(state.range(0) / 10.0).substr(0, 3) + "mm " + std::to_string(g.nx) +
+                 "x" + std::to_string(g.ny) + "x" + std::to_string(g.nz) + " " + std::to_string(w) + "x" +
                  std::to_string(h));
 }
 BENCHMARK(BM_IcePhotoGiraffe)
-    ->Args({20, 1024})->Args({15, 1024})->Args({25, 1024})->Args({20, 320})
-    ->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+    ->Args({20, 1024})
+    ->Args({15, 1024})
+    ->Args({25, 1024})
+    ->Args({20, 320})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 void BM_IceTrueMask(benchmark::State& state) {
   const int si = int(state.range(0));

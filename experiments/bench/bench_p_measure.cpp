@@ -7,7 +7,8 @@
 //   marching  region_from_image alone (one image), the contour extraction cost
 // The inputs are built once per resolution, outside the timed loop. Every benchmark reports
 // abs_error = |P - P_analytic| (the lens closed form) and P in its counters.
-// Timed by CPU time (single-threaded code). Run: meltlab_bench_p_measure --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+// Timed by CPU time (single-threaded code). Run: meltlab_bench_p_measure --benchmark_repetitions=5
+// --benchmark_report_aggregates_only=true
 
 #include <meltlab/verify/metrics.h>
 #include <meltlab/verify/region.h>
@@ -27,7 +28,9 @@ using namespace meltlab::verify;
 
 constexpr int kSuper = 4;
 
-double lens_area(double r, double d) { return 2 * r * r * std::acos(d / (2 * r)) - 0.5 * d * std::sqrt(4 * r * r - d * d); }
+double lens_area(double r, double d) {
+  return 2 * r * r * std::acos(d / (2 * r)) - 0.5 * d * std::sqrt(4 * r * r - d * d);
+}
 double disc_pair_P(double r, double d) {
   const double a = std::numbers::pi * r * r, i = lens_area(r, d);
   return (2 * a - 2 * i) / (2 * a - i);

@@ -41,7 +41,14 @@ void BM_NeumannStefan(benchmark::State& state) {
   state.counters["exact_mm"] = exact * 1e3;
   state.counters["rel_error"] = std::abs(front - exact) / exact;
 }
-BENCHMARK(BM_NeumannStefan)->Arg(4000)->Arg(2000)->Arg(1000)->Arg(500)->Arg(250)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_NeumannStefan)
+    ->Arg(4000)
+    ->Arg(2000)
+    ->Arg(1000)
+    ->Arg(500)
+    ->Arg(250)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
 
 void BM_ShrinkingSphere(benchmark::State& state) {
   const double h = static_cast<double>(state.range(0)) * 1e-6, r0 = 15e-3;

@@ -79,7 +79,8 @@ void time_frames(benchmark::State& state, render::IceRenderer& r) {
 }
 
 enum Variant { kFull, kNoDispersion, kReflectOnly, kNoLiquid, kMinimal, kPhysical, kFullMipmap, kPhysicalMipmap };
-const char* kNames[] = {"full", "no_dispersion", "reflect_only", "no_liquid", "minimal", "physical", "full_mipmap", "physical_mipmap"};
+const char* kNames[] = {"full",    "no_dispersion", "reflect_only", "no_liquid",
+                        "minimal", "physical",      "full_mipmap",  "physical_mipmap"};
 
 void BM_RenderBunny(benchmark::State& state) {
   const auto v = static_cast<Variant>(state.range(0));
@@ -88,18 +89,29 @@ void BM_RenderBunny(benchmark::State& state) {
   s.height = 768;
   bool liquid = true;
   switch (v) {
-    case kFull: break;
-    case kNoDispersion: s.ice.dispersion = false; break;
-    case kReflectOnly: s.ice.ct = 0; break;
-    case kNoLiquid: liquid = false; break;
+    case kFull:
+      break;
+    case kNoDispersion:
+      s.ice.dispersion = false;
+      break;
+    case kReflectOnly:
+      s.ice.ct = 0;
+      break;
+    case kNoLiquid:
+      liquid = false;
+      break;
     case kMinimal:
       s.ice.ct = 0;
       s.ice.cs = 0;
       s.ground.cs = 0;
       liquid = false;
       break;
-    case kPhysical: s.ice.model = render::IceModel::kPhysical; break;
-    case kFullMipmap: s.texture_filter = render::TextureFilter::kMipmap; break;
+    case kPhysical:
+      s.ice.model = render::IceModel::kPhysical;
+      break;
+    case kFullMipmap:
+      s.texture_filter = render::TextureFilter::kMipmap;
+      break;
     case kPhysicalMipmap:
       s.ice.model = render::IceModel::kPhysical;
       s.texture_filter = render::TextureFilter::kMipmap;
@@ -153,7 +165,8 @@ void BM_TextureLookup(benchmark::State& state) {
   const int id = ft.add(tex, render::FilteredTextures::Kind::kTexture, "ground");
   std::vector<Eigen::Vector2d> st(4096);
   for (std::size_t k = 0; k < st.size(); ++k)
-    st[k] = Eigen::Vector2d(std::fmod(0.6180339887 * static_cast<double>(k), 1.0), std::fmod(0.7548776662 * static_cast<double>(k), 1.0));
+    st[k] = Eigen::Vector2d(std::fmod(0.6180339887 * static_cast<double>(k), 1.0),
+                            std::fmod(0.7548776662 * static_cast<double>(k), 1.0));
   const double texel = 1.0 / 256;
   const Eigen::Vector2d dx = state.range(0) == 2 ? Eigen::Vector2d(4 * texel, 0) : Eigen::Vector2d(8 * texel, 0);
   const Eigen::Vector2d dy = state.range(0) == 2 ? Eigen::Vector2d(0, 4 * texel) : Eigen::Vector2d(0, texel);
@@ -161,9 +174,15 @@ void BM_TextureLookup(benchmark::State& state) {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (const auto& p : st) {
       switch (state.range(0)) {
-        case 0: sum += sample_bilinear_rgb(tex, p.x() * 256 - 0.5, p.y() * 256 - 0.5, ImageWrap::kRepeat, ImageWrap::kRepeat); break;
-        case 1: sum += ft.texture(id, p.x(), p.y(), Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()); break;
-        default: sum += ft.texture(id, p.x(), p.y(), dx, dy); break;
+        case 0:
+          sum += sample_bilinear_rgb(tex, p.x() * 256 - 0.5, p.y() * 256 - 0.5, ImageWrap::kRepeat, ImageWrap::kRepeat);
+          break;
+        case 1:
+          sum += ft.texture(id, p.x(), p.y(), Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero());
+          break;
+        default:
+          sum += ft.texture(id, p.x(), p.y(), dx, dy);
+          break;
       }
     }
     benchmark::DoNotOptimize(sum);

@@ -77,7 +77,8 @@ void BM_FillConvexPolyPeer(benchmark::State& state) {
       const double u = (p.x() - cam.centre.x()) * cam.pixels_per_unit + cu;
       const double v = -(p.y() - cam.centre.y()) * cam.pixels_per_unit + cv_;
       // Sub-sample grid of the k-times mask: U = k u + (k - 1) / 2.
-      pts[i] = cv::Point(int(std::lround((k * u + 0.5 * (k - 1)) * scale)), int(std::lround((k * v + 0.5 * (k - 1)) * scale)));
+      pts[i] = cv::Point(int(std::lround((k * u + 0.5 * (k - 1)) * scale)),
+                         int(std::lround((k * v + 0.5 * (k - 1)) * scale)));
     }
     for (std::size_t t = 0; t < mesh.triangle_slots(); ++t) {
       if (!mesh.triangle_alive[t]) continue;

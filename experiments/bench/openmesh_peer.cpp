@@ -62,10 +62,10 @@ struct OpenMeshMeltPeerT<Real>::Impl {
 
   Mesh mesh;
   sim::MeltParams params;
-  OpenMesh::VPropHandleT<Point> move;        ///< Alg. 1's displacement, applied after the sweep
-  OpenMesh::VPropHandleT<int> pass;          ///< the collapse pass that last touched the vertex
+  OpenMesh::VPropHandleT<Point> move;  ///< Alg. 1's displacement, applied after the sweep
+  OpenMesh::VPropHandleT<int> pass;    ///< the collapse pass that last touched the vertex
   std::int64_t live_vertices = 0, live_faces = 0;
-  std::int64_t dead_vertices = 0;             ///< deleted but not yet garbage-collected
+  std::int64_t dead_vertices = 0;  ///< deleted but not yet garbage-collected
   int pass_counter = 0;
 
   void deform();
@@ -83,13 +83,15 @@ OpenMeshMeltPeerT<Real>::OpenMeshMeltPeerT(const sim::IndexedMesh& in, const sim
   s.params = params;
   auto& m = s.mesh;
   m.reserve(in.V.size(), in.V.size() + in.F.size(), in.F.size());
-  for (const auto& p : in.V) m.add_vertex(typename Impl::Point(static_cast<Real>(p.x()), static_cast<Real>(p.y()), static_cast<Real>(p.z())));
+  for (const auto& p : in.V)
+    m.add_vertex(typename Impl::Point(static_cast<Real>(p.x()), static_cast<Real>(p.y()), static_cast<Real>(p.z())));
   const auto nv = static_cast<sim::Index>(in.V.size());
   for (std::size_t f = 0; f < in.F.size(); ++f) {
     const sim::Triangle& t = in.F[f];
     for (sim::Index v : t)
       if (v < 0 || v >= nv) throw InputError(fmt::format("mesh: face {} uses vertex {} of {}", f, v, nv));
-    const auto fh = m.add_face(OpenMesh::VertexHandle(t[0]), OpenMesh::VertexHandle(t[1]), OpenMesh::VertexHandle(t[2]));
+    const auto fh =
+        m.add_face(OpenMesh::VertexHandle(t[0]), OpenMesh::VertexHandle(t[1]), OpenMesh::VertexHandle(t[2]));
     if (!fh.is_valid())
       throw InputError(fmt::format("mesh: face {} ({}, {}, {}) makes the surface non-manifold", f, t[0], t[1], t[2]));
   }
@@ -146,10 +148,9 @@ void OpenMeshMeltPeerT<Real>::Impl::deform() {
 // pair (which Alg. 3 deletes), so the component goes at once.
 template <class Real>
 void OpenMeshMeltPeerT<Real>::Impl::delete_tetrahedron(typename Mesh::HalfedgeHandle heh, sim::CycleReport& report) {
-  std::array<OpenMesh::FaceHandle, 4> faces = {
-      mesh.face_handle(heh), mesh.opposite_face_handle(heh),
-      mesh.opposite_face_handle(mesh.next_halfedge_handle(heh)),
-      mesh.opposite_face_handle(mesh.prev_halfedge_handle(heh))};
+  std::array<OpenMesh::FaceHandle, 4> faces = {mesh.face_handle(heh), mesh.opposite_face_handle(heh),
+                                               mesh.opposite_face_handle(mesh.next_halfedge_handle(heh)),
+                                               mesh.opposite_face_handle(mesh.prev_halfedge_handle(heh))};
   for (auto fh : faces) mesh.delete_face(fh, true);  // true: its edges and vertices go with it
   report.merged_vertices += 1;
   report.degenerate_triangles += 2;

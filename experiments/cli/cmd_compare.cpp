@@ -25,10 +25,12 @@ Run add_compare(CLI::App& app, const std::vector<std::string>& command_line) {
 
   sub->add_option("--sim", o->run_dir, "Folder of a `meltlab simulate` run (its run.json is replayed)")->required();
   sub->add_option("--observations", o->observations, "Observation manifest (.yaml/.yml/.json)")->required();
-  sub->add_option("--out", o->out_dir, "Output folder (per_frame.csv, overlays/, p_curve.png, compare.json)")->required();
-  auto* cpp = sub->add_option("--cycles-per-photo", *cycles_per_photo,
-                              fmt::format("Simulation cycles between consecutive photos (default {}: ~700 cycles per 100 photos, §8.2)",
-                                          verify::kDefaultCyclesPerPhoto));
+  sub->add_option("--out", o->out_dir, "Output folder (per_frame.csv, overlays/, p_curve.png, compare.json)")
+      ->required();
+  auto* cpp = sub->add_option(
+      "--cycles-per-photo", *cycles_per_photo,
+      fmt::format("Simulation cycles between consecutive photos (default {}: ~700 cycles per 100 photos, §8.2)",
+                  verify::kDefaultCyclesPerPhoto));
   auto* spc = sub->add_option("--seconds-per-cycle", *seconds_per_cycle,
                               "Real seconds per simulation cycle (uses the photos' time stamps)");
   cpp->excludes(spc);
@@ -36,13 +38,15 @@ Run add_compare(CLI::App& app, const std::vector<std::string>& command_line) {
   std::map<std::string, verify::RegistrationMode> reg{{"none", verify::RegistrationMode::kNone},
                                                       {"first", verify::RegistrationMode::kFirstFrame},
                                                       {"every", verify::RegistrationMode::kEveryFrame}};
-  sub->add_option("--registration", o->compare.registration,
-                  "Align render to photo: on the first usable frame and keep it (first), per frame (every), or not (none)")
+  sub->add_option(
+         "--registration", o->compare.registration,
+         "Align render to photo: on the first usable frame and keep it (first), per frame (every), or not (none)")
       ->transform(CLI::CheckedTransformer(reg, CLI::ignore_case))
       ->default_str("first");
-  std::map<std::string, verify::RegistrationOptions::Refine> refine{{"none", verify::RegistrationOptions::Refine::kNone},
-                                                                   {"icp", verify::RegistrationOptions::Refine::kIcp},
-                                                                   {"ecc", verify::RegistrationOptions::Refine::kEcc}};
+  std::map<std::string, verify::RegistrationOptions::Refine> refine{
+      {"none", verify::RegistrationOptions::Refine::kNone},
+      {"icp", verify::RegistrationOptions::Refine::kIcp},
+      {"ecc", verify::RegistrationOptions::Refine::kEcc}};
   sub->add_option("--refine", o->compare.registration_options.refine,
                   "Refinement after the moment-based start: contour ICP, OpenCV ECC, or none")
       ->transform(CLI::CheckedTransformer(refine, CLI::ignore_case))
@@ -72,10 +76,13 @@ Run add_compare(CLI::App& app, const std::vector<std::string>& command_line) {
     });
     line.finish();
     const auto& s = result.summary;
-    auto num = [](const nlohmann::json& v) { return v.is_null() ? std::string("-") : fmt::format("{:.4f}", v.get<double>()); };
+    auto num = [](const nlohmann::json& v) {
+      return v.is_null() ? std::string("-") : fmt::format("{:.4f}", v.get<double>());
+    };
     std::fprintf(stderr, "meltlab: compared %d photos (%d skipped): P first %s, last %s, max %s, mean %s; wrote %s\n",
                  s["frames_compared"].get<int>(), s["frames_skipped"].get<int>(), num(s["P_first"]).c_str(),
-                 num(s["P_last"]).c_str(), num(s["P_max"]).c_str(), num(s["P_mean"]).c_str(), o->out_dir.string().c_str());
+                 num(s["P_last"]).c_str(), num(s["P_max"]).c_str(), num(s["P_mean"]).c_str(),
+                 o->out_dir.string().c_str());
     return s["frames_compared"].get<int>() > 0 ? kExitOk : kExitInvalid;
   };
 }

@@ -29,10 +29,12 @@ Run add_dataset(CLI::App& app) {
   get->add_option("names", *names, "Dataset names (or 'all')")->required();
   // Tab. 2.3's polyhedra in their polygon form (faces with hole loops), which no mesh file
   // format keeps: the catalog stores them triangulated, so their file counts differ.
-  auto* euler = sub->add_subcommand("euler", "Eq. 2.3 counts (V E F H S G chi) of the Tab. 2.3 polyhedra in polygon form, as JSON");
+  auto* euler = sub->add_subcommand(
+      "euler", "Eq. 2.3 counts (V E F H S G chi) of the Tab. 2.3 polyhedra in polygon form, as JSON");
   auto shapes = std::make_shared<std::vector<std::string>>();
-  euler->add_option("names", *shapes, "cube_quads, cube_triangles, double_cube_quads, cube_with_face_hole, cube_with_tunnel, "
-                                      "cube_with_tunnel_front_triangulated (default: all)");
+  euler->add_option("names", *shapes,
+                    "cube_quads, cube_triangles, double_cube_quads, cube_with_face_hole, cube_with_tunnel, "
+                    "cube_with_tunnel_front_triangulated (default: all)");
   return [=]() {
     if (euler->parsed()) {
       const std::map<std::string, std::function<sim::PolygonMesh()>> polygon_forms{
@@ -48,9 +50,11 @@ Run add_dataset(CLI::App& app) {
       nlohmann::json out = nlohmann::json::object();
       for (const auto& n : wanted) {
         const auto it = polygon_forms.find(n);
-        if (it == polygon_forms.end()) throw InputError(fmt::format("dataset euler: '{}' is not one of the Tab. 2.3 polyhedra", n));
+        if (it == polygon_forms.end())
+          throw InputError(fmt::format("dataset euler: '{}' is not one of the Tab. 2.3 polyhedra", n));
         const sim::EulerCounts c = sim::euler_counts(it->second());
-        out[n] = {{"V", c.V}, {"E", c.E}, {"F", c.F}, {"H", c.H}, {"S", c.S}, {"G", c.G}, {"chi", c.chi}, {"consistent", c.genus_valid}};
+        out[n] = {{"V", c.V}, {"E", c.E}, {"F", c.F},     {"H", c.H},
+                  {"S", c.S}, {"G", c.G}, {"chi", c.chi}, {"consistent", c.genus_valid}};
       }
       std::printf("%s\n", out.dump(2).c_str());
       return kExitOk;
@@ -60,15 +64,22 @@ Run add_dataset(CLI::App& app) {
       if (*as_json) {
         nlohmann::json out = nlohmann::json::array();
         for (const auto& e : catalog)
-          out.push_back({{"name", e.name}, {"kind", datasets::dataset_kind_name(e.kind)}, {"source", e.source},
-                         {"triangles", e.triangles}, {"closed_manifold", e.closed_manifold}, {"need_repair", e.need_repair},
-                         {"genus", e.genus}, {"shells", e.shells}, {"description", e.description}});
+          out.push_back({{"name", e.name},
+                         {"kind", datasets::dataset_kind_name(e.kind)},
+                         {"source", e.source},
+                         {"triangles", e.triangles},
+                         {"closed_manifold", e.closed_manifold},
+                         {"need_repair", e.need_repair},
+                         {"genus", e.genus},
+                         {"shells", e.shells},
+                         {"description", e.description}});
         std::printf("%s\n", out.dump(2).c_str());
       } else {
         std::printf("%-24s %-10s %10s  %s\n", "name", "kind", "triangles", "description");
         for (const auto& e : catalog)
           std::printf("%-24s %-10s %10lld  %s%s\n", e.name.c_str(), datasets::dataset_kind_name(e.kind).c_str(),
-                      static_cast<long long>(e.triangles), e.description.c_str(), e.need_repair ? " [needs --repair]" : "");
+                      static_cast<long long>(e.triangles), e.description.c_str(),
+                      e.need_repair ? " [needs --repair]" : "");
         std::printf("cache: %s\n", datasets::default_cache_dir().string().c_str());
       }
       return kExitOk;

@@ -37,7 +37,8 @@ std::map<std::string, double> parse_assignments(const std::vector<std::string>& 
     std::string item;
     while (std::getline(in, item, ',')) {
       const auto eq = item.find('=');
-      if (eq == std::string::npos || eq == 0) throw InputError(fmt::format("{}: expected name=value, got '{}'", option, item));
+      if (eq == std::string::npos || eq == 0)
+        throw InputError(fmt::format("{}: expected name=value, got '{}'", option, item));
       out[item.substr(0, eq)] = parse_number(item.substr(eq + 1), option);
     }
   }
@@ -47,7 +48,8 @@ std::map<std::string, double> parse_assignments(const std::vector<std::string>& 
 }  // namespace
 
 Run add_fit(CLI::App& app, const std::vector<std::string>& command_line) {
-  auto* sub = app.add_subcommand("fit", "Fit kg, kl parameters, time scale and registration to an observation sequence (Ceres)");
+  auto* sub = app.add_subcommand(
+      "fit", "Fit kg, kl parameters, time scale and registration to an observation sequence (Ceres)");
   auto o = std::make_shared<experiments::FitRunOptions>();
   auto fit = std::make_shared<std::string>("kg,reg");
   auto fix = std::make_shared<std::vector<std::string>>();
@@ -59,8 +61,7 @@ Run add_fit(CLI::App& app, const std::vector<std::string>& command_line) {
   sub->add_option("--mesh", s.mesh, "Mesh file or dataset name (the object at the first photo)")->required();
   sub->add_option("--observations", o->observations, "Observation manifest (.yaml/.yml/.json)")->required();
   sub->add_option("--out", o->out_dir, "Output folder (fit.json, comparison/)")->required();
-  sub->add_option("--fit", *fit,
-                  "Parameters to fit, comma separated: " + verify::fit_parameter_names_help())
+  sub->add_option("--fit", *fit, "Parameters to fit, comma separated: " + verify::fit_parameter_names_help())
       ->default_val("kg,reg");
   sub->add_option("--fix", *fix, "Fixed values: name=value[,name=value...]");
   sub->add_option("--initial", *initial, "Starting values: name=value[,...]");
@@ -75,15 +76,18 @@ Run add_fit(CLI::App& app, const std::vector<std::string>& command_line) {
   sub->add_option("--cycles-per-photo", o->cycles_per_photo, "Cycles between photos (start value when fitted)")
       ->default_val(verify::kDefaultCyclesPerPhoto);
   sub->add_option("--first-cycle", o->first_cycle, "Cycle shown by the first photo")->default_val(0);
-  sub->add_option("--holdout", o->holdout, "Fraction of the last photos kept out of the fit and predicted")->default_val(0.0);
+  sub->add_option("--holdout", o->holdout, "Fraction of the last photos kept out of the fit and predicted")
+      ->default_val(0.0);
   sub->add_option("--volume-weight", o->volume_weight,
                   "Also fit the manifest's mass/volume series with this weight (relative volume error x weight ~ px)")
       ->default_val(0.0);
   sub->add_option("--samples", o->fit_options.photo_samples, "Contour points per photo")->default_val(48);
-  sub->add_option("--supersample", o->fit_options.supersample, "k x k samples per pixel of the rendered coverage")->default_val(4);
+  sub->add_option("--supersample", o->fit_options.supersample, "k x k samples per pixel of the rendered coverage")
+      ->default_val(4);
   sub->add_option("--max-iterations", o->fit_options.max_iterations, "Ceres iterations")->default_val(40);
   sub->add_flag("--no-scan", *no_scan, "Skip the coarse scan of kg");
-  sub->add_option("--overlay-every", o->overlay_every, "Overlay of every K-th photo of the fitted run (0 = none)")->default_val(10);
+  sub->add_option("--overlay-every", o->overlay_every, "Overlay of every K-th photo of the fitted run (0 = none)")
+      ->default_val(10);
   sub->add_flag("--overwrite", o->overwrite, "Allow --out to hold a previous fit");
 
   return [=]() {

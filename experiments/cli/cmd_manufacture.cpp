@@ -13,7 +13,8 @@ namespace meltlab::cli {
 
 Run add_manufacture(CLI::App& app, const std::vector<std::string>& command_line) {
   auto* sub = app.add_subcommand(
-      "manufacture", "Melt an ice body with the physically based reference solver and photograph it (observations with truth)");
+      "manufacture",
+      "Melt an ice body with the physically based reference solver and photograph it (observations with truth)");
   auto o = std::make_shared<experiments::ManufactureOptions>();
   o->command_line = command_line;
   auto& ph = o->physics;

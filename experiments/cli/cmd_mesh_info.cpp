@@ -18,20 +18,24 @@ namespace meltlab::cli {
 
 namespace {
 nlohmann::json counts_json(const sim::EulerCounts& c) {
-  return {{"V", c.V}, {"E", c.E}, {"F", c.F}, {"H", c.H}, {"S", c.S}, {"G", c.G}, {"chi", c.chi}, {"consistent", c.genus_valid}};
+  return {{"V", c.V}, {"E", c.E}, {"F", c.F},     {"H", c.H},
+          {"S", c.S}, {"G", c.G}, {"chi", c.chi}, {"consistent", c.genus_valid}};
 }
 }  // namespace
 
 Run add_mesh_info(CLI::App& app) {
   auto* sub = app.add_subcommand(
-      "mesh-info", "Print a mesh's Euler counts (Eq. 2.3), validity and quality measures (Eq. 2.4-2.8) as JSON; exit 1 if invalid");
+      "mesh-info",
+      "Print a mesh's Euler counts (Eq. 2.3), validity and quality measures (Eq. 2.4-2.8) as JSON; exit 1 if invalid");
   auto mesh = std::make_shared<std::string>();
   auto options = std::make_shared<sim::LoadOptions>();
   sub->add_option("mesh", *mesh, "Mesh file or dataset name")->required();
-  sub->add_option("--weld-tol", options->weld_tolerance, "Merge vertices closer than this (mesh units)")->default_val(0.0);
+  sub->add_option("--weld-tol", options->weld_tolerance, "Merge vertices closer than this (mesh units)")
+      ->default_val(0.0);
   sub->add_flag("--repair", options->repair, "Report the mesh after CGAL repair");
   auto intersections = std::make_shared<bool>(false);
-  sub->add_flag("--self-intersections", *intersections, "Also test for self-intersections with CGAL (exact predicates)");
+  sub->add_flag("--self-intersections", *intersections,
+                "Also test for self-intersections with CGAL (exact predicates)");
   return [=]() {
     const auto path = experiments::resolve_mesh_argument(*mesh);
     sim::LoadOptions opt = *options;
@@ -92,7 +96,9 @@ Run add_mesh_info(CLI::App& app) {
       nlohmann::json sample = nlohmann::json::array();
       for (std::size_t k = 0; k < std::min<std::size_t>(si.sample.size(), 10); ++k)
         sample.push_back({si.sample[k].first, si.sample[k].second});
-      out["self_intersections"] = {{"intersects", si.intersects}, {"pairs", si.pairs}, {"first_pairs", sample},
+      out["self_intersections"] = {{"intersects", si.intersects},
+                                   {"pairs", si.pairs},
+                                   {"first_pairs", sample},
                                    {"note", "pairs capped at 1000; triangles are indices into the loaded mesh"}};
     }
     std::printf("%s\n", out.dump(2).c_str());

@@ -26,9 +26,9 @@ extern "C" void on_reproduce_interrupt(int) { g_stop.store(true); }
 
 Run add_reproduce(CLI::App& app) {
   namespace fs = std::filesystem;
-  auto* sub = app.add_subcommand(
-      "reproduce",
-      "Run the reproduction experiments (one YAML config per table/figure/study), reuse finished ones, build the report");
+  auto* sub = app.add_subcommand("reproduce",
+                                 "Run the reproduction experiments (one YAML config per table/figure/study), reuse "
+                                 "finished ones, build the report");
   auto o = std::make_shared<experiments::ReproduceOptions>();
   auto configs = std::make_shared<std::vector<std::string>>();
   auto source_dir = std::make_shared<std::string>(MELTLAB_SOURCE_DIR);
@@ -36,7 +36,9 @@ Run add_reproduce(CLI::App& app) {
   auto no_report = std::make_shared<bool>(false);
   sub->add_option("--out", o->out_dir, "Output folder: one subfolder per experiment, summary.json, report/index.html")
       ->required();
-  sub->add_flag("--quick", o->quick, "Reduced sizes (the default of ./scripts/reproduce; < 10 min on 2 cores); experiments with modes: [full] are left out");
+  sub->add_flag("--quick", o->quick,
+                "Reduced sizes (the default of ./scripts/reproduce; < 10 min on 2 cores); experiments with modes: "
+                "[full] are left out");
   sub->add_option("--only", o->only, "Run only these experiments (repeatable)")->delimiter(',');
   sub->add_option("--jobs", o->jobs, "Experiments run in parallel")->default_val(2)->check(CLI::Range(1, 64));
   sub->add_option("--configs", *configs,
@@ -87,14 +89,14 @@ Run add_reproduce(CLI::App& app) {
       failed += r.status == "failed" || r.status == "not run";
       std::string detail = r.error;
       if (detail.empty())
-        for (const auto& s : r.steps) detail += fmt::format("{}{} {:.1f}s", detail.empty() ? "" : ", ", s.name, s.seconds);
+        for (const auto& s : r.steps)
+          detail += fmt::format("{}{} {:.1f}s", detail.empty() ? "" : ", ", s.name, s.seconds);
       const bool earlier = r.status == "reused" || r.status == "kept";
-      std::printf("%-22s %-8s %9.1f  %s%s\n", r.name.c_str(), r.status.c_str(), earlier ? r.original_seconds : r.seconds,
-                  detail.c_str(), earlier ? " (earlier run)" : "");
+      std::printf("%-22s %-8s %9.1f  %s%s\n", r.name.c_str(), r.status.c_str(),
+                  earlier ? r.original_seconds : r.seconds, detail.c_str(), earlier ? " (earlier run)" : "");
     }
     std::printf("%d ran, %d reused, %d failed in %.1f s; %d more kept from earlier runs; summary: %s\n", ran, reused,
-                failed, result.seconds, kept,
-                (o->out_dir / "summary.json").string().c_str());
+                failed, result.seconds, kept, (o->out_dir / "summary.json").string().c_str());
     std::printf("report: %s\n",
                 result.report_status == "built" ? result.report_file.string().c_str() : result.report_status.c_str());
     if (result.interrupted) return kExitInterrupted;

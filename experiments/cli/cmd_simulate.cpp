@@ -20,15 +20,18 @@ extern "C" void on_interrupt(int) { g_stop.store(true); }
 }  // namespace
 
 Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
-  auto* sub = app.add_subcommand("simulate", "Melt a mesh with the empirical surface model (Alg. 1-3) and record every cycle");
+  auto* sub =
+      app.add_subcommand("simulate", "Melt a mesh with the empirical surface model (Alg. 1-3) and record every cycle");
   auto o = std::make_shared<experiments::SimulateOptions>();
   auto order = std::make_shared<std::string>("morton");
   auto no_repair = std::make_shared<bool>(false);
   auto keep_going = std::make_shared<bool>(false);
   o->command_line = command_line;
 
-  sub->add_option("--mesh", o->mesh, "Mesh file (.off .ply .obj .stl) or a dataset name (meltlab dataset list)")->required();
-  sub->add_option("--cycles", o->cycles, "Number of cycles (stops earlier when everything has melted)")->default_val(1000);
+  sub->add_option("--mesh", o->mesh, "Mesh file (.off .ply .obj .stl) or a dataset name (meltlab dataset list)")
+      ->required();
+  sub->add_option("--cycles", o->cycles, "Number of cycles (stops earlier when everything has melted)")
+      ->default_val(1000);
   sub->add_option("--out", o->out_dir, "Output folder (stats.csv, run.json, snapshots/)")->required();
   MeltOptionSet melt;
   melt.threads = true;
@@ -36,7 +39,8 @@ Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
   std::map<std::string, sim::DeformMode> deform{{"combined", sim::DeformMode::kCombined},
                                                 {"normal", sim::DeformMode::kNormalOnly},
                                                 {"edge", sim::DeformMode::kEdgeOnly}};
-  sub->add_option("--deform", o->deform, "Displacement: combined (Eq. 3.6), normal (M_N only, Fig. 3.1), edge (M_E only)")
+  sub->add_option("--deform", o->deform,
+                  "Displacement: combined (Eq. 3.6), normal (M_N only, Fig. 3.1), edge (M_E only)")
       ->transform(CLI::CheckedTransformer(deform, CLI::ignore_case))
       ->default_str("combined");
   std::map<std::string, sim::TieRule> tie{{"le", sim::TieRule::kLessEqual}, {"strict", sim::TieRule::kStrict}};
@@ -49,29 +53,36 @@ Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
       ->default_str("mean");
   std::map<std::string, sim::MergeMode> merge{{"cluster-mean", sim::MergeMode::kClusterMean},
                                               {"pairwise", sim::MergeMode::kSequentialPairwise}};
-  sub->add_option("--merge", o->merge, "Merged position: cluster-mean (order-independent, GPU 5.4) or pairwise (CPU Alg. 2)")
+  sub->add_option("--merge", o->merge,
+                  "Merged position: cluster-mean (order-independent, GPU 5.4) or pairwise (CPU Alg. 2)")
       ->transform(CLI::CheckedTransformer(merge, CLI::ignore_case))
       ->default_str("cluster-mean");
   sub->add_option("--remnant-check-every", o->remnant_check_every,
                   "Every K cycles delete parts whose volume is <= 0 (inverted remnants; 0 = never)")
       ->default_val(16);
-  sub->add_option("--compact-below", o->compact_below,
-                  "Compact the arrays when fewer than this fraction of triangle slots is live (0 = never, as the monograph)")
+  sub->add_option(
+         "--compact-below", o->compact_below,
+         "Compact the arrays when fewer than this fraction of triangle slots is live (0 = never, as the monograph)")
       ->default_val(0.5);
-  sub->add_flag("--no-repair", *no_repair, "Do not run the topology repair after Alg. 3 (the monograph's algorithms only)");
+  sub->add_flag("--no-repair", *no_repair,
+                "Do not run the topology repair after Alg. 3 (the monograph's algorithms only)");
   sub->add_option("--order", *order, "Vertex numbering: morton (renumbered for locality) or file (as in the input)")
       ->check(CLI::IsMember({"morton", "file"}))
       ->default_val("morton");
-  sub->add_option("--snapshot-every", o->snapshot_every, "Write the mesh every K cycles (0 = first and last only)")->default_val(0);
-  sub->add_option("--snapshot-format", o->snapshot_format, "Snapshot file format: ply, off, obj, stl")->default_val("ply");
+  sub->add_option("--snapshot-every", o->snapshot_every, "Write the mesh every K cycles (0 = first and last only)")
+      ->default_val(0);
+  sub->add_option("--snapshot-format", o->snapshot_format, "Snapshot file format: ply, off, obj, stl")
+      ->default_val("ply");
   sub->add_option("--stats-every", o->stats_every, "Write a stats.csv row every K cycles")->default_val(1);
-  sub->add_option("--check-every", o->check_every, "Full topology check every K cycles; the run fails if it breaks (0 = off)")
+  sub->add_option("--check-every", o->check_every,
+                  "Full topology check every K cycles; the run fails if it breaks (0 = off)")
       ->default_val(0);
   sub->add_option("--check-intersections-every", o->intersect_every,
                   "CGAL self-intersection test every K cycles, recorded in run.json (0 = off)")
       ->default_val(0);
   sub->add_flag("--keep-going", *keep_going, "Keep cycling after the mesh has melted away");
-  sub->add_option("--weld-tol", o->load.weld_tolerance, "Merge input vertices closer than this (mesh units)")->default_val(0.0);
+  sub->add_option("--weld-tol", o->load.weld_tolerance, "Merge input vertices closer than this (mesh units)")
+      ->default_val(0.0);
   sub->add_flag("--repair", o->load.repair, "Repair open/non-manifold input with CGAL instead of refusing it");
   sub->add_flag("--overwrite", o->overwrite, "Allow --out to hold a previous run");
 
@@ -81,7 +92,8 @@ Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
     o->repair_topology = !*no_repair;
     o->stop_when_empty = !*keep_going;
     auto prepared = experiments::prepare_simulation(*o);
-    std::fprintf(stderr, "meltlab: %s: %zu vertices, %zu triangles, L0 = %.4g; kE = %.4g, kN = %.4g, kr = %.4g (mesh units)\n",
+    std::fprintf(stderr,
+                 "meltlab: %s: %zu vertices, %zu triangles, L0 = %.4g; kE = %.4g, kN = %.4g, kr = %.4g (mesh units)\n",
                  prepared->mesh_path.string().c_str(), prepared->mesh.V.size(), prepared->mesh.F.size(),
                  prepared->mean_edge_length, prepared->params.kE, prepared->params.kN, prepared->params.kr);
     g_stop.store(false);
@@ -90,7 +102,8 @@ Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
     const auto result = experiments::run_simulation(
         *prepared,
         [&](const experiments::SimulateProgress& p) {
-          line.update(p.cycle, p.cycles, fmt::format("cycles  {} triangles  {:.3f} ms/cycle", p.triangles, p.ms_per_cycle));
+          line.update(p.cycle, p.cycles,
+                      fmt::format("cycles  {} triangles  {:.3f} ms/cycle", p.triangles, p.ms_per_cycle));
         },
         &g_stop);
     line.finish();

@@ -67,9 +67,8 @@ Run add_synth_sequence(CLI::App& app, const std::vector<std::string>& command_li
     store_melt_options();
     if (!misalign->empty()) o->misalignment = parse_misalignment(*misalign);
     ProgressLine line;
-    experiments::make_synthetic_sequence(*o, [&](const experiments::SyntheticProgress& p) {
-      line.update(p.done, p.total, "photos");
-    });
+    experiments::make_synthetic_sequence(
+        *o, [&](const experiments::SyntheticProgress& p) { line.update(p.done, p.total, "photos"); });
     line.finish();
     std::fprintf(stderr, "meltlab: wrote %d photos, manifest.yaml and truth/ to %s\n", o->photos,
                  o->out_dir.string().c_str());

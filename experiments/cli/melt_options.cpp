@@ -27,7 +27,8 @@ std::function<void()> add_melt_options(CLI::App& sub, experiments::SimulateOptio
         ->check(CLI::IsMember({"float", "double"}))
         ->default_val("double");
   if (set.threads)
-    sub.add_option("--threads", options.threads, "Worker threads (0 = all cores, 1 = serial execution)")->default_val(0);
+    sub.add_option("--threads", options.threads, "Worker threads (0 = all cores, 1 = serial execution)")
+        ->default_val(0);
 
   return [&options, set, kn, kn_opt, units, precision]() {
     if (set.units) options.relative_units = *units == "relative";

@@ -20,11 +20,11 @@ struct MeltOptionSet {
   double kr = 0.5;
   std::string kg_help = "Global rate coefficient kg in [0, 1] (ambient temperature)";
   std::string kl_help = "YAML file with the local coefficient field (top-level key 'kl'); default kl = 1";
-  bool kn = true;          ///< --kn (default kE / 100)
-  bool units = true;       ///< --units relative|absolute; without it, coefficients are relative to L0
-  bool kl = true;          ///< --kl FILE
-  bool precision = true;   ///< --precision float|double; without it, double
-  bool threads = false;    ///< --threads N (default 0 = all cores)
+  bool kn = true;         ///< --kn (default kE / 100)
+  bool units = true;      ///< --units relative|absolute; without it, coefficients are relative to L0
+  bool kl = true;         ///< --kl FILE
+  bool precision = true;  ///< --precision float|double; without it, double
+  bool threads = false;   ///< --threads N (default 0 = all cores)
 };
 
 /// Declares the melt options of `set` on `sub`, bound to `options` (which must outlive the

@@ -22,19 +22,26 @@ namespace {
 
 const char* registration_name(verify::RegistrationMode m) {
   switch (m) {
-    case verify::RegistrationMode::kNone: return "none";
-    case verify::RegistrationMode::kFirstFrame: return "first";
-    case verify::RegistrationMode::kEveryFrame: return "every";
-    case verify::RegistrationMode::kGiven: return "given";
+    case verify::RegistrationMode::kNone:
+      return "none";
+    case verify::RegistrationMode::kFirstFrame:
+      return "first";
+    case verify::RegistrationMode::kEveryFrame:
+      return "every";
+    case verify::RegistrationMode::kGiven:
+      return "given";
   }
   return "?";
 }
 
 const char* refine_name(verify::RegistrationOptions::Refine r) {
   switch (r) {
-    case verify::RegistrationOptions::Refine::kNone: return "none";
-    case verify::RegistrationOptions::Refine::kIcp: return "icp";
-    case verify::RegistrationOptions::Refine::kEcc: return "ecc";
+    case verify::RegistrationOptions::Refine::kNone:
+      return "none";
+    case verify::RegistrationOptions::Refine::kIcp:
+      return "icp";
+    case verify::RegistrationOptions::Refine::kEcc:
+      return "ecc";
   }
   return "?";
 }
@@ -53,7 +60,8 @@ void require(bool ok, const std::string& message) {
 }  // namespace
 
 verify::CompareResult compare_and_write(const verify::ObservationSequence& obs, sim::MeshSequence& meshes,
-                                        const verify::CompareOptions& options, const fs::path& out_dir, int overlay_every,
+                                        const verify::CompareOptions& options, const fs::path& out_dir,
+                                        int overlay_every,
                                         const std::function<void(const CompareRunProgress&)>& progress,
                                         std::vector<double>* frame_ms) {
   create_output_directories(out_dir, "--out");
@@ -81,9 +89,9 @@ verify::CompareResult compare_and_write(const verify::ObservationSequence& obs, 
       });
   verify::write_per_frame_csv(out_dir / "per_frame.csv", result.frames);
   verify::write_image(out_dir / "p_curve.png",
-                      verify::p_curve_image(result.frames, fmt::format("{}: P per photo", obs.object.empty()
-                                                                                              ? obs.manifest.stem().string()
-                                                                                              : obs.object)));
+                      verify::p_curve_image(
+                          result.frames, fmt::format("{}: P per photo",
+                                                     obs.object.empty() ? obs.manifest.stem().string() : obs.object)));
   return result;
 }
 
@@ -126,11 +134,13 @@ json summarize_frames(const std::vector<verify::FrameResult>& frames) {
   return s;
 }
 
-CompareRunResult run_compare(const CompareRunOptions& o, const std::function<void(const CompareRunProgress&)>& progress) {
+CompareRunResult run_compare(const CompareRunOptions& o,
+                             const std::function<void(const CompareRunProgress&)>& progress) {
   const auto t_start = std::chrono::steady_clock::now();
   Provenance provenance = start_provenance("compare", o.command_line);
   const auto& m = o.compare.mapping;
-  require(!(m.cycles_per_photo && m.seconds_per_cycle), "--cycles-per-photo and --seconds-per-cycle exclude each other");
+  require(!(m.cycles_per_photo && m.seconds_per_cycle),
+          "--cycles-per-photo and --seconds-per-cycle exclude each other");
   if (m.cycles_per_photo)
     require(std::isfinite(*m.cycles_per_photo) && *m.cycles_per_photo > 0,
             fmt::format("--cycles-per-photo: must be a finite number > 0 (got {})", *m.cycles_per_photo));
@@ -156,7 +166,8 @@ CompareRunResult run_compare(const CompareRunOptions& o, const std::function<voi
   out.compare = compare_and_write(obs, replay, copt, folder.path(), o.overlay_every, progress, &frame_ms);
   out.summary = summarize_frames(out.compare.frames);
   json j;
-  j["run"] = {{"dir", fs::absolute(o.run_dir).string()}, {"cycles_run", replay.cycles_run()},
+  j["run"] = {{"dir", fs::absolute(o.run_dir).string()},
+              {"cycles_run", replay.cycles_run()},
               {"mesh", replay.run_json().value("mesh", json::object())}};
   j["observations"] = {{"manifest", fs::absolute(obs.manifest).string()},
                        {"manifest_hash", file_hash(obs.manifest)},

@@ -161,8 +161,10 @@ std::vector<verify::FitParameter> fit_parameters(const FitRunOptions& o, double 
             fmt::format("{} = {} lies outside its bounds [{}, {}]", name, p.initial, p.lower, p.upper));
     out.push_back(p);
   }
-  for (const auto& [name, v] : o.initial) require(known.count(name) > 0, fmt::format("--initial: unknown parameter '{}'", name));
-  for (const auto& [name, v] : o.bounds) require(known.count(name) > 0, fmt::format("--bound: unknown parameter '{}'", name));
+  for (const auto& [name, v] : o.initial)
+    require(known.count(name) > 0, fmt::format("--initial: unknown parameter '{}'", name));
+  for (const auto& [name, v] : o.bounds)
+    require(known.count(name) > 0, fmt::format("--bound: unknown parameter '{}'", name));
   return out;
 }
 
@@ -170,10 +172,12 @@ namespace {
 
 /// The kl field numbers named by --fit, --fix, --initial or --bound, read from the --kl file
 /// (loaded into `kl_doc` when one is named).
-std::map<std::string, double> kl_parameter_values(const FitRunOptions& o, const PreparedSimulation& prepared, YAML::Node& kl_doc) {
+std::map<std::string, double> kl_parameter_values(const FitRunOptions& o, const PreparedSimulation& prepared,
+                                                  YAML::Node& kl_doc) {
   std::map<std::string, double> kl_values;
   std::vector<std::string> names = o.fit;
-  for (const auto& m : {o.fix, o.initial}) for (const auto& [k, v] : m) names.push_back(k);
+  for (const auto& m : {o.fix, o.initial})
+    for (const auto& [k, v] : m) names.push_back(k);
   for (const auto& [k, v] : o.bounds) names.push_back(k);
   for (const std::string& name : names) {
     if (verify::fit_parameter_role(name) != verify::FitParameterRole::kKlField) continue;
@@ -187,16 +191,20 @@ std::map<std::string, double> kl_parameter_values(const FitRunOptions& o, const 
 
 /// The manifest's mass/volume series in m³ over the fitted photos (before the held-out ones).
 verify::VolumeSeries volume_series(const verify::ObservationSequence& obs, int n_fit) {
-  require(obs.mass_series.has_value(), fmt::format("{}: --volume-weight needs a mass_series in the manifest", obs.manifest.string()));
+  require(obs.mass_series.has_value(),
+          fmt::format("{}: --volume-weight needs a mass_series in the manifest", obs.manifest.string()));
   const verify::TimeSeries ts = verify::read_time_series(*obs.mass_series);
   verify::VolumeSeries vs;
   const double held_out_time = obs.interval_s ? *obs.interval_s * n_fit : kInf;
   for (std::size_t i = 0; i < ts.time_s.size(); ++i) {
     if (ts.time_s[i] >= held_out_time) break;
     double v = ts.value[i];
-    if (ts.quantity == "mass_g") v = v / 1000.0 / kIceDensity;
-    else if (ts.quantity == "mass_kg") v = v / kIceDensity;
-    else if (ts.quantity == "volume_cm3") v = v * 1e-6;
+    if (ts.quantity == "mass_g")
+      v = v / 1000.0 / kIceDensity;
+    else if (ts.quantity == "mass_kg")
+      v = v / kIceDensity;
+    else if (ts.quantity == "volume_cm3")
+      v = v * 1e-6;
     vs.time_s.push_back(ts.time_s[i]);
     vs.volume_m3.push_back(v);
   }
@@ -229,12 +237,17 @@ json fit_json(const verify::ObservationSequence& obs, const FitRunOptions& o, co
               const verify::CompareResult& cmp, int n_fit) {
   json j;
   const int n_frames = static_cast<int>(obs.frames.size());
-  j["observations"] = {{"manifest", fs::absolute(obs.manifest).string()}, {"manifest_hash", file_hash(obs.manifest)},
-                       {"frames", n_frames}, {"object", obs.object}};
+  j["observations"] = {{"manifest", fs::absolute(obs.manifest).string()},
+                       {"manifest_hash", file_hash(obs.manifest)},
+                       {"frames", n_frames},
+                       {"object", obs.object}};
   j["simulation"] = options_to_json(o.simulation);
   json est = json::object();
   for (const auto& e : fit.estimates) {
-    est[e.name] = {{"value", e.value}, {"initial", e.initial}, {"fixed", e.fixed}, {"at_bound", e.at_bound},
+    est[e.name] = {{"value", e.value},
+                   {"initial", e.initial},
+                   {"fixed", e.fixed},
+                   {"at_bound", e.at_bound},
                    {"standard_error", e.standard_error ? json(*e.standard_error) : json(nullptr)}};
   }
   j["estimates"] = est;

@@ -39,12 +39,14 @@ double signed_volume(const sim::IndexedMesh& m) {
 
 }  // namespace
 
-void manufacture_sequence(const ManufactureOptions& o, const std::function<void(const ManufactureProgress&)>& progress) {
+void manufacture_sequence(const ManufactureOptions& o,
+                          const std::function<void(const ManufactureProgress&)>& progress) {
   require(o.photos >= 1 && o.photos <= 100000, fmt::format("--photos: must be in [1, 100000] (got {})", o.photos));
   require(std::isfinite(o.interval_s) && o.interval_s > 0, "--interval-s: must be > 0");
   require(std::isfinite(o.mass_g) && o.mass_g > 0, "--mass-g: must be > 0");
   require(std::isfinite(o.voxel_mm) && o.voxel_mm >= 0.2 && o.voxel_mm <= 20, "--voxel-mm: must be in [0.2, 20]");
-  require(o.width >= 16 && o.height >= 16 && o.width <= 8192 && o.height <= 8192, "--width/--height: must be in [16, 8192]");
+  require(o.width >= 16 && o.height >= 16 && o.width <= 8192 && o.height <= 8192,
+          "--width/--height: must be in [16, 8192]");
   require(std::isfinite(o.camera_height_m) && o.camera_height_m > 0.05, "--camera-height-m: must be > 0.05");
   require(std::isfinite(o.fill) && o.fill > 0 && o.fill <= 1, "--fill: must be in (0, 1]");
   require(o.jpeg_quality >= 1 && o.jpeg_quality <= 100, "--jpeg-quality: must be in [1, 100]");
@@ -78,8 +80,9 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
 
   // ---- camera: straight down from camera_height_m, object spanning `fill` of the image ----
   const double fx = o.fill * std::min(o.width / extent.x(), o.height / extent.y()) * o.camera_height_m;
-  const render::Pinhole camera = render::Pinhole::look_at(o.width, o.height, fx, Eigen::Vector3d(0, 0, o.camera_height_m),
-                                                          Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 1, 0));
+  const render::Pinhole camera =
+      render::Pinhole::look_at(o.width, o.height, fx, Eigen::Vector3d(0, 0, o.camera_height_m),
+                               Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 1, 0));
 
   create_output_directories(dir / "frames", "--out");
   create_output_directories(dir / "truth" / "masks", "--out");
@@ -160,8 +163,11 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
   const auto ledger = solver.ledger();
   json truth;
   truth["generator"] = "meltlab manufacture (enthalpy reference solver + photo renderer)";
-  truth["mesh"] = {{"source", mesh_path.string()}, {"source_hash", file_hash(mesh_path)}, {"scale", scale},
-                   {"shift_m", {shift.x(), shift.y(), shift.z()}}, {"initial_mesh", "truth/initial_mesh.ply"}};
+  truth["mesh"] = {{"source", mesh_path.string()},
+                   {"source_hash", file_hash(mesh_path)},
+                   {"scale", scale},
+                   {"shift_m", {shift.x(), shift.y(), shift.z()}},
+                   {"initial_mesh", "truth/initial_mesh.ply"}};
   truth["physics"] = {{"voxel_mm", o.voxel_mm},
                       {"grid", {fraction0.nx, fraction0.ny, fraction0.nz}},
                       {"initial_mass_g", mass0_g},
@@ -174,11 +180,15 @@ void manufacture_sequence(const ManufactureOptions& o, const std::function<void(
                       {"lamp_W_m2", o.physics.lamp_irradiance_W_m2},
                       {"ground_conductance_W_m2K", o.physics.ground_conductance_W_m2K},
                       {"time_step_s", solver.time_step_s()}};
-  truth["energy"] = {{"heat_in_J", ledger.heat_in_J()}, {"latent_J", ledger.latent_J}, {"sensible_J", ledger.sensible_J()}};
+  truth["energy"] = {
+      {"heat_in_J", ledger.heat_in_J()}, {"latent_J", ledger.latent_J}, {"sensible_J", ledger.sensible_J()}};
   truth["camera"] = json::parse(render::describe_camera_json(camera));
-  truth["photo"] = {{"extinction_per_m", o.photo.extinction_per_m}, {"albedo", o.photo.albedo},
-                    {"noise_sigma", o.photo.noise_sigma}, {"blur_sigma_px", o.photo.lens_blur_sigma_px},
-                    {"jpeg_quality", o.jpeg_quality}, {"seed", o.seed}};
+  truth["photo"] = {{"extinction_per_m", o.photo.extinction_per_m},
+                    {"albedo", o.photo.albedo},
+                    {"noise_sigma", o.photo.noise_sigma},
+                    {"blur_sigma_px", o.photo.lens_blur_sigma_px},
+                    {"jpeg_quality", o.jpeg_quality},
+                    {"seed", o.seed}};
   truth["interval_s"] = o.interval_s;
   truth["frames"] = frames;
   truth["provenance"] = finish_provenance(provenance);

@@ -39,7 +39,8 @@ double median(std::vector<double> v) {
 std::vector<float> relief_threshold(int w, int h, float p) {
   std::vector<float> tp(static_cast<std::size_t>(w) * h);
   auto hash = [](int i, int j) {
-    std::uint64_t x = static_cast<std::uint64_t>(i) * 0x9E3779B97F4A7C15ull ^ static_cast<std::uint64_t>(j) * 0xC2B2AE3D27D4EB4Full;
+    std::uint64_t x =
+        static_cast<std::uint64_t>(i) * 0x9E3779B97F4A7C15ull ^ static_cast<std::uint64_t>(j) * 0xC2B2AE3D27D4EB4Full;
     x ^= x >> 29;
     x *= 0xBF58476D1CE4E5B9ull;
     x ^= x >> 32;
@@ -52,7 +53,8 @@ std::vector<float> relief_threshold(int w, int h, float p) {
       const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
       const double fx = x - x0, fy = y - y0;
       const double sx = fx * fx * (3 - 2 * fx), sy = fy * fy * (3 - 2 * fy);
-      const double n = (1 - sy) * ((1 - sx) * hash(x0, y0) + sx * hash(x0 + 1, y0)) + sy * ((1 - sx) * hash(x0, y0 + 1) + sx * hash(x0 + 1, y0 + 1));
+      const double n = (1 - sy) * ((1 - sx) * hash(x0, y0) + sx * hash(x0 + 1, y0)) +
+                       sy * ((1 - sx) * hash(x0, y0 + 1) + sx * hash(x0 + 1, y0 + 1));
       tp[static_cast<std::size_t>(j) * w + i] = p * static_cast<float>(0.5 + n);
     }
   return tp;
@@ -73,16 +75,19 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   require(o.mask_resolution >= 16 && o.mask_resolution <= 8192,
           fmt::format("--mask-resolution: must be in [16, 8192] (got {})", o.mask_resolution));
   require(o.threshold > 0.0f && std::isfinite(o.threshold), "--threshold: must be a finite number > 0");
-  require(o.far_fraction > 0 && o.far_fraction <= 1, fmt::format("--far-fraction: must be in (0, 1] (got {})", o.far_fraction));
+  require(o.far_fraction > 0 && o.far_fraction <= 1,
+          fmt::format("--far-fraction: must be in (0, 1] (got {})", o.far_fraction));
   require(o.mask_extent >= 1.0, fmt::format("--mask-extent: must be >= 1 (got {})", o.mask_extent));
-  require(o.width >= 0 && o.height >= 0 && o.width <= 16384 && o.height <= 16384, "--width/--height: must be in [1, 16384]");
+  require(o.width >= 0 && o.height >= 0 && o.width <= 16384 && o.height <= 16384,
+          "--width/--height: must be in [1, 16384]");
   require(o.up == 'x' || o.up == 'y' || o.up == 'z', fmt::format("--up: must be x, y or z (got '{}')", o.up));
   if (o.liquid_figure) {
     require(o.liquid, "--liquid-figure: needs the liquid stage (drop --no-liquid)");
     require(!o.figure_cycles.empty(), "--figure-cycles: give at least one cycle");
     for (auto c : o.figure_cycles) require(c >= 0, fmt::format("--figure-cycles: cycles must be >= 0 (got {})", c));
   }
-  render::RenderScene scene = o.scene_file.empty() ? render::RenderScene{} : render::load_render_scene(o.scene_file.string());
+  render::RenderScene scene =
+      o.scene_file.empty() ? render::RenderScene{} : render::load_render_scene(o.scene_file.string());
   if (o.width > 0) scene.width = o.width;
   if (o.height > 0) scene.height = o.height;
   auto prepared = prepare_simulation(o.melt, /*check_output=*/false);
@@ -155,22 +160,27 @@ RenderRunResult run_render(const RenderRunOptions& o) {
       if (renderer->scene().outputs.png)
         render::write_png(dir / "frames" / (stem + ".png"), img, renderer->scene().outputs.exposure,
                           renderer->scene().outputs.gamma);
-      const char* bvh = st.bvh == render::BvhUpdate::kRefit ? "refit" : st.bvh == render::BvhUpdate::kRebuild ? "rebuild" : "none";
+      const char* bvh = st.bvh == render::BvhUpdate::kRefit     ? "refit"
+                        : st.bvh == render::BvhUpdate::kRebuild ? "rebuild"
+                                                                : "none";
       rows.push_back(fmt::format("{},{},{},{:.3f},{:.3f},{:.9g},{}", cycle, triangles, bvh, st.bvh_ms, st.trace_ms,
                                  mask ? mask->total() : 0.0, mask ? mask->wet_count() : 0));
       trace_ms.push_back(st.trace_ms);
       ++result.frames;
     }
     if (cycle >= last) break;
-    if (!simulator.empty()) simulator.step();
-    else if (result.melted_at_cycle < 0) result.melted_at_cycle = cycle;
+    if (!simulator.empty())
+      simulator.step();
+    else if (result.melted_at_cycle < 0)
+      result.melted_at_cycle = cycle;
     if (mask) mask->step(simulator.mesh(), exec == sim::Execution::kParallel);
     result.cycles_run = cycle + 1;
   }
 
   // ---- outputs ----
   if (figure) {
-    write_text_atomically(dir / "liquid" / "mask_sums.csv", csv_text(rows, "cycle,triangles,mask_sum,wet_texels,mask_max"));
+    write_text_atomically(dir / "liquid" / "mask_sums.csv",
+                          csv_text(rows, "cycle,triangles,mask_sum,wet_texels,mask_max"));
   } else {
     write_text_atomically(dir / "frames.csv",
                           csv_text(rows, "cycle,triangles,bvh_update,bvh_ms,trace_ms,mask_sum,wet_texels"));
@@ -180,7 +190,10 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   j["mesh"] = prepared->mesh_json;
   j["mesh_up_axis"] = std::string(1, o.up);
   j["mesh_lift_z"] = lift;
-  j["melt"] = {{"kg", prepared->params.kg}, {"kE", prepared->params.kE}, {"kN", prepared->params.kN}, {"kr", prepared->params.kr}};
+  j["melt"] = {{"kg", prepared->params.kg},
+               {"kE", prepared->params.kE},
+               {"kN", prepared->params.kN},
+               {"kr", prepared->params.kr}};
   j["cycles"] = {{"requested", last}, {"run", result.cycles_run}, {"melted_at_cycle", result.melted_at_cycle}};
   if (mask) {
     const auto& mp = mask->params();

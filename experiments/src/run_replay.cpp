@@ -32,7 +32,8 @@ RunReplay::RunReplay(const fs::path& run_dir) {
   const std::string mesh_file = run_["mesh"].value("file", "");
   o.mesh = mesh_file;
   std::error_code ec;
-  if (!fs::exists(mesh_file, ec)) throw InputError(fmt::format("{}: the run's mesh {} no longer exists", name, mesh_file));
+  if (!fs::exists(mesh_file, ec))
+    throw InputError(fmt::format("{}: the run's mesh {} no longer exists", name, mesh_file));
   if (file_hash(mesh_file) != run_["mesh"].value("file_hash", ""))
     throw InputError(fmt::format("{}: the run's mesh {} has changed since the run", name, mesh_file));
   if (!o.kl_file.empty() && file_hash(o.kl_file) != run_["parameters"].value("kl_file_hash", ""))

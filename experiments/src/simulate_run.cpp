@@ -29,9 +29,12 @@ namespace {
 
 const char* name_of(sim::DeformMode m) {
   switch (m) {
-    case sim::DeformMode::kCombined: return "combined";
-    case sim::DeformMode::kNormalOnly: return "normal";
-    case sim::DeformMode::kEdgeOnly: return "edge";
+    case sim::DeformMode::kCombined:
+      return "combined";
+    case sim::DeformMode::kNormalOnly:
+      return "normal";
+    case sim::DeformMode::kEdgeOnly:
+      return "edge";
   }
   return "?";
 }
@@ -59,18 +62,20 @@ std::string enum_name(E e, const std::vector<std::pair<E, const char*>>& names) 
   return "?";
 }
 template <class E>
-E enum_value(const json& j, const char* key, const std::vector<std::pair<E, const char*>>& names, const std::string& source) {
+E enum_value(const json& j, const char* key, const std::vector<std::pair<E, const char*>>& names,
+             const std::string& source) {
   const std::string s = j.at(key).get<std::string>();
   for (const auto& [v, n] : names)
     if (s == n) return v;
   throw InputError(fmt::format("{}: options.{}: unknown value '{}'", source, key, s));
 }
-const std::vector<std::pair<sim::DeformMode, const char*>> kDeformNames = {
-    {sim::DeformMode::kCombined, "combined"}, {sim::DeformMode::kNormalOnly, "normal"}, {sim::DeformMode::kEdgeOnly, "edge"}};
+const std::vector<std::pair<sim::DeformMode, const char*>> kDeformNames = {{sim::DeformMode::kCombined, "combined"},
+                                                                           {sim::DeformMode::kNormalOnly, "normal"},
+                                                                           {sim::DeformMode::kEdgeOnly, "edge"}};
 const std::vector<std::pair<sim::TieRule, const char*>> kTieNames = {{sim::TieRule::kLessEqual, "le"},
-                                                                    {sim::TieRule::kStrict, "strict"}};
+                                                                     {sim::TieRule::kStrict, "strict"}};
 const std::vector<std::pair<sim::EdgeSumMode, const char*>> kEdgeSumNames = {{sim::EdgeSumMode::kMean, "mean"},
-                                                                            {sim::EdgeSumMode::kSum, "sum"}};
+                                                                             {sim::EdgeSumMode::kSum, "sum"}};
 const std::vector<std::pair<sim::MergeMode, const char*>> kMergeNames = {
     {sim::MergeMode::kClusterMean, "cluster-mean"}, {sim::MergeMode::kSequentialPairwise, "pairwise"}};
 }  // namespace
@@ -136,7 +141,8 @@ fs::path resolve_mesh_argument(const std::string& mesh) {
     return datasets::dataset_path(mesh);
   } catch (const InputError& e) {
     if (looks_like_path) throw InputError(fmt::format("{}: no such file", mesh));
-    throw InputError(fmt::format("{}: neither a mesh file nor a dataset ({}); see `meltlab dataset list`", mesh, e.what()));
+    throw InputError(
+        fmt::format("{}: neither a mesh file nor a dataset ({}); see `meltlab dataset list`", mesh, e.what()));
   }
 }
 
@@ -229,10 +235,12 @@ struct StatsWriter {
   void row(std::int64_t cycle, const sim::TriMesh<Real>& m, const sim::CycleReport& r, double ms) {
     const sim::TopologyReport topo = sim::check_topology(m, 1);
     const sim::QualityReport q = sim::mesh_quality(m);
-    out << fmt::format("{},{},{},{},{},{},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{},{},{:.4g},{:.4g},{:.4g},{:.4g}\n",
-                       cycle, topo.counts.V, topo.counts.F, topo.counts.S, topo.counts.chi, topo.counts.G, q.volume, q.area,
-                       q.Qs, q.Qd, q.Qq, q.max_d, ms, r.merged_vertices, r.glued_triangles, r.repair_vertex_splits,
-                       r.repair_edge_collapses, r.inverted_parts_removed, r.deform_ms, r.collapse_ms, r.glued_ms, r.repair_ms);
+    out << fmt::format(
+        "{},{},{},{},{},{},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{},{},{:.4g},{:.4g},{:.4g},{:.4g}"
+        "\n",
+        cycle, topo.counts.V, topo.counts.F, topo.counts.S, topo.counts.chi, topo.counts.G, q.volume, q.area, q.Qs,
+        q.Qd, q.Qq, q.max_d, ms, r.merged_vertices, r.glued_triangles, r.repair_vertex_splits, r.repair_edge_collapses,
+        r.inverted_parts_removed, r.deform_ms, r.collapse_ms, r.glued_ms, r.repair_ms);
   }
   void finish() {
     out.flush();
@@ -281,7 +289,8 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
   json intersections = json::array();
   if (o.intersect_every > 0) {
     const sim::SelfIntersectionReport si = sim::self_intersections(simulator.mesh(), 1000);
-    intersections.push_back({{"cycle", 0}, {"intersecting_pairs", si.pairs}, {"triangles", simulator.mesh().live_triangle_count()}});
+    intersections.push_back(
+        {{"cycle", 0}, {"intersecting_pairs", si.pairs}, {"triangles", simulator.mesh().live_triangle_count()}});
     if (si.intersects) first_intersection = 0;
   }
   sim::CycleReport last;
@@ -316,8 +325,9 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
         ++checks;
         const sim::TopologyReport topo = sim::check_topology(simulator.mesh());
         if (!topo.valid())
-          throw InvariantError(fmt::format("cycle {}: invalid topology: {}", c,
-                                           topo.problems.empty() ? "Euler counts inconsistent" : topo.problems.front().describe()));
+          throw InvariantError(
+              fmt::format("cycle {}: invalid topology: {}", c,
+                          topo.problems.empty() ? "Euler counts inconsistent" : topo.problems.front().describe()));
       }
       if (o.intersect_every > 0 && (c % o.intersect_every == 0)) {
         ++intersect_checks;
@@ -392,7 +402,8 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
       {"cycles_requested", o.cycles},
       {"cycles_run", c},
       {"empty_at_cycle", result.empty_at_cycle},
-      {"final", {{"vertices", simulator.mesh().live_vertex_count()}, {"triangles", simulator.mesh().live_triangle_count()}}},
+      {"final",
+       {{"vertices", simulator.mesh().live_vertex_count()}, {"triangles", simulator.mesh().live_triangle_count()}}},
       {"inverted_parts_removed", inverted_removed},
       {"timing",
        {{"total_s", total_s},
@@ -401,7 +412,10 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
         {"cycle_ms_p95", percentile(cycle_ms, 0.95)},
         {"cycle_ms_max", cycle_ms.empty() ? 0.0 : *std::max_element(cycle_ms.begin(), cycle_ms.end())},
         {"pass_ms_mean",
-         {{"deform", sum_pass[0] / n}, {"collapse", sum_pass[1] / n}, {"glued", sum_pass[2] / n}, {"repair", sum_pass[3] / n}}},
+         {{"deform", sum_pass[0] / n},
+          {"collapse", sum_pass[1] / n},
+          {"glued", sum_pass[2] / n},
+          {"repair", sum_pass[3] / n}}},
         {"note", "cycle times exclude statistics, checks and snapshots"}}},
       {"checks",
        {{"topology_every", o.check_every},
@@ -423,7 +437,8 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
 
 }  // namespace
 
-SimulateResult run_simulation(PreparedSimulation& prepared, const std::function<void(const SimulateProgress&)>& progress,
+SimulateResult run_simulation(PreparedSimulation& prepared,
+                              const std::function<void(const SimulateProgress&)>& progress,
                               const std::atomic<bool>* stop) {
   if (prepared.opt.double_precision) return run_typed<double>(prepared, progress, stop);
   return run_typed<float>(prepared, progress, stop);

@@ -71,14 +71,17 @@ void write_photo(const fs::path& file, const cv::Mat& bgr, int jpeg_quality) {
 
 }  // namespace
 
-void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::function<void(const SyntheticProgress&)>& progress) {
+void make_synthetic_sequence(const SyntheticSequenceOptions& o,
+                             const std::function<void(const SyntheticProgress&)>& progress) {
   require(o.photos >= 1 && o.photos <= 100000, fmt::format("--photos: must be in [1, 100000] (got {})", o.photos));
   require(std::isfinite(o.cycles_per_photo) && o.cycles_per_photo > 0,
           fmt::format("--cycles-per-photo: must be a finite number > 0 (got {})", o.cycles_per_photo));
-  require(std::isfinite(o.interval_s) && o.interval_s > 0, fmt::format("--interval-s: must be > 0 (got {})", o.interval_s));
+  require(std::isfinite(o.interval_s) && o.interval_s > 0,
+          fmt::format("--interval-s: must be > 0 (got {})", o.interval_s));
   require(o.width >= 16 && o.height >= 16 && o.width <= 16384 && o.height <= 16384,
           fmt::format("--width/--height: must be in [16, 16384] (got {}x{})", o.width, o.height));
-  require(std::isfinite(o.fill) && o.fill > 0 && o.fill <= 1, fmt::format("--fill: must be in (0, 1] (got {})", o.fill));
+  require(std::isfinite(o.fill) && o.fill > 0 && o.fill <= 1,
+          fmt::format("--fill: must be in (0, 1] (got {})", o.fill));
   require(std::isfinite(o.noise_sigma) && o.noise_sigma >= 0, "--noise: must be >= 0");
   require(std::isfinite(o.blur_sigma_px) && o.blur_sigma_px >= 0, "--blur: must be >= 0");
   require(o.jpeg_quality >= 0 && o.jpeg_quality <= 100, "--jpeg-quality: must be in [0, 100]");
@@ -178,13 +181,15 @@ void make_synthetic_sequence(const SyntheticSequenceOptions& o, const std::funct
                            {"tx_px", mis.translation.x()},
                            {"ty_px", mis.translation.y()}};
   truth["seed"] = o.seed;
-  truth["image_model"] = {{"noise_sigma", o.noise_sigma}, {"blur_sigma_px", o.blur_sigma_px}, {"jpeg_quality", o.jpeg_quality}};
+  truth["image_model"] = {
+      {"noise_sigma", o.noise_sigma}, {"blur_sigma_px", o.blur_sigma_px}, {"jpeg_quality", o.jpeg_quality}};
   truth["frames"] = frames;
   truth["provenance"] = finish_provenance(provenance);
   write_text_atomically(dir / "truth" / "truth.json", truth.dump(2) + "\n");
 
   SequenceManifest manifest;
-  manifest.comment = "Made by meltlab synth-sequence (the empirical model: inverse-crime data). Truth: truth/truth.json";
+  manifest.comment =
+      "Made by meltlab synth-sequence (the empirical model: inverse-crime data). Truth: truth/truth.json";
   manifest.object = fs::path(o.simulation.mesh).stem().string();
   manifest.interval_s = o.interval_s;
   manifest.camera = camera;

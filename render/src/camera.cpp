@@ -110,7 +110,8 @@ double ground_units_per_pixel(const Camera& c) {
   return t / p.fx;  // depth along the optical axis ≈ t (the axis is the ray)
 }
 
-RayGenerator::RayGenerator(const Camera& camera, double ortho_start_z) : camera_(camera), ortho_start_z_(ortho_start_z) {
+RayGenerator::RayGenerator(const Camera& camera, double ortho_start_z)
+    : camera_(camera), ortho_start_z_(ortho_start_z) {
   if (const auto* p = std::get_if<Pinhole>(&camera_)) world_from_camera_ = p->camera_from_world.inverse();
 }
 
@@ -183,9 +184,11 @@ Camera parse_orthographic(const ConfigSection& c) {
   OrthographicTopDown o;
   o.width = c.require_in_range<int>("width", 1, kMaxImageSide);
   o.height = c.require_in_range<int>("height", 1, kMaxImageSide);
-  if (c.has("pixels_per_mm") == c.has("pixels_per_unit")) c.fail("give exactly one of 'pixels_per_mm' and 'pixels_per_unit'");
+  if (c.has("pixels_per_mm") == c.has("pixels_per_unit"))
+    c.fail("give exactly one of 'pixels_per_mm' and 'pixels_per_unit'");
   if (c.has("centre_m") && c.has("centre")) c.fail("give at most one of 'centre_m' and 'centre'");
-  o.pixels_per_unit = c.has("pixels_per_mm") ? 1000.0 * c.require_positive("pixels_per_mm") : c.require_positive("pixels_per_unit");
+  o.pixels_per_unit =
+      c.has("pixels_per_mm") ? 1000.0 * c.require_positive("pixels_per_mm") : c.require_positive("pixels_per_unit");
   for (const char* key : {"centre_m", "centre"}) {
     if (!c.has(key)) continue;
     const auto v = c.require_numbers(key, 2, 2);
@@ -211,7 +214,8 @@ Camera parse_pinhole(const ConfigSection& c) {
     const double ortho_err = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
     if (ortho_err > 1e-6 || R.determinant() <= 0.0 || M(3, 0) != 0.0 || M(3, 1) != 0.0 || M(3, 2) != 0.0 ||
         M(3, 3) != 1.0)
-      c.fail_at("camera_from_world", "'camera_from_world' must be a rigid transform (rotation + translation, last row 0 0 0 1)");
+      c.fail_at("camera_from_world",
+                "'camera_from_world' must be a rigid transform (rotation + translation, last row 0 0 0 1)");
     p.camera_from_world.matrix() = M;
     p.width = width;
     p.height = height;
@@ -255,19 +259,19 @@ std::string describe_camera_json(const Camera& c) {
   // fmt's "{}" prints the shortest decimal that reads back to the same double, so the text
   // round-trips exactly through parse_camera.
   if (const auto* o = std::get_if<OrthographicTopDown>(&c)) {
-    return fmt::format(R"({{"type": "orthographic", "width": {}, "height": {}, "pixels_per_unit": {}, "centre": [{}, {}]}})",
-                       o->width, o->height, o->pixels_per_unit, o->centre.x(), o->centre.y());
+    return fmt::format(
+        R"({{"type": "orthographic", "width": {}, "height": {}, "pixels_per_unit": {}, "centre": [{}, {}]}})", o->width,
+        o->height, o->pixels_per_unit, o->centre.x(), o->centre.y());
   }
   const auto& p = std::get<Pinhole>(c);
   const Eigen::Matrix4d M = p.camera_from_world.matrix();
   std::string rows;
   for (int r = 0; r < 4; ++r)
     rows += fmt::format("{}[{}, {}, {}, {}]", r ? ", " : "", M(r, 0), M(r, 1), M(r, 2), M(r, 3));
-  return fmt::format(
-      R"({{"type": "pinhole", "width": {}, "height": {}, "fx": {}, "fy": {}, "cx": {}, "cy": {}, )"
-      R"("distortion": [{}, {}, {}, {}, {}], "camera_from_world": [{}]}})",
-      p.width, p.height, p.fx, p.fy, p.cx, p.cy, p.distortion[0], p.distortion[1], p.distortion[2], p.distortion[3],
-      p.distortion[4], rows);
+  return fmt::format(R"({{"type": "pinhole", "width": {}, "height": {}, "fx": {}, "fy": {}, "cx": {}, "cy": {}, )"
+                     R"("distortion": [{}, {}, {}, {}, {}], "camera_from_world": [{}]}})",
+                     p.width, p.height, p.fx, p.fy, p.cx, p.cy, p.distortion[0], p.distortion[1], p.distortion[2],
+                     p.distortion[3], p.distortion[4], rows);
 }
 
 bool undistort_normalized(const std::array<double, 5>& d, double xd, double yd, double& x_out, double& y_out) {

@@ -26,7 +26,8 @@ std::filesystem::path image_file(const ConfigSection& c, const std::string& key,
   std::filesystem::path f(*name);
   if (f.is_relative()) f = base / f;
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(f, ec)) c.fail_at(key, fmt::format("'{}': no such image file {}", key, f.string()));
+  if (!std::filesystem::is_regular_file(f, ec))
+    c.fail_at(key, fmt::format("'{}': no such image file {}", key, f.string()));
   return f;
 }
 
@@ -38,14 +39,16 @@ Vec3d vec3(const ConfigSection& c, const std::string& key, const Vec3d& fallback
 }
 
 void read_ice(const ConfigSection& is, const std::filesystem::path& base, IceMaterial& m) {
-  m.model = is.get_choice("model", "monograph", {"monograph", "physical"}) == "physical" ? IceModel::kPhysical : IceModel::kMonograph;
+  m.model = is.get_choice("model", "monograph", {"monograph", "physical"}) == "physical" ? IceModel::kPhysical
+                                                                                         : IceModel::kMonograph;
   m.ca = is.get_in_range("ca", m.ca, 0.0, 100.0);
   m.cd = is.get_in_range("cd", m.cd, 0.0, 100.0);
   m.cs = is.get_in_range("cs", m.cs, 0.0, 100.0);
   m.n_spec = is.get_in_range("n_spec", m.n_spec, 0.0, 1e6);
   m.cr = is.get_in_range("cr", m.cr, 0.0, 100.0);
   m.ct = is.get_in_range("ct", m.ct, 0.0, 100.0);
-  m.fresnel = is.get_choice("fresnel", "full", {"full", "schlick"}) == "schlick" ? FresnelMode::kSchlick : FresnelMode::kFull;
+  m.fresnel =
+      is.get_choice("fresnel", "full", {"full", "schlick"}) == "schlick" ? FresnelMode::kSchlick : FresnelMode::kFull;
   m.specular = is.get_choice("specular", "RsV", {"RsV", "RsL"}) == "RsL" ? SpecularTerm::kRsL : SpecularTerm::kRsV;
   m.dispersion = is.get("dispersion", m.dispersion);
   m.eta = is.get_in_range("eta", m.eta, 1.0, 4.0);
@@ -94,8 +97,8 @@ void read_environment(const ConfigSection& es, const std::filesystem::path& base
   env.to_sun = vec3(es, "to_sun", env.to_sun, true);
   env.sun_radiance = es.get_in_range("sun_radiance", env.sun_radiance, 0.0, 1e6);
   env.file = image_file(es, "file", base);
-  env.layout = *environment_layout_from_name(
-      es.get_choice("layout", "auto", {"auto", "latlong", "cube_3x2", "cube_1x6", "cross_horizontal", "cross_vertical"}));
+  env.layout = *environment_layout_from_name(es.get_choice(
+      "layout", "auto", {"auto", "latlong", "cube_3x2", "cube_1x6", "cross_horizontal", "cross_vertical"}));
 }
 
 void read_outputs(const ConfigSection& os, RenderOutputs& out) {
@@ -116,8 +119,9 @@ RenderScene parse_render_scene(const YAML::Node& node, const std::string& source
   if (const auto camera = top.optional_section("camera")) s.camera = parse_camera(*camera);
   s.width = top.get_in_range("width", s.width, 1, 16384);
   s.height = top.get_in_range("height", s.height, 1, 16384);
-  s.texture_filter = top.get_choice("texture_filter", "bilinear", {"bilinear", "mipmap"}) == "mipmap" ? TextureFilter::kMipmap
-                                                                                                     : TextureFilter::kBilinear;
+  s.texture_filter = top.get_choice("texture_filter", "bilinear", {"bilinear", "mipmap"}) == "mipmap"
+                         ? TextureFilter::kMipmap
+                         : TextureFilter::kBilinear;
   if (top.has("lights")) {
     s.lights.clear();
     for (const ConfigSection& ls : top.sections("lights")) {
@@ -165,30 +169,37 @@ std::string describe_render_scene_json(const RenderScene& s) {
   };
   std::string lights;
   for (const auto& l : s.lights)
-    lights += fmt::format("{}{{\"to_light\": [{}, {}, {}], \"colour\": [{}, {}, {}]}}", lights.empty() ? "" : ", ", l.to_light.x(),
-                          l.to_light.y(), l.to_light.z(), l.colour.x(), l.colour.y(), l.colour.z());
+    lights += fmt::format("{}{{\"to_light\": [{}, {}, {}], \"colour\": [{}, {}, {}]}}", lights.empty() ? "" : ", ",
+                          l.to_light.x(), l.to_light.y(), l.to_light.z(), l.colour.x(), l.colour.y(), l.colour.z());
   return fmt::format(
       "{{\"camera\": {}, \"texture_filter\": \"{}\", \"lights\": [{}], "
       "\"ice\": {{\"model\": \"{}\", \"ca\": {}, \"cd\": {}, \"cs\": {}, \"n_spec\": {}, \"cr\": {}, \"ct\": {}, "
       "\"fresnel\": \"{}\", \"specular\": \"{}\", \"dispersion\": {}, \"eta\": {}, \"eta_rgb\": [{}, {}, {}], "
       "\"eta_convention\": \"air to ice eta_i/eta_t = 1/eta\", \"texture_scale\": {}, \"texture_source\": {}, "
       "\"texture_tile\": {}, \"normal_map\": {}, "
-      "\"normal_map_space\": \"tangent, projected along the dominant axis\", \"normal_map_tile\": {}, \"normal_map_bump\": {}, "
+      "\"normal_map_space\": \"tangent, projected along the dominant axis\", \"normal_map_tile\": {}, "
+      "\"normal_map_bump\": {}, "
       "\"normal_map_source\": {}, "
       "\"absorption\": [{}, {}, {}], \"max_internal_bounces\": {}}}, "
-      "\"ground\": {{\"z\": {}, \"tile\": {}, \"textured\": {}, \"texture_source\": {}, \"ca\": {}, \"cd\": {}, \"cs\": {}, \"n_spec\": {}, \"a\": {}, \"cr\": {}, "
+      "\"ground\": {{\"z\": {}, \"tile\": {}, \"textured\": {}, \"texture_source\": {}, \"ca\": {}, \"cd\": {}, "
+      "\"cs\": {}, \"n_spec\": {}, \"a\": {}, \"cr\": {}, "
       "\"tilt_s\": {}, \"tilt_t\": {}, \"d\": {}, \"rs_uses_n_star\": {}, \"liquid\": {}, \"rim_offset_texels\": 1}}, "
-      "\"environment\": {{\"type\": \"lat-long\", \"source\": {}, \"layout\": \"{}\", \"width\": {}, \"height\": {}, \"to_sun\": [{}, {}, {}], "
+      "\"environment\": {{\"type\": \"lat-long\", \"source\": {}, \"layout\": \"{}\", \"width\": {}, \"height\": {}, "
+      "\"to_sun\": [{}, {}, {}], "
       "\"sun_radiance\": {}}}, \"outputs\": {{\"exr\": {}, \"png\": {}, \"exposure\": {}, \"gamma\": {}}}}}",
       s.camera ? describe_camera_json(*s.camera) : std::string("\"auto\""),
-      s.texture_filter == TextureFilter::kMipmap ? "mipmap (OpenImageIO TextureSystem, ray differentials)" : "bilinear", lights,
-      m.model == IceModel::kMonograph ? "monograph" : "physical", m.ca, m.cd, m.cs, m.n_spec, m.cr, m.ct,
-      m.fresnel == FresnelMode::kFull ? "full" : "schlick", m.specular == SpecularTerm::kRsV ? "RsV" : "RsL", m.dispersion,
-      m.eta, m.eta_rgb[0], m.eta_rgb[1], m.eta_rgb[2], m.texture_scale, source_of(m.texture_file, "procedural milky ice"), m.texture_tile, m.normal_map, m.normal_map_tile, m.normal_map_bump,
-      source_of(m.normal_map_file, "procedural"), m.absorption[0], m.absorption[1], m.absorption[2], m.max_internal_bounces,
-      g.z ? fmt::format("{}", *g.z) : std::string("null"), g.tile, g.textured, source_of(g.texture_file, "procedural"), g.ca, g.cd, g.cs, g.n_spec, g.a, g.cr, g.tilt_s, g.tilt_t, g.d,
-      g.rs_uses_n_star, g.liquid, source_of(s.environment.file, "procedural"), environment_layout_name(s.environment.layout), s.environment.width, s.environment.height, s.environment.to_sun.x(), s.environment.to_sun.y(),
-      s.environment.to_sun.z(), s.environment.sun_radiance, s.outputs.exr, s.outputs.png, s.outputs.exposure, s.outputs.gamma);
+      s.texture_filter == TextureFilter::kMipmap ? "mipmap (OpenImageIO TextureSystem, ray differentials)" : "bilinear",
+      lights, m.model == IceModel::kMonograph ? "monograph" : "physical", m.ca, m.cd, m.cs, m.n_spec, m.cr, m.ct,
+      m.fresnel == FresnelMode::kFull ? "full" : "schlick", m.specular == SpecularTerm::kRsV ? "RsV" : "RsL",
+      m.dispersion, m.eta, m.eta_rgb[0], m.eta_rgb[1], m.eta_rgb[2], m.texture_scale,
+      source_of(m.texture_file, "procedural milky ice"), m.texture_tile, m.normal_map, m.normal_map_tile,
+      m.normal_map_bump, source_of(m.normal_map_file, "procedural"), m.absorption[0], m.absorption[1], m.absorption[2],
+      m.max_internal_bounces, g.z ? fmt::format("{}", *g.z) : std::string("null"), g.tile, g.textured,
+      source_of(g.texture_file, "procedural"), g.ca, g.cd, g.cs, g.n_spec, g.a, g.cr, g.tilt_s, g.tilt_t, g.d,
+      g.rs_uses_n_star, g.liquid, source_of(s.environment.file, "procedural"),
+      environment_layout_name(s.environment.layout), s.environment.width, s.environment.height,
+      s.environment.to_sun.x(), s.environment.to_sun.y(), s.environment.to_sun.z(), s.environment.sun_radiance,
+      s.outputs.exr, s.outputs.png, s.outputs.exposure, s.outputs.gamma);
 }
 
 }  // namespace meltlab::render

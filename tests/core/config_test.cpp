@@ -55,13 +55,13 @@ TEST(Config, TypedValuesAndDefaults) {
 TEST(Config, WrongTypesNameFileLineAndKey) {
   const ConfigSection c = section_of(
       "a: 1\n"
-      "n: abc\n"           // line 2
-      "i: 1.5\n"           // line 3
-      "b: maybe\n"         // line 4
-      "s: [x]\n"           // line 5
-      "v: [1, 2]\n"        // line 6
-      "w: [1, x, 3]\n"     // line 7
-      "f: .inf\n");        // line 8
+      "n: abc\n"        // line 2
+      "i: 1.5\n"        // line 3
+      "b: maybe\n"      // line 4
+      "s: [x]\n"        // line 5
+      "v: [1, 2]\n"     // line 6
+      "w: [1, x, 3]\n"  // line 7
+      "f: .inf\n");     // line 8
   // yaml-cpp's BadConversion becomes an InputError naming the value.
   EXPECT_EQ(error_of([&] { c.require<double>("n"); }), "c.yaml:2: 'n' must be a number (got 'abc')");
   EXPECT_EQ(error_of([&] { c.require<int>("i"); }), "c.yaml:3: 'i' must be an integer (got '1.5')");
@@ -75,11 +75,14 @@ TEST(Config, WrongTypesNameFileLineAndKey) {
 
 TEST(Config, RangesAndChoices) {
   const ConfigSection c = section_of("eta: 5\nn: 0\nw: -2\nmode: exact\n");
-  EXPECT_EQ(error_of([&] { c.get_in_range<double>("eta", 1.31, 1.0, 4.0); }), "c.yaml:1: 'eta' must be in [1, 4] (got 5)");
+  EXPECT_EQ(error_of([&] { c.get_in_range<double>("eta", 1.31, 1.0, 4.0); }),
+            "c.yaml:1: 'eta' must be in [1, 4] (got 5)");
   EXPECT_EQ(c.get_in_range<double>("gamma", 2.2, 0.1, 10.0), 2.2);
   EXPECT_EQ(error_of([&] { c.require_in_range<int>("w", 1, 64); }), "c.yaml:3: 'w' must be in [1, 64] (got -2)");
   EXPECT_EQ(error_of([&] { c.require_positive("n"); }), "c.yaml:2: 'n' must be > 0 (got 0)");
-  EXPECT_EQ(error_of([&] { c.get_choice("mode", "full", {"full", "schlick"}); }),
+  EXPECT_EQ(error_of([&] {
+              c.get_choice("mode", "full", {"full", "schlick"});
+            }),
             "c.yaml:4: 'mode' must be one of full, schlick (got 'exact')");
   EXPECT_EQ(c.get_choice("other", "full", {"full", "schlick"}), "full");
 }
@@ -159,7 +162,8 @@ TEST(Config, FreeStandingValuesAndTheirSections) {
   const ConfigValue scalar(YAML::Load("0.5"), "k.yaml", "kl");
   EXPECT_TRUE(scalar.is_scalar());
   EXPECT_EQ(scalar.as<double>(), 0.5);
-  const ConfigValue field(YAML::Load("\n{type: product, of: [0.5, {type: constant, value: 1, extra: 2}]}"), "k.yaml", "kl");
+  const ConfigValue field(YAML::Load("\n{type: product, of: [0.5, {type: constant, value: 1, extra: 2}]}"), "k.yaml",
+                          "kl");
   ASSERT_TRUE(field.is_map());
   const ConfigSection top = field.section();
   EXPECT_EQ(top.require<std::string>("type"), "product");
@@ -171,7 +175,8 @@ TEST(Config, FreeStandingValuesAndTheirSections) {
   leaf.require<std::string>("type");
   leaf.require<double>("value");
   EXPECT_EQ(error_of([&] { field.finish(); }), "k.yaml:2: kl.of[1]: unknown key 'extra' (allowed: type, value)");
-  EXPECT_EQ(error_of([&] { of[1].fail("not after the previous frame"); }), "k.yaml:2: kl.of[1]: not after the previous frame");
+  EXPECT_EQ(error_of([&] { of[1].fail("not after the previous frame"); }),
+            "k.yaml:2: kl.of[1]: not after the previous frame");
   EXPECT_EQ(error_of([&] { top.fail_at("type", "'type' product needs two fields"); }),
             "k.yaml:2: kl: 'type' product needs two fields");
 }

@@ -25,11 +25,11 @@ namespace meltlab {
 namespace {
 
 namespace fs = std::filesystem;
-using ::testing::HasSubstr;
-using ::testing::Not;
 using test::message_of;
 using test::TempFolder;
 using test::write_file;
+using ::testing::HasSubstr;
+using ::testing::Not;
 
 // ---- errors ----
 
@@ -189,7 +189,9 @@ TEST(RunFolder, RefusesAFinishedRunWithoutOverwriteAndReplacesItWith) {
   const fs::path out = dir.path() / "a";
   fs::create_directories(out);
   write_file(out / "run.json", "old");
-  EXPECT_THAT(message_of([&] { RunFolder(out, RunFolderOptions{"--out", "run.json", "run", false}); }),
+  EXPECT_THAT(message_of([&] {
+                RunFolder(out, RunFolderOptions{"--out", "run.json", "run", false});
+              }),
               HasSubstr("pass --overwrite"));
   RunFolder run(out, RunFolderOptions{"--out", "run.json", "run", true});
   write_file(run.path() / "run.json", "new");
@@ -200,11 +202,15 @@ TEST(RunFolder, RefusesAFinishedRunWithoutOverwriteAndReplacesItWith) {
 TEST(RunFolder, RefusesAFileInTheWayAndAForeignFolder) {
   const TempFolder dir;
   write_file(dir.path() / "file", "x");
-  EXPECT_THAT(message_of([&] { RunFolder(dir.path() / "file", RunFolderOptions{"--out", "run.json", "run", true}); }),
+  EXPECT_THAT(message_of([&] {
+                RunFolder(dir.path() / "file", RunFolderOptions{"--out", "run.json", "run", true});
+              }),
               HasSubstr("is not a folder"));
   fs::create_directories(dir.path() / "photos");
   write_file(dir.path() / "photos" / "img.png", "x");
-  EXPECT_THAT(message_of([&] { RunFolder(dir.path() / "photos", RunFolderOptions{"--out", "run.json", "run", true}); }),
+  EXPECT_THAT(message_of([&] {
+                RunFolder(dir.path() / "photos", RunFolderOptions{"--out", "run.json", "run", true});
+              }),
               HasSubstr("not empty"));
   EXPECT_TRUE(fs::exists(dir.path() / "photos" / "img.png"));  // --overwrite never deletes foreign files
 }
@@ -212,13 +218,16 @@ TEST(RunFolder, RefusesAFileInTheWayAndAForeignFolder) {
 TEST(RunFolder, FileSystemRefusalsAreOneSentenceInputErrors) {
   const TempFolder dir;
   const std::string too_long(300, 'n');  // NAME_MAX is 255 on Linux file systems
-  const std::string what =
-      message_of([&] { RunFolder(dir.path() / too_long / "a", RunFolderOptions{"--out", "run.json", "run", false}); });
+  const std::string what = message_of([&] {
+    RunFolder(dir.path() / too_long / "a", RunFolderOptions{"--out", "run.json", "run", false});
+  });
   EXPECT_THAT(what, HasSubstr("--out"));
   EXPECT_THAT(what, HasSubstr("cannot"));
   EXPECT_THAT(what, Not(HasSubstr("filesystem error")));
   write_file(dir.path() / "plain", "x");
-  EXPECT_THAT(message_of([&] { RunFolder(dir.path() / "plain" / "a", RunFolderOptions{"--out", "run.json", "run", false}); }),
+  EXPECT_THAT(message_of([&] {
+                RunFolder(dir.path() / "plain" / "a", RunFolderOptions{"--out", "run.json", "run", false});
+              }),
               HasSubstr("--out"));
 }
 

@@ -18,10 +18,10 @@ namespace meltlab {
 namespace {
 
 namespace fs = std::filesystem;
-using ::testing::HasSubstr;
 using test::message_of;
 using test::TempFolder;
 using test::write_file;
+using ::testing::HasSubstr;
 
 /// A w x h image with `channels` channels whose value (x, y, c) is f(x, y, c).
 template <class T, class F>
@@ -38,7 +38,8 @@ Image<T> pattern(int w, int h, int channels, F f) {
 TEST(ImageFiles, FloatExrRoundTripsHalfValuesExactly) {
   const TempFolder dir;
   // Multiples of 1/16 below 2048 are exact in half floats.
-  const ImageF img = pattern<float>(7, 5, 3, [](int x, int y, int c) { return static_cast<float>(x + 7 * y + 35 * c) / 16.0f; });
+  const ImageF img =
+      pattern<float>(7, 5, 3, [](int x, int y, int c) { return static_cast<float>(x + 7 * y + 35 * c) / 16.0f; });
   write_image(dir.path() / "a.exr", img);
   PixelFormat stored = PixelFormat::kUint8;
   const ImageF back = read_image(dir.path() / "a.exr", input_limits().image_pixels, ImageAlpha::kAsStored, &stored);
@@ -48,7 +49,8 @@ TEST(ImageFiles, FloatExrRoundTripsHalfValuesExactly) {
 
 TEST(ImageFiles, FullFloatExrKeepsEveryBit) {
   const TempFolder dir;
-  const ImageF img = pattern<float>(6, 4, 1, [](int x, int y, int) { return 0.1f + 0.013f * static_cast<float>(x * y); });
+  const ImageF img =
+      pattern<float>(6, 4, 1, [](int x, int y, int) { return 0.1f + 0.013f * static_cast<float>(x * y); });
   write_image(dir.path() / "f.exr", img, PixelFormat::kFloat);
   PixelFormat stored = PixelFormat::kUint8;
   EXPECT_EQ(read_image(dir.path() / "f.exr", input_limits().image_pixels, ImageAlpha::kAsStored, &stored), img);
@@ -57,7 +59,8 @@ TEST(ImageFiles, FullFloatExrKeepsEveryBit) {
 
 TEST(ImageFiles, EightBitPngRoundTripsAndReadsAsValueOver255) {
   const TempFolder dir;
-  const Image8 img = pattern<std::uint8_t>(9, 4, 3, [](int x, int y, int c) { return static_cast<std::uint8_t>(x * 25 + y * 3 + c); });
+  const Image8 img =
+      pattern<std::uint8_t>(9, 4, 3, [](int x, int y, int c) { return static_cast<std::uint8_t>(x * 25 + y * 3 + c); });
   write_image(dir.path() / "a.png", img);
   PixelFormat stored = PixelFormat::kFloat;
   const ImageF back = read_image(dir.path() / "a.png", input_limits().image_pixels, ImageAlpha::kAsStored, &stored);
@@ -82,7 +85,8 @@ TEST(ImageFiles, FloatToEightBitRoundsAndClamps) {
 
 TEST(ImageFiles, GrayPngKeepsOneChannel) {
   const TempFolder dir;
-  const Image8 img = pattern<std::uint8_t>(5, 3, 1, [](int x, int y, int) { return static_cast<std::uint8_t>(50 * x + y); });
+  const Image8 img =
+      pattern<std::uint8_t>(5, 3, 1, [](int x, int y, int) { return static_cast<std::uint8_t>(50 * x + y); });
   write_image(dir.path() / "gray.png", img);
   const ImageFileInfo info = read_image_info(dir.path() / "gray.png");
   EXPECT_EQ(info.width, 5);
@@ -95,13 +99,16 @@ TEST(ImageFiles, GrayPngKeepsOneChannel) {
 
 TEST(ImageFiles, SixteenBitPngRoundTripsExactly) {
   const TempFolder dir;
-  const ImageF img = pattern<float>(5, 5, 3, [](int x, int y, int c) { return static_cast<float>((x * 997 + y * 13 + c) / 65535.0); });
+  const ImageF img =
+      pattern<float>(5, 5, 3, [](int x, int y, int c) { return static_cast<float>((x * 997 + y * 13 + c) / 65535.0); });
   write_image(dir.path() / "w.png", img, PixelFormat::kUint16);
   PixelFormat stored = PixelFormat::kUint8;
   const ImageF back = read_image(dir.path() / "w.png", input_limits().image_pixels, ImageAlpha::kAsStored, &stored);
   EXPECT_EQ(stored, PixelFormat::kUint16);
   for (std::size_t k = 0; k < img.size(); ++k)
-    EXPECT_EQ(std::lround(static_cast<double>(back.values()[k]) * 65535.0), std::lround(static_cast<double>(img.values()[k]) * 65535.0)) << k;
+    EXPECT_EQ(std::lround(static_cast<double>(back.values()[k]) * 65535.0),
+              std::lround(static_cast<double>(img.values()[k]) * 65535.0))
+        << k;
 }
 
 TEST(ImageFiles, JpegQualityIsApplied) {
@@ -118,7 +125,8 @@ TEST(ImageFiles, JpegQualityIsApplied) {
     const ImageF back = read_image(dir.path() / name);
     EXPECT_EQ(back.width(), 64);
     double sum = 0;
-    for (std::size_t k = 0; k < img.size(); ++k) sum += std::abs(static_cast<double>(back.values()[k]) * 255.0 - img.values()[k]);
+    for (std::size_t k = 0; k < img.size(); ++k)
+      sum += std::abs(static_cast<double>(back.values()[k]) * 255.0 - img.values()[k]);
     return sum / static_cast<double>(img.size());
   };
   const double e95 = mean_error("q95.jpg"), e20 = mean_error("q20.jpg");
@@ -162,7 +170,8 @@ std::string png_header(std::uint32_t width, std::uint32_t height) {
 
 TEST(ImageFiles, ReaderErrorsAreOneLineNamingTheFile) {
   const TempFolder dir;
-  const Image8 img = pattern<std::uint8_t>(120, 80, 3, [](int x, int y, int c) { return static_cast<std::uint8_t>(x * y + c); });
+  const Image8 img =
+      pattern<std::uint8_t>(120, 80, 3, [](int x, int y, int c) { return static_cast<std::uint8_t>(x * y + c); });
   write_image(dir.path() / "good.png", img);
   write_image(dir.path() / "good.jpg", img);
   const std::string png = test::read_file(dir.path() / "good.png");
@@ -232,7 +241,8 @@ TEST(SampleBilinear, RgbIsBitwiseThePerChannelLookup) {
     for (double y : {-0.2, 0.5, 1.0, 3.7, 5.2})
       for (ImageWrap wy : {ImageWrap::kClamp, ImageWrap::kRepeat}) {
         const Eigen::Vector3d rgb = sample_bilinear_rgb(img, x, y, ImageWrap::kRepeat, wy);
-        for (int c = 0; c < 3; ++c) EXPECT_EQ(rgb[c], sample_bilinear(img, x, y, c, ImageWrap::kRepeat, wy)) << x << " " << y;
+        for (int c = 0; c < 3; ++c)
+          EXPECT_EQ(rgb[c], sample_bilinear(img, x, y, c, ImageWrap::kRepeat, wy)) << x << " " << y;
       }
 }
 

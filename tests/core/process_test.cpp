@@ -133,7 +133,8 @@ TEST_F(ProcessTest, AnUnopenableRedirectionNamesTheFileNotTheProgram) {
 
 TEST_F(ProcessTest, WaitingSurvivesSignalsDeliveredToTheParent) {
   // A handler without SA_RESTART makes waitpid fail with EINTR; the wait must carry on.
-  struct sigaction action {}, previous{};
+  struct sigaction action {
+  }, previous{};
   action.sa_handler = [](int) {};
   sigemptyset(&action.sa_mask);
   action.sa_flags = 0;

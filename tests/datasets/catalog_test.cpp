@@ -113,7 +113,8 @@ TEST(Catalog, BadFilesAreInputErrorsNamingTheFile) {
        "'problem'"},
       {"datasets: []\n", "archive"},
       {head + "  - [1, 2\n", "catalog.yaml:4: YAML syntax error"},
-      {"archive: x\ndatasets:\n" + ok + "extra: 1\n", "catalog.yaml:4: unknown key 'extra' (allowed: archive, datasets)"},
+      {"archive: x\ndatasets:\n" + ok + "extra: 1\n",
+       "catalog.yaml:4: unknown key 'extra' (allowed: archive, datasets)"},
       {head + ok + "  - {name: b, kind: procedural, source: cube_triangles, description: x, triangles: 0}\n",
        "catalog.yaml:4: datasets[1]: dataset 'b': 'triangles' must be positive"},
   };

@@ -13,8 +13,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto path = meltlab::fuzz::write_input("image." + ext, data + 1, size - 1);
   meltlab::fuzz::expect_only_input_errors("image/info", [&] { (void)meltlab::read_image_info(path); });
   meltlab::fuzz::expect_only_input_errors("image/as-stored", [&] { (void)meltlab::read_image(path); });
-  return meltlab::fuzz::expect_only_input_errors(
-      "image/associated", [&] {
-        (void)meltlab::read_image(path, meltlab::input_limits().image_pixels, meltlab::ImageAlpha::kAssociated);
-      });
+  return meltlab::fuzz::expect_only_input_errors("image/associated", [&] {
+    (void)meltlab::read_image(path, meltlab::input_limits().image_pixels, meltlab::ImageAlpha::kAssociated);
+  });
 }

@@ -75,8 +75,8 @@ TEST(Pinhole, ProjectionEqualsOpenCvProjectPoints) {
   cv::Rodrigues(R, rvec);
   const Vec3d t = p.camera_from_world.translation();
   const cv::Mat tvec = (cv::Mat_<double>(3, 1) << t.x(), t.y(), t.z());
-  const cv::Mat dist = (cv::Mat_<double>(1, 5) << p.distortion[0], p.distortion[1], p.distortion[2],
-                        p.distortion[3], p.distortion[4]);
+  const cv::Mat dist =
+      (cv::Mat_<double>(1, 5) << p.distortion[0], p.distortion[1], p.distortion[2], p.distortion[3], p.distortion[4]);
   std::vector<cv::Point2d> img;
   cv::projectPoints(pts, rvec, tvec, K, dist, img);
   const RayGenerator rays(p);
@@ -228,7 +228,8 @@ TEST(PixelWindow, CoversTheBoxInWholePixelsClampedToTheImage) {
 }
 
 TEST(GroundUnitsPerPixel, OrthographicAndPinholeLookingDown) {
-  EXPECT_DOUBLE_EQ(ground_units_per_pixel(OrthographicTopDown::from_pixels_per_mm(64, 48, 4.0, Vec2d(0, 0))), 1.0 / 4000.0);
+  EXPECT_DOUBLE_EQ(ground_units_per_pixel(OrthographicTopDown::from_pixels_per_mm(64, 48, 4.0, Vec2d(0, 0))),
+                   1.0 / 4000.0);
   // 0.8 m above the ground with f = 1000 px: 0.8 mm per pixel.
   const Camera down = Pinhole::look_at(640, 480, 1000.0, Vec3d(0.1, 0.2, 0.8), Vec3d(0.1, 0.2, 0.0));
   EXPECT_NEAR(ground_units_per_pixel(down), 0.8 / 1000.0, 1e-15);
@@ -261,8 +262,8 @@ TEST(CameraYaml, DescribeRoundTripsExactly) {
   p.cx = 801.3;
   p.cy = 597.1;
   p.distortion = {-0.2, 0.07, 1e-3, -2e-4, 0.01};
-  const std::vector<Camera> cams = {OrthographicTopDown::from_pixels_per_mm(2048, 1536, 7.3, Vec2d(0.0123, -0.0456)),
-                                    p, Pinhole{}};
+  const std::vector<Camera> cams = {OrthographicTopDown::from_pixels_per_mm(2048, 1536, 7.3, Vec2d(0.0123, -0.0456)), p,
+                                    Pinhole{}};
   for (const Camera& c : cams) {
     const std::string text = describe_camera_json(c);
     const Camera back = parse_camera(YAML::Load(text), "round-trip");

@@ -56,7 +56,8 @@ bool binary_values(const cv::Mat& m) {
 
 // Convex hull (monotone chain) of 2-D points; counter-clockwise in (u, v).
 std::vector<Vec2d> hull(std::vector<Vec2d> p) {
-  std::sort(p.begin(), p.end(), [](const Vec2d& a, const Vec2d& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  std::sort(p.begin(), p.end(),
+            [](const Vec2d& a, const Vec2d& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
   auto cross = [](const Vec2d& o, const Vec2d& a, const Vec2d& b) {
     return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
   };
@@ -183,7 +184,8 @@ TEST(Silhouette, SupersampledCoverageConvergesToTheExactArea) {
   // A box has an exactly computable sample count: with k = 4 the samples of columns lie at
   // u = i - 0.375, -0.125, 0.125, 0.375.
   const Camera bc = OrthographicTopDown::from_pixels_per_mm(64, 48, 1.0, Vec2d(0, 0));  // u = 1000x + 31.5
-  const cv::Mat cov = silhouette_coverage(tri(box(-0.0101, 0.0123, -0.0052, 0.0071, 0.01)), bc, SilhouetteOptions{4, true, true});
+  const cv::Mat cov =
+      silhouette_coverage(tri(box(-0.0101, 0.0123, -0.0052, 0.0071, 0.01)), bc, SilhouetteOptions{4, true, true});
   auto samples = [](double a, double b) {  // sample positions s/4 - 0.375 (s integer) in [a, b)
     return int(std::ceil((b + 0.375) * 4) - std::ceil((a + 0.375) * 4));
   };
@@ -208,7 +210,7 @@ bool inside_top_left(const std::vector<Vec2d>& poly_ccw_uv_down, int i, int j) {
     // E > 0 inside for the negative-area orientation.
     const std::int64_t dx = bx - ax, dy = by - ay;
     const std::int64_t E = dy * (px - ax) - dx * (py - ay);  // = -(cross(d, p - a))
-    const std::int64_t nx = dy, ny = -dx;                   // gradient of E: points inside
+    const std::int64_t nx = dy, ny = -dx;                    // gradient of E: points inside
     if (E < 0) return false;
     if (E == 0 && !(nx > 0 || (nx == 0 && ny > 0))) return false;
   }
@@ -418,7 +420,8 @@ TEST(Silhouette, DistortedMaskMatchesPerPixelUndistortionToHalfAPixel) {
     for (int i = 0; i < 320; ++i) pix.emplace_back(float(i), float(j));
   const cv::Mat K = (cv::Mat_<double>(3, 3) << p.fx, 0, p.cx, 0, p.fy, p.cy, 0, 0, 1);
   const cv::Mat D = (cv::Mat_<double>(1, 5) << p.distortion[0], p.distortion[1], p.distortion[2], p.distortion[3], 0.0);
-  cv::undistortPoints(pix, und, K, D, cv::noArray(), K, cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-12));
+  cv::undistortPoints(pix, und, K, D, cv::noArray(), K,
+                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-12));
   int inside = 0, bad = 0;
   for (std::size_t n = 0; n < pix.size(); ++n) {
     const double d = cv::pointPolygonTest(contour, und[n], true);  // > 0 inside
@@ -439,8 +442,8 @@ TEST(Silhouette, FarPinholeLookingDownApproachesTheOrthographicMask) {
   const datasets::MoldBlock b = datasets::mold_block(datasets::Mold::kGiraffe);
   const OrthographicTopDown ortho = giraffe_camera();
   const double D = 1000.0;
-  const Pinhole far = Pinhole::look_at(2048, 1536, ortho.pixels_per_unit * (D - b.thickness_m),
-                                       Vec3d(0, 0, D), Vec3d(0, 0, 0));
+  const Pinhole far =
+      Pinhole::look_at(2048, 1536, ortho.pixels_per_unit * (D - b.thickness_m), Vec3d(0, 0, D), Vec3d(0, 0, 0));
   const cv::Mat a = silhouette_mask(b.mesh, Camera(ortho));
   const cv::Mat c = silhouette_mask(b.mesh, Camera(far));
   cv::Mat uni;

@@ -106,7 +106,8 @@ TEST(Deform, Algorithm1EqualsEquations36And38) {
       const V3 MN = -normal_sum[v].normalized();
       const V3 M = MN.dot(ME) > 0 ? V3(kE * ME + kN * MN) : V3(kN * MN);  // Eq. 3.6
       const V3 expected = P + kg * 1.0 * M;                               // Eq. 3.8
-      EXPECT_NEAR((m.position[static_cast<std::size_t>(v)] - expected).norm(), 0.0, kExact) << "trial " << trial << " v" << v;
+      EXPECT_NEAR((m.position[static_cast<std::size_t>(v)] - expected).norm(), 0.0, kExact)
+          << "trial " << trial << " v" << v;
     }
   }
 }

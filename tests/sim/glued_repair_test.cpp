@@ -116,7 +116,8 @@ TEST(Remnants, InvertedPartIsRemoved) {
 // Compaction drops dead slots, keeps the live mesh and the relative order of indices (so
 // every triangle stays min-index first and Alg. 2's comparisons are unchanged).
 TEST(Compact, KeepsLiveMeshAndIndexOrder) {
-  auto m = TriMesh<double>::from_indexed(test::disjoint_union(test::octahedron(), test::translated(test::icosahedron(), {5, 0, 0})));
+  auto m = TriMesh<double>::from_indexed(
+      test::disjoint_union(test::octahedron(), test::translated(test::icosahedron(), {5, 0, 0})));
   for (std::size_t t = 0; t < 8; ++t) m.triangle_alive[t] = 0;  // the octahedron melted away
   for (std::size_t v = 0; v < 6; ++v) m.vertex_alive[v] = 0;
   const IndexedMesh before = m.to_indexed();

@@ -46,8 +46,10 @@ TEST(KlField, PointSourceFalloffs) {
     double at_one_radius;
   } cases[] = {{"gaussian", std::exp(-0.5)}, {"inverse_square", 0.5}, {"linear", 0.0}, {"exponential", std::exp(-1.0)}};
   for (const auto& k : cases) {
-    const auto f = parse(std::string("{type: point_source, position: [0.1, 0.2, 0.3], base: 0.2, strength: 0.6, radius: 0.05, falloff: ") +
-                         k.name + "}");
+    const auto f =
+        parse(std::string(
+                  "{type: point_source, position: [0.1, 0.2, 0.3], base: 0.2, strength: 0.6, radius: 0.05, falloff: ") +
+              k.name + "}");
     EXPECT_FALSE(f->is_constant());
     EXPECT_NEAR(f->value(c), 0.8, kExact) << k.name;
     EXPECT_NEAR(f->value(c + V3(0, 0.05, 0)), 0.2 + 0.6 * k.at_one_radius, kExact) << k.name;

@@ -69,8 +69,9 @@ TYPED_TEST(Lanes8, AllGreaterNeedsEveryLane) {
 TYPED_TEST(Lanes8, InverseLengthEqualsScalar) {
   using Real = TypeParam;
   using Lim = std::numeric_limits<Real>;
-  const Real cases[] = {0, Lim::denorm_min(), Lim::min() / 4, Lim::min(), Real(1e-7), Real(0.3), 1, Real(7.5e6),
-                        Lim::max(), Lim::infinity(), Real(2), Real(1) / 3, Real(1e30), Real(4), Real(9), Real(0.01)};
+  const Real cases[] = {0,          Lim::denorm_min(), Lim::min() / 4, Lim::min(),      Real(1e-7), Real(0.3),
+                        1,          Real(7.5e6),       Lim::max(),     Lim::infinity(), Real(2),    Real(1) / 3,
+                        Real(1e30), Real(4),           Real(9),        Real(0.01)};
   for (std::size_t base = 0; base < std::size(cases); base += kLanes) {
     Lanes<Real> n2;
     for (std::size_t i = 0; i < kLanes; ++i) n2[i] = cases[base + i];
@@ -138,9 +139,15 @@ TriMesh<Real> reference_deform(TriMesh<Real> m, const MeltParams& p, const KlFie
     const bool combined = p.tie == TieRule::kLessEqual ? d <= 0 : d < 0;
     V move = V::Zero();
     switch (p.deform) {
-      case DeformMode::kCombined: move = combined ? V((kE * ME - kN * N) * s) : V((-kN * N) * s); break;
-      case DeformMode::kNormalOnly: move = (-kN * N) * s; break;
-      case DeformMode::kEdgeOnly: move = (kE * ME) * s; break;
+      case DeformMode::kCombined:
+        move = combined ? V((kE * ME - kN * N) * s) : V((-kN * N) * s);
+        break;
+      case DeformMode::kNormalOnly:
+        move = (-kN * N) * s;
+        break;
+      case DeformMode::kEdgeOnly:
+        move = (kE * ME) * s;
+        break;
     }
     m.normal[v] = N;
     m.displacement[v] = move;

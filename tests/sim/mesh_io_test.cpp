@@ -50,7 +50,8 @@ TEST_F(MeshIo, RoundTripEveryFormat) {
     double vol = 0;
     for (const auto& t : in.mesh.F)
       vol += in.mesh.V[static_cast<std::size_t>(t[0])].dot(
-                 in.mesh.V[static_cast<std::size_t>(t[1])].cross(in.mesh.V[static_cast<std::size_t>(t[2])])) / 6.0;
+                 in.mesh.V[static_cast<std::size_t>(t[1])].cross(in.mesh.V[static_cast<std::size_t>(t[2])])) /
+             6.0;
     EXPECT_NEAR(vol, 4.0 / 3.0 * 0.25 * 0.25 * 0.25, kFloatStorage) << ext << ": orientation or positions changed";
   }
 }
@@ -85,8 +86,8 @@ TEST_F(MeshIo, QuadCubeKeepsPolygonCountsAndTriangulates) {
 }
 
 TEST_F(MeshIo, UnreferencedVertexIsDropped) {
-  const fs::path p = write("extra.off",
-                           "OFF\n5 4 0\n-1 0 1\n0 0 -1\n1 0 1\n0 1 0\n7 7 7\n3 3 1 0\n3 3 2 1\n3 3 0 2\n3 1 2 0\n");
+  const fs::path p =
+      write("extra.off", "OFF\n5 4 0\n-1 0 1\n0 0 -1\n1 0 1\n0 1 0\n7 7 7\n3 3 1 0\n3 3 2 1\n3 3 0 2\n3 1 2 0\n");
   const LoadedMesh in = load_mesh(p);
   EXPECT_EQ(in.report.unreferenced_vertices, 1u);
   EXPECT_EQ(in.mesh.V.size(), 4u);
@@ -131,9 +132,11 @@ TEST_F(MeshIo, NonFiniteCoordinateIsNamed) {
       load_error(write("nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n"));
   EXPECT_THAT(msg, HasSubstr("nan.obj:line 3"));
   EXPECT_THAT(msg, HasSubstr("not a finite number"));
-  const std::string off = load_error(write("nan.off", "OFF\n4 4 0\n-1 0 1\n0 0 -1\n1 nan 1\n0 1 0\n3 3 1 0\n3 3 2 1\n3 3 0 2\n3 1 2 0\n"));
+  const std::string off =
+      load_error(write("nan.off", "OFF\n4 4 0\n-1 0 1\n0 0 -1\n1 nan 1\n0 1 0\n3 3 1 0\n3 3 2 1\n3 3 0 2\n3 1 2 0\n"));
   EXPECT_THAT(off, HasSubstr("nan.off:line 5: vertex v2 coordinate 'nan' is not a finite number"));
-  const std::string inf = load_error(write("inf.off", "OFF\n4 4 0\n-1 0 1\n0 0 -1\n1 inf 1\n0 1 0\n3 3 1 0\n3 3 2 1\n3 3 0 2\n3 1 2 0\n"));
+  const std::string inf =
+      load_error(write("inf.off", "OFF\n4 4 0\n-1 0 1\n0 0 -1\n1 inf 1\n0 1 0\n3 3 1 0\n3 3 2 1\n3 3 0 2\n3 1 2 0\n"));
   EXPECT_THAT(inf, HasSubstr("inf.off:line 5: vertex v2"));
 }
 

@@ -40,7 +40,8 @@ TEST(Mesh, TetrahedronFig213SortedAndOutward) {
 }
 
 TEST(Mesh, ToIndexedDropsDeadSlotsAndRenumbers) {
-  auto m = TriMesh<double>::from_indexed(test::disjoint_union(test::octahedron(), test::translated(test::octahedron(), {5, 0, 0})));
+  auto m = TriMesh<double>::from_indexed(
+      test::disjoint_union(test::octahedron(), test::translated(test::octahedron(), {5, 0, 0})));
   for (std::size_t t = 0; t < 8; ++t) m.triangle_alive[t] = 0;
   for (std::size_t v = 0; v < 6; ++v) m.vertex_alive[v] = 0;
   const IndexedMesh out = m.to_indexed();

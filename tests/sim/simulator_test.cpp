@@ -151,8 +151,11 @@ IndexedMesh make_sphere() { return datasets::icosphere(4, 0.05); }
 // Random parameters on several shapes: the mesh stays a valid closed solid every cycle
 // until it has melted away, positions stay finite, and the volume never increases.
 TEST(Simulator, StaysValidAndShrinksUnderRandomParameters) {
-  const PropertyCase cases[] = {{"dumbbell", make_dumbbell}, {"torus", make_torus}, {"airplane", make_airplane},
-                                {"cube", make_cube},         {"sphere", make_sphere}};
+  const PropertyCase cases[] = {{"dumbbell", make_dumbbell},
+                                {"torus", make_torus},
+                                {"airplane", make_airplane},
+                                {"cube", make_cube},
+                                {"sphere", make_sphere}};
   // kr is drawn below the shortest input edge, so collapses come from melting, not from a
   // kr that already exceeds whole rings of the input: with a kr above every edge of a loop,
   // Alg. 2's chain flattening merges the whole loop into one vertex in one pass (e.g. the

@@ -76,8 +76,8 @@ TEST(Stress, EveryMeshMeltsAwayValidly) {
   for (const auto& e : meshes) {
     SCOPED_TRACE(e.name);
     const sim::IndexedMesh mesh = load_dataset(e);
-    sim::MeltSimulator<double> s(sim::TriMesh<double>::from_indexed(mesh), default_params(mesh), sim::make_constant_kl(1.0),
-                                 sim::Execution::kParallel);
+    sim::MeltSimulator<double> s(sim::TriMesh<double>::from_indexed(mesh), default_params(mesh),
+                                 sim::make_constant_kl(1.0), sim::Execution::kParallel);
     const auto t0 = std::chrono::steady_clock::now();
     std::int64_t c = 0, topo_checks = 0, si_checks = 0, si_hits = 0, first_si = -1, splits = 0;
     for (c = 1; c <= max_cycles && !s.empty(); ++c) {
@@ -104,8 +104,8 @@ TEST(Stress, EveryMeshMeltsAwayValidly) {
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const std::int64_t empty_at = s.empty() ? c - 1 : -1;
-    csv << fmt::format("{},{},{},{},{},{},{},{},{},{:.2f}\n", e.name, mesh.F.size(), c - 1, empty_at, topo_checks, si_checks,
-                       si_hits, first_si, splits, seconds);
+    csv << fmt::format("{},{},{},{},{},{},{},{},{},{:.2f}\n", e.name, mesh.F.size(), c - 1, empty_at, topo_checks,
+                       si_checks, si_hits, first_si, splits, seconds);
     csv.flush();
     if (full) {
       EXPECT_GE(empty_at, 0) << e.name << " did not melt away in " << max_cycles << " cycles";
@@ -117,7 +117,7 @@ TEST(Stress, EveryMeshMeltsAwayValidly) {
 // M_N-only run is scaled so that both lose the same volume in the first 50 cycles. Records
 // the first cycle whose mesh intersects itself (sampled every `every` cycles).
 struct FirstBreak {
-  std::int64_t cycle = -1;   // -1: never within the run
+  std::int64_t cycle = -1;  // -1: never within the run
   std::int64_t cycles_run = 0;
 };
 
@@ -173,8 +173,8 @@ TEST(Stress, NormalOnlyBreaksBeforeCombined) {
     normal.kN = combined.kE * loss_combined / loss_normal;  // same initial melt rate
     const FirstBreak fc = first_self_intersection(mesh, combined, max_cycles, every);
     const FirstBreak fn = first_self_intersection(mesh, normal, max_cycles, every);
-    csv << fmt::format("{},{},{:.6g},{:.6g},{:.6g},{},{},{},{},{}\n", name, mesh.F.size(), combined.kE, combined.kN, normal.kN,
-                       fc.cycle, fc.cycles_run, fn.cycle, fn.cycles_run, every);
+    csv << fmt::format("{},{},{:.6g},{:.6g},{:.6g},{},{},{},{},{}\n", name, mesh.F.size(), combined.kE, combined.kN,
+                       normal.kN, fc.cycle, fc.cycles_run, fn.cycle, fn.cycles_run, every);
     csv.flush();
     const std::int64_t c_break = fc.cycle < 0 ? max_cycles + 1 : fc.cycle;
     const std::int64_t n_break = fn.cycle < 0 ? max_cycles + 1 : fn.cycle;

@@ -57,8 +57,8 @@ class TempFolder {
  public:
   TempFolder() {
     static std::atomic<int> counter{0};
-    path_ = std::filesystem::temp_directory_path() /
-            fmt::format("meltlab-test-{}-{}", ::getpid(), counter.fetch_add(1));
+    path_ =
+        std::filesystem::temp_directory_path() / fmt::format("meltlab-test-{}-{}", ::getpid(), counter.fetch_add(1));
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }

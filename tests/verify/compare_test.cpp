@@ -85,8 +85,8 @@ TEST(FrameMapping, CyclesPerPhotoAndSecondsPerCycle) {
 
 TEST(Overlay, UsesTheGreysOfFigure812) {
   cv::Mat a = cv::Mat::zeros(1, 4, CV_8UC1), b = cv::Mat::zeros(1, 4, CV_8UC1);
-  a.at<std::uint8_t>(0, 0) = 255;  // photo only
-  b.at<std::uint8_t>(0, 1) = 255;  // render only
+  a.at<std::uint8_t>(0, 0) = 255;                             // photo only
+  b.at<std::uint8_t>(0, 1) = 255;                             // render only
   a.at<std::uint8_t>(0, 2) = b.at<std::uint8_t>(0, 2) = 255;  // common
   const cv::Mat o = overlay_image(a, b);
   EXPECT_EQ(o.at<std::uint8_t>(0, 0), 80);   // dark grey

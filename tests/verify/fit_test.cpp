@@ -28,7 +28,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kRadius0_m = 0.02;                // 40 px at 2000 px/m
+constexpr double kRadius0_m = 0.02;                  // 40 px at 2000 px/m
 constexpr double kRelativeLossPerCycleAtKg1 = 0.02;  // radius(c) = r0 (1 - 0.02 kg c)
 constexpr double kTrueKg = 0.4;
 constexpr int kPhotos = 6;
@@ -132,7 +132,8 @@ TEST(Fit, RecoversTheShrinkRateOfAnAnalyticDisc) {
 
   // Uncertainty: finite, positive and small against the value; a 2 x 2 correlation with a
   // unit diagonal and |off-diagonal| < 1 (kg and a shift are not confounded by a centred disc).
-  const auto kg_it = std::find_if(r.estimates.begin(), r.estimates.end(), [](const FitEstimate& e) { return e.name == "kg"; });
+  const auto kg_it =
+      std::find_if(r.estimates.begin(), r.estimates.end(), [](const FitEstimate& e) { return e.name == "kg"; });
   ASSERT_NE(kg_it, r.estimates.end());
   const FitEstimate& kg = *kg_it;
   ASSERT_TRUE(kg.standard_error.has_value());

@@ -77,11 +77,10 @@ TEST_P(Recovers, KnownSimilarity) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Molds, Recovers,
-                         ::testing::Combine(::testing::Values(datasets::Mold::kGiraffe, datasets::Mold::kAirplane,
-                                                              datasets::Mold::kShip),
-                                            ::testing::Values(RegistrationOptions::Refine::kIcp,
-                                                              RegistrationOptions::Refine::kEcc)));
+INSTANTIATE_TEST_SUITE_P(
+    Molds, Recovers,
+    ::testing::Combine(::testing::Values(datasets::Mold::kGiraffe, datasets::Mold::kAirplane, datasets::Mold::kShip),
+                       ::testing::Values(RegistrationOptions::Refine::kIcp, RegistrationOptions::Refine::kEcc)));
 
 TEST(Registration, MomentsAloneGetClose) {
   const cv::Mat render = mold_mask(datasets::Mold::kGiraffe);

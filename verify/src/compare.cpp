@@ -64,7 +64,8 @@ cv::Mat p_curve_image(const std::vector<FrameResult>& frames, const std::string&
     cv::putText(img, std::to_string(n), {px(n) - 8, kTop + ph + 22}, font, 0.45, axis, 1, cv::LINE_AA);
   }
   cv::rectangle(img, {kLeft, kTop}, {kLeft + pw, kTop + ph}, axis, 1);
-  for (int x = kLeft; x < kLeft + pw; x += 16) cv::line(img, {x, py(0.2)}, {std::min(x + 8, kLeft + pw), py(0.2)}, accept, 1);
+  for (int x = kLeft; x < kLeft + pw; x += 16)
+    cv::line(img, {x, py(0.2)}, {std::min(x + 8, kLeft + pw), py(0.2)}, accept, 1);
   cv::putText(img, "P = 0.2 (acceptance)", {kLeft + pw - 190, py(0.2) - 6}, font, 0.45, accept, 1, cv::LINE_AA);
   auto draw = [&](bool use_exact, const cv::Scalar& colour) {
     std::vector<cv::Point> run;
@@ -99,13 +100,14 @@ void write_per_frame_csv(const fs::path& file, const std::vector<FrameResult>& f
     const bool ok = f.status == "ok";
     auto num = [&](double v) { return ok ? fmt::format("{:.8g}", v) : std::string(); };
     auto mm = [&](double v) { return ok && f.mm_per_px > 0 ? fmt::format("{:.8g}", v * f.mm_per_px) : std::string(); };
-    out << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\"\n", f.frame + 1, f.image, f.status,
-                       f.time_s ? fmt::format("{:.6g}", *f.time_s) : "", f.cycle, num(f.pixels.S_A), num(f.pixels.S_B),
-                       num(f.pixels.S_I), num(f.pixels.P), ok && f.P_exact ? fmt::format("{:.8g}", *f.P_exact) : "",
-                       num(f.pixels.IoU), num(f.pixels.Dice), num(f.distances_px.hausdorff), mm(f.distances_px.hausdorff),
-                       num(f.distances_px.mean), mm(f.distances_px.mean), num(f.registration.scale),
-                       num(f.registration.angle_rad * 180.0 / 3.14159265358979323846), num(f.registration.translation.x()),
-                       num(f.registration.translation.y()), f.note);
+    out << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\"\n", f.frame + 1, f.image,
+                       f.status, f.time_s ? fmt::format("{:.6g}", *f.time_s) : "", f.cycle, num(f.pixels.S_A),
+                       num(f.pixels.S_B), num(f.pixels.S_I), num(f.pixels.P),
+                       ok && f.P_exact ? fmt::format("{:.8g}", *f.P_exact) : "", num(f.pixels.IoU), num(f.pixels.Dice),
+                       num(f.distances_px.hausdorff), mm(f.distances_px.hausdorff), num(f.distances_px.mean),
+                       mm(f.distances_px.mean), num(f.registration.scale),
+                       num(f.registration.angle_rad * 180.0 / 3.14159265358979323846),
+                       num(f.registration.translation.x()), num(f.registration.translation.y()), f.note);
   }
   write_text_atomically(file, out.str());
 }
@@ -170,8 +172,8 @@ CompareResult compare_sequence(const ObservationSequence& obs, sim::MeshSequence
     const sim::TriMesh<double>& mesh = meshes.mesh_at(r.cycle);
     binary.render(mesh, render_mask);
     if (render_mask.size() != seg.mask.size())
-      throw InputError(fmt::format("{}: frame {} is {}x{} but the camera renders {}x{}", manifest, r.image, seg.mask.cols,
-                                   seg.mask.rows, render_mask.cols, render_mask.rows));
+      throw InputError(fmt::format("{}: frame {} is {}x{} but the camera renders {}x{}", manifest, r.image,
+                                   seg.mask.cols, seg.mask.rows, render_mask.cols, render_mask.rows));
     Similarity2D t = fixed.value_or(Similarity2D::identity());
     if (!fixed && cv::countNonZero(render_mask) > 0) {
       const RegistrationResult reg = register_masks(seg.mask, render_mask, options.registration_options);
@@ -194,8 +196,8 @@ CompareResult compare_sequence(const ObservationSequence& obs, sim::MeshSequence
     Region render_region;
     if (r.render_area_px > 0) {
       soft.render(mesh, render_cov);
-      render_region = transform_region(options.supersample > 1 ? region_from_image(render_cov, 0.5) : region_from_mask(render_cov),
-                                       t);
+      render_region = transform_region(
+          options.supersample > 1 ? region_from_image(render_cov, 0.5) : region_from_mask(render_cov), t);
     }
     if (options.exact) r.P_exact = compare_regions_exact(seg.region, render_region).P;
     r.distances_px = contour_distances(seg.region, render_region);

@@ -38,7 +38,8 @@ void check_parameters(const std::vector<FitParameter>& params, const FitOptions&
       throw InputError(fmt::format("fit: {} = {} is outside its bounds [{}, {}]", p.name, p.initial, p.lower, p.upper));
     if (!(p.scale > 0) || !std::isfinite(p.scale)) throw InputError(fmt::format("fit: {} needs a scale > 0", p.name));
   }
-  if (o.photo_samples < 4 || o.render_samples < 1) throw InputError("fit: at least 4 photo and 1 render samples per frame");
+  if (o.photo_samples < 4 || o.render_samples < 1)
+    throw InputError("fit: at least 4 photo and 1 render samples per frame");
 }
 
 struct Targets {
@@ -76,7 +77,8 @@ Targets photo_targets(const ObservationSequence& obs, const FitOptions& o, FitRe
     for (const Segment& s : t.segs) t.perimeter += (s.b - s.a).norm();
     const cv::Rect bound = cv::boundingRect(seg.mask);
     const int m = static_cast<int>(std::ceil(o.margin_px));
-    t.bbox = cv::Rect(bound.x - m, bound.y - m, bound.width + 2 * m, bound.height + 2 * m) & cv::Rect(0, 0, image.cols, image.rows);
+    t.bbox = cv::Rect(bound.x - m, bound.y - m, bound.width + 2 * m, bound.height + 2 * m) &
+             cv::Rect(0, 0, image.cols, image.rows);
     t.sdf = signed_distance_image(seg.mask);
     if (out.first_mask.empty()) out.first_mask = seg.mask;
     out.targets.push_back(std::move(t));
@@ -93,8 +95,8 @@ int index_of(const std::vector<FitParameter>& params, const std::string& name) {
 
 /// Starts the free reg.* parameters from register_masks of the first photo against the model's
 /// render at the starting values, expressed about the pivot.
-void start_registration(const ObservationSequence& obs, FitModel& model, std::vector<FitParameter>& params, const FitOptions& o,
-                        const PhotoTarget& first, const cv::Mat& first_mask, const Vec2d& pivot,
+void start_registration(const ObservationSequence& obs, FitModel& model, std::vector<FitParameter>& params,
+                        const FitOptions& o, const PhotoTarget& first, const cv::Mat& first_mask, const Vec2d& pivot,
                         const std::function<void(const std::string&)>& log) {
   std::map<std::string, double> mv;
   for (const FitParameter& p : params)
@@ -112,8 +114,10 @@ void start_registration(const ObservationSequence& obs, FitModel& model, std::ve
   about.angle_rad = rr.render_to_photo.angle_rad;
   const Vec2d base = pivot - about.apply(pivot);
   const Vec2d t = rr.render_to_photo.translation - base;
-  const std::map<std::string, double> init{{"reg.tx_px", t.x()}, {"reg.ty_px", t.y()},
-                                           {"reg.angle_deg", about.angle_rad / kDeg}, {"reg.scale", about.scale}};
+  const std::map<std::string, double> init{{"reg.tx_px", t.x()},
+                                           {"reg.ty_px", t.y()},
+                                           {"reg.angle_deg", about.angle_rad / kDeg},
+                                           {"reg.scale", about.scale}};
   for (FitParameter& p : params) {
     if (!is_registration(p.name) || p.fixed) continue;
     const auto it = init.find(p.name);
@@ -184,14 +188,14 @@ FreeParameters build_problem(ceres::Problem& problem, Evaluator& ev, ScaledParam
   std::vector<double*> blocks;
   for (std::size_t j = 0; j < n; ++j) blocks.push_back(&sp.u[j]);
   for (std::size_t t = 0; t < ev.targets().size(); ++t) {
-    problem.AddResidualBlock(new BlockCost(ev, static_cast<int>(t), static_cast<int>(ev.residuals_per_frame()), o.step_fraction,
-                                           sp.lower_u, sp.upper_u),
+    problem.AddResidualBlock(new BlockCost(ev, static_cast<int>(t), static_cast<int>(ev.residuals_per_frame()),
+                                           o.step_fraction, sp.lower_u, sp.upper_u),
                              new ceres::HuberLoss(block_loss), blocks);
   }
   if (volume && o.volume_weight > 0 && !volume->time_s.empty())
     problem.AddResidualBlock(
-        new BlockCost(ev, -1, static_cast<int>(volume->time_s.size()), o.step_fraction, sp.lower_u, sp.upper_u), nullptr,
-        blocks);
+        new BlockCost(ev, -1, static_cast<int>(volume->time_s.size()), o.step_fraction, sp.lower_u, sp.upper_u),
+        nullptr, blocks);
   FreeParameters free;
   for (std::size_t j = 0; j < n; ++j) {
     if (params[j].fixed) {
@@ -207,7 +211,8 @@ FreeParameters build_problem(ceres::Problem& problem, Evaluator& ev, ScaledParam
 }
 
 /// Runs Ceres (when anything is free) and records cost, iterations and convergence.
-void solve(ceres::Problem& problem, const Evaluator& ev, const FitOptions& o, const FreeParameters& free, FitResult& result) {
+void solve(ceres::Problem& problem, const Evaluator& ev, const FitOptions& o, const FreeParameters& free,
+           FitResult& result) {
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
   so.max_num_iterations = o.max_iterations;
@@ -346,9 +351,8 @@ FitResult fit_sequence(const ObservationSequence& obs, FitModel& model, const st
   const cv::Moments mo = cv::moments(targets.first_mask, true);
   result.pivot_px = Vec2d(mo.m10 / mo.m00, mo.m01 / mo.m00);
 
-  const bool reg_free = std::any_of(params.begin(), params.end(), [](const FitParameter& p) {
-    return is_registration(p.name) && !p.fixed;
-  });
+  const bool reg_free = std::any_of(params.begin(), params.end(),
+                                    [](const FitParameter& p) { return is_registration(p.name) && !p.fixed; });
   if (o.initial_registration && reg_free)
     start_registration(obs, model, params, o, targets.targets.front(), targets.first_mask, result.pivot_px, log);
 

@@ -50,8 +50,8 @@ struct PhotoTarget {
   std::vector<Segment> segs;
   std::vector<Vec2d> samples;
   double area = 0, perimeter = 0;
-  cv::Rect bbox;        ///< photo pixels, with margin, clamped to the image
-  cv::Mat sdf;          ///< signed distance to the photo contour, in photo pixels
+  cv::Rect bbox;  ///< photo pixels, with margin, clamped to the image
+  cv::Mat sdf;    ///< signed distance to the photo contour, in photo pixels
   cv::Mat mask;
 };
 
@@ -68,9 +68,15 @@ struct Evaluation {
 /// residual blocks.
 class Evaluator {
  public:
-  Evaluator(const ObservationSequence& obs, FitModel& model, std::vector<FitParameter> params, const FitOptions& options,
-            std::vector<PhotoTarget> targets, const std::optional<VolumeSeries>& volume, Vec2d pivot)
-      : obs_(obs), model_(model), params_(std::move(params)), o_(options), targets_(std::move(targets)), volume_(volume),
+  Evaluator(const ObservationSequence& obs, FitModel& model, std::vector<FitParameter> params,
+            const FitOptions& options, std::vector<PhotoTarget> targets, const std::optional<VolumeSeries>& volume,
+            Vec2d pivot)
+      : obs_(obs),
+        model_(model),
+        params_(std::move(params)),
+        o_(options),
+        targets_(std::move(targets)),
+        volume_(volume),
         pivot_(pivot) {}
 
   std::size_t residuals_per_frame() const { return static_cast<std::size_t>(o_.photo_samples) + 2; }
@@ -121,7 +127,8 @@ class Evaluator {
 /// of all parameters (one 1-D block each, in units of their scale), with central differences.
 class BlockCost final : public ceres::CostFunction {
  public:
-  BlockCost(Evaluator& ev, int target, int count, double step, std::vector<double> lower_u, std::vector<double> upper_u);
+  BlockCost(Evaluator& ev, int target, int count, double step, std::vector<double> lower_u,
+            std::vector<double> upper_u);
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:

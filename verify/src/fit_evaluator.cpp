@@ -26,7 +26,8 @@ std::shared_ptr<const Evaluation> Evaluator::evaluate(const std::vector<double>&
   return e;
 }
 
-std::shared_ptr<const Evaluator::Renders> Evaluator::renders(const std::map<std::string, double>& model_values, double K) {
+std::shared_ptr<const Evaluator::Renders> Evaluator::renders(const std::map<std::string, double>& model_values,
+                                                             double K) {
   std::vector<double> key;
   for (const auto& [k, v] : model_values) key.push_back(v);
   key.push_back(K);
@@ -109,8 +110,8 @@ Evaluation Evaluator::compute(const std::vector<double>& x) {
 /// a quarter of its size, so registrations reached during the fit stay inside it.
 Region Evaluator::render_region(std::size_t target, const sim::TriMesh<double>& mesh, cv::Mat& coverage) {
   const PhotoTarget& t = targets_[target];
-  const bool distorted = std::holds_alternative<render::Pinhole>(obs_.camera) &&
-                         std::get<render::Pinhole>(obs_.camera).distorted();
+  const bool distorted =
+      std::holds_alternative<render::Pinhole>(obs_.camera) && std::get<render::Pinhole>(obs_.camera).distorted();
   // A distorted pinhole renders the whole image, as the fit always has: its renderer
   // resamples an undistorted canvas placed by the window, so a crop would move the
   // coverage by rounding (and fit.json numbers must not change).
@@ -118,8 +119,9 @@ Region Evaluator::render_region(std::size_t target, const sim::TriMesh<double>& 
   if (!distorted) {
     const Similarity2D inv = initial_registration_.inverse();
     Vec2d lo = Vec2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-    for (const Vec2d& c : {Vec2d(t.bbox.x, t.bbox.y), Vec2d(t.bbox.x + t.bbox.width, t.bbox.y),
-                           Vec2d(t.bbox.x, t.bbox.y + t.bbox.height), Vec2d(t.bbox.x + t.bbox.width, t.bbox.y + t.bbox.height)}) {
+    for (const Vec2d& c :
+         {Vec2d(t.bbox.x, t.bbox.y), Vec2d(t.bbox.x + t.bbox.width, t.bbox.y),
+          Vec2d(t.bbox.x, t.bbox.y + t.bbox.height), Vec2d(t.bbox.x + t.bbox.width, t.bbox.y + t.bbox.height)}) {
       const Vec2d q = inv.apply(c);
       lo = lo.cwiseMin(q);
       hi = hi.cwiseMax(q);

@@ -49,7 +49,12 @@ std::vector<FitParameterSpec> fit_parameter_table(const FitParameterContext& c) 
 }
 
 FitParameterSpec kl_fit_parameter(const std::string& name, double value) {
-  return {name, FitParameterRole::kKlField, value, value >= 0 ? 0.0 : -kInf, kInf, std::max(std::abs(value) * 0.05, 1e-4),
+  return {name,
+          FitParameterRole::kKlField,
+          value,
+          value >= 0 ? 0.0 : -kInf,
+          kInf,
+          std::max(std::abs(value) * 0.05, 1e-4),
           "a number in the --kl YAML"};
 }
 
@@ -72,8 +77,8 @@ std::string fit_parameter_names_help() {
   };
   std::string regs;
   for (const std::string& r : registration_parameter_names()) regs += (regs.empty() ? "" : ",") + r;
-  return fmt::format("{}, {}, {}, reg (= {}), kl.<path in the --kl YAML, e.g. kl.of.0.strength>", help_of("kg"), help_of("kn"),
-                     help_of("cycles_per_photo"), regs);
+  return fmt::format("{}, {}, {}, reg (= {}), kl.<path in the --kl YAML, e.g. kl.of.0.strength>", help_of("kg"),
+                     help_of("kn"), help_of("cycles_per_photo"), regs);
 }
 
 }  // namespace meltlab::verify

@@ -20,7 +20,9 @@ namespace fs = std::filesystem;
 namespace {
 
 // OpenCV's channel order: BGR for colour, the channel itself for grey.
-int rgb_channel_of_bgr(int bgr_channel, int channels) { return channels >= 3 && bgr_channel < 3 ? 2 - bgr_channel : bgr_channel; }
+int rgb_channel_of_bgr(int bgr_channel, int channels) {
+  return channels >= 3 && bgr_channel < 3 ? 2 - bgr_channel : bgr_channel;
+}
 
 template <class T>
 void fill_from_image(const ImageF& image, cv::Mat& mat, double scale) {
@@ -70,7 +72,8 @@ cv::Mat mat_from_image(const ImageF& image, PixelFormat format) {
       return mat;
     }
     case PixelFormat::kHalf:
-    case PixelFormat::kFloat: break;
+    case PixelFormat::kFloat:
+      break;
   }
   cv::Mat mat(image.height(), image.width(), CV_MAKETYPE(CV_32F, channels));
   fill_from_image<float>(image, mat, 1.0);
@@ -117,8 +120,8 @@ cv::Mat read_image(const fs::path& file) {
 void write_image(const fs::path& file, const cv::Mat& image) {
   if (image.empty()) throw InputError(fmt::format("{}: cannot write an empty image", file.string()));
   if (image.depth() != CV_8U && image.depth() != CV_16U && image.depth() != CV_32F)
-    throw InputError(fmt::format("{}: cannot write pixels of OpenCV depth {} (8U, 16U or 32F only)", file.string(),
-                                 image.depth()));
+    throw InputError(
+        fmt::format("{}: cannot write pixels of OpenCV depth {} (8U, 16U or 32F only)", file.string(), image.depth()));
   PixelFormat stored = PixelFormat::kUint8;
   const ImageF pixels = image_from_mat(image, &stored);
   meltlab::write_image(file, pixels, stored);

@@ -131,7 +131,8 @@ std::vector<Vec2d> sample(const std::vector<Seg>& segs, double spacing) {
   for (const Seg& g : segs) {
     const double len = (g.b - g.a).norm();
     const auto n = static_cast<std::size_t>(std::max(1.0, std::ceil(len / spacing)));
-    for (std::size_t k = 0; k < n; ++k) s.push_back(g.a + (g.b - g.a) * (static_cast<double>(k) / static_cast<double>(n)));
+    for (std::size_t k = 0; k < n; ++k)
+      s.push_back(g.a + (g.b - g.a) * (static_cast<double>(k) / static_cast<double>(n)));
   }
   return s;
 }
@@ -197,7 +198,8 @@ class SegmentGrid {
         for (int x = std::max(x0, 0); x <= std::min(x1, nx_ - 1); ++x) {
           if (!edge_row && x != x0 && x != x1) continue;  // interior done in earlier rings
           const std::size_t c = static_cast<std::size_t>(y) * nx_ + x;
-          for (std::uint32_t k = start_[c]; k < start_[c + 1]; ++k) best = std::min(best, point_segment_d2(p, segs_[items_[k]]));
+          for (std::uint32_t k = start_[c]; k < start_[c + 1]; ++k)
+            best = std::min(best, point_segment_d2(p, segs_[items_[k]]));
         }
       }
       // Lower bound on the distance to any cell outside the examined block.
@@ -239,7 +241,8 @@ void directed(const std::vector<Vec2d>& samples, const std::vector<Seg>& target,
 
 ContourDistances contour_distances(const Region& photo, const Region& render, double spacing) {
   if (!(spacing > 0) || !std::isfinite(spacing))
-    throw std::invalid_argument("contour_distances: spacing must be positive and finite (got " + std::to_string(spacing) + ")");
+    throw std::invalid_argument("contour_distances: spacing must be positive and finite (got " +
+                                std::to_string(spacing) + ")");
   std::vector<Seg> sa, sb;
   collect_segments(photo, sa);
   collect_segments(render, sb);

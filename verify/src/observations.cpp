@@ -74,7 +74,8 @@ std::string path_text(const ConfigValue& v) {
 fs::path existing_file(const Ctx& ctx, const ConfigValue& v) {
   const fs::path p = ctx.resolve(path_text(v));
   std::error_code ec;
-  if (!fs::is_regular_file(p, ec)) v.fail(fmt::format("{} {}", p.string(), fs::exists(p, ec) ? "is not a file" : "does not exist"));
+  if (!fs::is_regular_file(p, ec))
+    v.fail(fmt::format("{} {}", p.string(), fs::exists(p, ec) ? "is not a file" : "does not exist"));
   return p;
 }
 
@@ -82,10 +83,12 @@ YAML::Node load_yaml(const fs::path& manifest, const std::string& file) {
   std::error_code ec;
   if (fs::is_directory(manifest, ec)) throw InputError(fmt::format("{}: is a directory, not a manifest", file));
   std::string content = read_text_file(manifest, "manifest");
-  if (content.find_first_not_of(" \t\r\n") == std::string::npos) throw InputError(fmt::format("{}: empty manifest", file));
+  if (content.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw InputError(fmt::format("{}: empty manifest", file));
 
   std::string ext = manifest.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".json") {
     try {
       [[maybe_unused]] const nlohmann::json parsed = nlohmann::json::parse(content);
@@ -120,7 +123,8 @@ SegmentationSettings parse_segmentation(const Ctx& ctx, const ConfigSection& seg
     } else if (*m == "background") {
       s.method = SegmentationSettings::Method::kBackground;
     } else {
-      seg.fail_at("method", fmt::format("'method': unknown segmentation method '{}' (otsu, global, adaptive or background)", *m));
+      seg.fail_at("method",
+                  fmt::format("'method': unknown segmentation method '{}' (otsu, global, adaptive or background)", *m));
     }
   }
   const auto whole = [&](const char* key, int fallback) {
@@ -289,8 +293,8 @@ ObservationSequence load_observations(const fs::path& manifest) {
     }
   }
   if (existing == 0) {
-    frames_node.fail(fmt::format("none of the {} frames exists (first: {})", seq.frames.size(),
-                                 seq.frames.front().image.string()));
+    frames_node.fail(
+        fmt::format("none of the {} frames exists (first: {})", seq.frames.size(), seq.frames.front().image.string()));
   }
   if (!size) frames_node.fail(fmt::format("no frame is a readable image ({})", first_problem));
   const int cam_w = render::camera_width(seq.camera), cam_h = render::camera_height(seq.camera);

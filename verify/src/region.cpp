@@ -391,9 +391,12 @@ Region region_from_image(const cv::Mat& image, double iso) {
   if (!std::isfinite(iso)) throw std::invalid_argument("region_from_image: iso level must be finite");
   if (image.empty()) return {};
   switch (image.type()) {
-    case CV_8UC1: return march_image<std::uint8_t>(image, iso);
-    case CV_32FC1: return march_image<float>(image, iso);
-    case CV_64FC1: return march_image<double>(image, iso);
+    case CV_8UC1:
+      return march_image<std::uint8_t>(image, iso);
+    case CV_32FC1:
+      return march_image<float>(image, iso);
+    case CV_64FC1:
+      return march_image<double>(image, iso);
     default:
       throw std::invalid_argument("region_from_image: image must be CV_8UC1, CV_32FC1 or CV_64FC1 (got type " +
                                   std::to_string(image.type()) + ")");

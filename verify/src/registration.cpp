@@ -116,7 +116,8 @@ class PointGrid {
     for (std::size_t i = 1; i < start_.size(); ++i) start_[i] += start_[i - 1];
     order_.resize(pts.size());
     std::vector<int> cursor(start_.begin(), start_.end() - 1);
-    for (std::size_t i = 0; i < pts.size(); ++i) order_[static_cast<std::size_t>(cursor[static_cast<std::size_t>(index(pts[i]))]++)] = static_cast<int>(i);
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      order_[static_cast<std::size_t>(cursor[static_cast<std::size_t>(index(pts[i]))]++)] = static_cast<int>(i);
   }
   // Index of the nearest point to q.
   int nearest(const Vec2d& q) const {
@@ -219,8 +220,8 @@ Similarity2D moment_estimate(const cv::Mat& photo, const cv::Mat& render, const 
 
 /// Trimmed ICP of the rendered boundary onto the photo's from `best`; replaces
 /// result.render_to_photo (and best_p) if it lowers P.
-void refine_icp(const cv::Mat& photo, const cv::Mat& render, const Similarity2D& best, const RegistrationOptions& options,
-                RegistrationResult& result, double& best_p) {
+void refine_icp(const cv::Mat& photo, const cv::Mat& render, const Similarity2D& best,
+                const RegistrationOptions& options, RegistrationResult& result, double& best_p) {
   const std::vector<Vec2d> target = boundary_points(photo, 4000);
   const std::vector<Vec2d> source = boundary_points(render, 4000);
   PointGrid grid(target, 8.0);
@@ -235,7 +236,8 @@ void refine_icp(const cv::Mat& photo, const cv::Mat& render, const Similarity2D&
     }
     // Trim the worst 10% of correspondences (parts present in one contour only).
     std::vector<double> sorted = dist;
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() * 9 / 10), sorted.end());
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() * 9 / 10),
+                     sorted.end());
     const double cut = sorted[sorted.size() * 9 / 10];
     std::vector<Vec2d> s2, d2;
     s2.reserve(source.size());
@@ -264,8 +266,8 @@ void refine_icp(const cv::Mat& photo, const cv::Mat& render, const Similarity2D&
 
 /// ECC on blurred masks from `best`; replaces result.render_to_photo (and best_p) if it
 /// lowers P, keeps the moment estimate if ECC fails.
-void refine_ecc(const cv::Mat& photo, const cv::Mat& render, const Similarity2D& best, const RegistrationOptions& options,
-                RegistrationResult& result, double& best_p) {
+void refine_ecc(const cv::Mat& photo, const cv::Mat& render, const Similarity2D& best,
+                const RegistrationOptions& options, RegistrationResult& result, double& best_p) {
   // ECC estimates a Euclidean warp between blurred masks; the moment scale is applied first.
   Similarity2D scale_only;
   scale_only.scale = best.scale;
@@ -280,16 +282,18 @@ void refine_ecc(const cv::Mat& photo, const cv::Mat& render, const Similarity2D&
   cv::GaussianBlur(b, b, cv::Size(k, k), options.ecc_blur_sigma_px);
   // Initial guess from the moments: the remaining rotation and translation.
   Similarity2D rest = compose(best, scale_only.inverse());
-  cv::Mat warp = (cv::Mat_<float>(2, 3) << static_cast<float>(std::cos(rest.angle_rad)), static_cast<float>(-std::sin(rest.angle_rad)),
-                  static_cast<float>(rest.translation.x()), static_cast<float>(std::sin(rest.angle_rad)),
-                  static_cast<float>(std::cos(rest.angle_rad)), static_cast<float>(rest.translation.y()));
+  cv::Mat warp = (cv::Mat_<float>(2, 3) << static_cast<float>(std::cos(rest.angle_rad)),
+                  static_cast<float>(-std::sin(rest.angle_rad)), static_cast<float>(rest.translation.x()),
+                  static_cast<float>(std::sin(rest.angle_rad)), static_cast<float>(std::cos(rest.angle_rad)),
+                  static_cast<float>(rest.translation.y()));
   // findTransformECC maps template (photo) coordinates into the input image: invert.
   cv::Mat inv;
   cv::invertAffineTransform(warp, inv);
   try {
-    cv::findTransformECC(a, b, inv, cv::MOTION_EUCLIDEAN,
-                         cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, options.max_iterations, 1e-7),
-                         cv::noArray(), 1);
+    cv::findTransformECC(
+        a, b, inv, cv::MOTION_EUCLIDEAN,
+        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, options.max_iterations, 1e-7), cv::noArray(),
+        1);
     cv::invertAffineTransform(inv, warp);
     Similarity2D e;
     e.angle_rad = std::atan2(warp.at<float>(1, 0), warp.at<float>(0, 0));

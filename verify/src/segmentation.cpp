@@ -91,11 +91,18 @@ cv::Mat to_unit_float(const cv::Mat& image) {
   }
   double scale = 1.0;
   switch (src.depth()) {
-    case CV_8U: scale = 1.0 / 255.0; break;
-    case CV_16U: scale = 1.0 / 65535.0; break;
+    case CV_8U:
+      scale = 1.0 / 255.0;
+      break;
+    case CV_16U:
+      scale = 1.0 / 65535.0;
+      break;
     case CV_32F:
-    case CV_64F: scale = 1.0; break;
-    default: throw InputError(fmt::format("segmentation: unsupported pixel depth {}", src.depth()));
+    case CV_64F:
+      scale = 1.0;
+      break;
+    default:
+      throw InputError(fmt::format("segmentation: unsupported pixel depth {}", src.depth()));
   }
   cv::Mat out;
   src.convertTo(out, CV_MAKETYPE(CV_32F, src.channels()), scale);
@@ -132,7 +139,8 @@ cv::Mat select_channel(const cv::Mat& unit, const std::string& channel) {
 
 cv::Mat channel_of(const cv::Mat& image, const SegmentationSettings& s) {
   cv::Mat c = select_channel(to_unit_float(image), s.channel);
-  if (s.blur_sigma_px > 0) cv::GaussianBlur(c, c, cv::Size(0, 0), s.blur_sigma_px, s.blur_sigma_px, cv::BORDER_REPLICATE);
+  if (s.blur_sigma_px > 0)
+    cv::GaussianBlur(c, c, cv::Size(0, 0), s.blur_sigma_px, s.blur_sigma_px, cv::BORDER_REPLICATE);
   return c;
 }
 
@@ -259,7 +267,8 @@ Segmentation segment_image(const cv::Mat& image, const SegmentationSettings& set
     inside.copyTo(mask(area));
   }
   // Morphology (outside the image counts as neutral; the ROI border as ground).
-  if (settings.open_radius_px > 0) cv::morphologyEx(mask, mask, cv::MORPH_OPEN, ellipse_kernel(settings.open_radius_px));
+  if (settings.open_radius_px > 0)
+    cv::morphologyEx(mask, mask, cv::MORPH_OPEN, ellipse_kernel(settings.open_radius_px));
   if (settings.close_radius_px > 0) {
     cv::morphologyEx(mask, mask, cv::MORPH_CLOSE, ellipse_kernel(settings.close_radius_px));
     if (area != whole) {

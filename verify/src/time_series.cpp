@@ -90,9 +90,10 @@ TimeSeries read_time_series(const fs::path& csv) {
           value_col = static_cast<int>(i);
           ts.quantity = name;
         } else {
-          throw InputError(fmt::format("{}: unknown column '{}' (expected time_s and one of mass_kg, mass_g, "
-                                       "volume_m3, volume_cm3)",
-                                       at, name));
+          throw InputError(
+              fmt::format("{}: unknown column '{}' (expected time_s and one of mass_kg, mass_g, "
+                          "volume_m3, volume_cm3)",
+                          at, name));
         }
       }
       if (time_col < 0) throw InputError(fmt::format("{}: header has no 'time_s' column", at));

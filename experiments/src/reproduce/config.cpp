@@ -43,7 +43,8 @@ std::string substitute(const std::string& s, const Vars& vars, const fs::path& c
     out += s.substr(i, open - i);
     const std::string key = s.substr(open + 2, close - open - 2);
     const auto it = vars.find(key);
-    if (it == vars.end()) throw InputError(fmt::format("{}: unknown variable '${{{}}}' in '{}'", config.string(), key, s));
+    if (it == vars.end())
+      throw InputError(fmt::format("{}: unknown variable '${{{}}}' in '{}'", config.string(), key, s));
     out += it->second;
     i = close + 1;
   }
@@ -62,7 +63,8 @@ std::vector<fs::path> python_modules_beside(const fs::path& script) {
   std::vector<fs::path> modules;
   std::error_code ec;
   for (fs::recursive_directory_iterator it(script.parent_path(), ec), end; !ec && it != end; it.increment(ec))
-    if (it->is_regular_file(ec) && it->path().extension() == ".py" && it->path() != script) modules.push_back(it->path());
+    if (it->is_regular_file(ec) && it->path().extension() == ".py" && it->path() != script)
+      modules.push_back(it->path());
   std::sort(modules.begin(), modules.end());
   return modules;
 }
@@ -123,7 +125,8 @@ ReproduceStep read_step(const ConfigValue& item, const Vars& vars, const fs::pat
   step.name = s.require<std::string>("name");
   if (!valid_name(step.name) || !step_names.insert(step.name).second)
     s.fail_at("name", fmt::format("step name '{}' must be [a-z0-9_]+ and unique", step.name));
-  if (s.has("meltlab") == s.has("python")) s.fail(fmt::format("step '{}' needs exactly one of 'meltlab' and 'python'", step.name));
+  if (s.has("meltlab") == s.has("python"))
+    s.fail(fmt::format("step '{}' needs exactly one of 'meltlab' and 'python'", step.name));
   step.kind = s.has("meltlab") ? "meltlab" : "python";
   const ConfigValue args = s.value(step.kind);
   if (!args.is_sequence() || args.items().empty())
@@ -219,7 +222,8 @@ std::vector<ReproduceExperiment> load_reproduce_experiments(const ReproduceOptio
   std::set<std::string> names;
   for (const auto& f : files) {
     ReproduceExperiment e = load_one(f, o);
-    if (!names.insert(e.name).second) throw InputError(fmt::format("{}: experiment name '{}' used twice", f.string(), e.name));
+    if (!names.insert(e.name).second)
+      throw InputError(fmt::format("{}: experiment name '{}' used twice", f.string(), e.name));
     all.push_back(std::move(e));
   }
   if (o.only.empty()) {
@@ -236,7 +240,8 @@ std::vector<ReproduceExperiment> load_reproduce_experiments(const ReproduceOptio
     }
     if (!it->in_mode)
       throw InputError(fmt::format("--only: experiment '{}' runs only in {} mode", want, it->modes.front()));
-    if (std::none_of(picked.begin(), picked.end(), [&](const auto& p) { return p.name == want; })) picked.push_back(*it);
+    if (std::none_of(picked.begin(), picked.end(), [&](const auto& p) { return p.name == want; }))
+      picked.push_back(*it);
   }
   return picked;
 }

@@ -30,7 +30,8 @@ std::string quote_join(const std::vector<std::string>& args) {
 }
 
 /// Runs one step; returns its outcome. A step that cannot be started sets `error`.
-StepOutcome run_step(const ReproduceOptions& o, const ReproduceExperiment& e, const ReproduceStep& s, std::string& error) {
+StepOutcome run_step(const ReproduceOptions& o, const ReproduceExperiment& e, const ReproduceStep& s,
+                     std::string& error) {
   std::vector<std::string> argv{s.kind == "meltlab" ? o.self_exe.string() : o.python};
   argv.insert(argv.end(), s.args.begin(), s.args.end());
   const fs::path out_file = s.stdout_file.empty() ? e.out_dir / "logs" / (s.name + ".out") : s.stdout_file;
@@ -50,8 +51,8 @@ StepOutcome run_step(const ReproduceOptions& o, const ReproduceExperiment& e, co
     error = fmt::format("step {}: {}", s.name, ex.what());
   }
   if (code != 0 && error.empty())
-    error = fmt::format("step {} ({} {}) exited with code {}: {}", s.name, s.kind, s.args.empty() ? "" : s.args[0], code,
-                        last_line(err_file));
+    error = fmt::format("step {} ({} {}) exited with code {}: {}", s.name, s.kind, s.args.empty() ? "" : s.args[0],
+                        code, last_line(err_file));
   return {s.name, code, seconds_since(t0)};
 }
 

@@ -36,7 +36,9 @@ struct MeshBvh::Embree {
 
   Embree() {
     device = rtcNewDevice(nullptr);
-    if (!device) throw InvariantError(fmt::format("Embree: cannot create a device (error {})", static_cast<int>(rtcGetDeviceError(nullptr))));
+    if (!device)
+      throw InvariantError(
+          fmt::format("Embree: cannot create a device (error {})", static_cast<int>(rtcGetDeviceError(nullptr))));
     rtcSetDeviceErrorFunction(device, on_embree_error, &last_error);
     scene = rtcNewScene(device);
     rtcSetSceneFlags(scene, RTC_SCENE_FLAG_DYNAMIC);
@@ -94,7 +96,9 @@ BvhUpdate MeshBvh::load(std::vector<float> positions, std::vector<std::uint32_t>
   normal_.assign(nv, Eigen::Vector3f::Zero());
   lower_ = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   upper_ = -lower_;
-  auto P = [&](std::uint32_t v) { return Eigen::Vector3f(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]); };
+  auto P = [&](std::uint32_t v) {
+    return Eigen::Vector3f(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]);
+  };
   for (std::size_t t = 0; t < nt; ++t) {
     const std::uint32_t a = index[3 * t], b = index[3 * t + 1], c = index[3 * t + 2];
     const Eigen::Vector3f n = (P(b) - P(a)).cross(P(c) - P(a));
@@ -131,8 +135,10 @@ BvhUpdate MeshBvh::load(std::vector<float> positions, std::vector<std::uint32_t>
     vertex_ = std::move(positions);
     index_ = std::move(index);
     RTCGeometry g = rtcNewGeometry(rtc_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertex_.data(), 0, 3 * sizeof(float), nv);
-    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, index_.data(), 0, 3 * sizeof(std::uint32_t), nt);
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertex_.data(), 0, 3 * sizeof(float),
+                               nv);
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, index_.data(), 0,
+                               3 * sizeof(std::uint32_t), nt);
     rtcSetGeometryBuildQuality(g, RTC_BUILD_QUALITY_REFIT);
     rtcCommitGeometry(g);
     rtc_->geometry_id = rtcAttachGeometry(rtc_->scene, g);
@@ -144,7 +150,8 @@ BvhUpdate MeshBvh::load(std::vector<float> positions, std::vector<std::uint32_t>
   return what;
 }
 
-bool MeshBvh::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_near, double t_far, MeshHit& hit) const {
+bool MeshBvh::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_near, double t_far,
+                        MeshHit& hit) const {
   if (index_.empty()) return false;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
@@ -179,7 +186,8 @@ bool MeshBvh::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, doub
 
 Eigen::Vector3d MeshBvh::corner_position(std::uint32_t prim, int k) const {
   const std::uint32_t v = index_[3 * prim + static_cast<std::uint32_t>(k)];
-  return {static_cast<double>(vertex_[3 * v]), static_cast<double>(vertex_[3 * v + 1]), static_cast<double>(vertex_[3 * v + 2])};
+  return {static_cast<double>(vertex_[3 * v]), static_cast<double>(vertex_[3 * v + 1]),
+          static_cast<double>(vertex_[3 * v + 2])};
 }
 
 Eigen::Vector3d MeshBvh::corner_normal(std::uint32_t prim, int k) const {

@@ -177,7 +177,8 @@ struct Occupancy {
           range(k, bz, k0, k1);
           for (int c = k0; c <= k1; ++c)
             for (int b = j0; b <= j1; ++b)
-              for (int a = i0; a <= i1; ++a) marked[std::size_t(a) + std::size_t(bx) * (std::size_t(b) + std::size_t(by) * std::size_t(c))] = 1;
+              for (int a = i0; a <= i1; ++a)
+                marked[std::size_t(a) + std::size_t(bx) * (std::size_t(b) + std::size_t(by) * std::size_t(c))] = 1;
         }
       }
   }
@@ -260,16 +261,16 @@ struct Scene {
   const IceFraction& ice;
   const IcePhotoOptions& opt;
   GridGeometry geo;
-  Occupancy occ;                 // empty-space skipping (disabled: every block is marked)
+  Occupancy occ;                        // empty-space skipping (disabled: every block is marked)
   std::vector<std::uint8_t> cell_live;  // dilated_nonzero (with occ)
   std::vector<double> zenith_sum;       // per column: Σ over the zenith march's z samples (see zenith_T)
   double zenith_dt = 0;
   bool zenith_hit = false;
   Vec3d to_lamp;
   double step = 0;
-  Box box;                       // where f > 0 can be sampled
-  Grid3<float> lamp_T;           // Shadow::kGrid: transmittance towards the lamp at cell centres
-  std::array<double, 3> a_rgb{}; // albedo × tint
+  Box box;                        // where f > 0 can be sampled
+  Grid3<float> lamp_T;            // Shadow::kGrid: transmittance towards the lamp at cell centres
+  std::array<double, 3> a_rgb{};  // albedo × tint
 
   Scene(const IceFraction& g, const IcePhotoOptions& o) : ice(g), opt(o), geo(g) {
     if (g.empty() || !(g.h_m > 0)) throw InputError("render_ice_photo: empty ice grid or non-positive cell size");
@@ -340,10 +341,13 @@ struct Scene {
     if (gx < -0.5 || gy < -0.5 || gx > geo.nx - 0.5 || gy > geo.ny - 0.5) return 1.0;
     const double fx = std::floor(gx), fy = std::floor(gy), tx = gx - fx, ty = gy - fy;
     const std::size_t sy = std::size_t(geo.nx);
-    const std::size_t x0 = std::size_t(std::clamp(int(fx), 0, geo.nx - 1)), x1 = std::size_t(std::clamp(int(fx) + 1, 0, geo.nx - 1));
-    const std::size_t y0 = sy * std::size_t(std::clamp(int(fy), 0, geo.ny - 1)), y1 = sy * std::size_t(std::clamp(int(fy) + 1, 0, geo.ny - 1));
+    const std::size_t x0 = std::size_t(std::clamp(int(fx), 0, geo.nx - 1)),
+                      x1 = std::size_t(std::clamp(int(fx) + 1, 0, geo.nx - 1));
+    const std::size_t y0 = sy * std::size_t(std::clamp(int(fy), 0, geo.ny - 1)),
+                      y1 = sy * std::size_t(std::clamp(int(fy) + 1, 0, geo.ny - 1));
     const double* S = zenith_sum.data();
-    const double sum = (S[x0 + y0] * (1 - tx) + S[x1 + y0] * tx) * (1 - ty) + (S[x0 + y1] * (1 - tx) + S[x1 + y1] * tx) * ty;
+    const double sum =
+        (S[x0 + y0] * (1 - tx) + S[x1 + y0] * tx) * (1 - ty) + (S[x0 + y1] * (1 - tx) + S[x1 + y1] * tx) * ty;
     return std::exp(-opt.extinction_per_m * sum * zenith_dt);
   }
 
@@ -360,8 +364,8 @@ struct Scene {
 
   /// The midpoint samples x_i = o + (t0 + (i + ½) dt) d, i < n, of a ray: calls fn(x_i, f_i, stencil)
   /// for each sample inside the grid, in order, until it returns false, except samples where f = 0
-  /// is known beforehand (unmarked blocks, skipped a block at a time; dead cells): the positions and values of the others are
-  /// those of the plain loop, so the result is the same.
+  /// is known beforehand (unmarked blocks, skipped a block at a time; dead cells): the positions and values of the
+  /// others are those of the plain loop, so the result is the same.
   template <class Fn>
   void march(const Vec3d& o, const Vec3d& d, double t0, int n, double dt, const Fn& fn) const {
     const float* v = ice.value.data();
@@ -388,7 +392,8 @@ struct Scene {
         double t_exit = kInf;
         for (int a = 0; a < 3; ++a) {
           if (d[a] > 0.0) {
-            if (b[a] + 1 < nb[a]) t_exit = std::min(t_exit, (geo.origin[a] + geo.h * ((b[a] + 1) * B) - o[a]) * inv_d[a]);
+            if (b[a] + 1 < nb[a])
+              t_exit = std::min(t_exit, (geo.origin[a] + geo.h * ((b[a] + 1) * B) - o[a]) * inv_d[a]);
           } else if (d[a] < 0.0) {
             if (b[a] > 0) t_exit = std::min(t_exit, (geo.origin[a] + geo.h * (b[a] * B) - o[a]) * inv_d[a]);
           }
@@ -484,7 +489,8 @@ struct Scene {
         const double dt = (t1 - t0) / n;
         const double p = henyey_greenstein(to_lamp.dot(d), opt.hg_g);
         const bool scatter = opt.albedo > 0.0;
-        const float* lamp = opt.shadow == IcePhotoOptions::Shadow::kGrid && !lamp_T.empty() ? lamp_T.value.data() : nullptr;
+        const float* lamp =
+            opt.shadow == IcePhotoOptions::Shadow::kGrid && !lamp_T.empty() ? lamp_T.value.data() : nullptr;
         bool opaque = false;
         double last_f = -1.0, last_att = 1.0;  // solid ice repeats f (and so the attenuation)
         march(o, d, t0, n, dt, [&](const Vec3d& x, double f, const Stencil& st) {
@@ -520,10 +526,10 @@ struct Scene {
       return rad;
     }
     const Vec3d g = o + t_ground * d;
-    const double rho = opt.ground_albedo *
-                       std::max(0.0, 1.0 + opt.ground_texture_contrast *
-                                               ground_texture_impl(g.x(), g.y(), opt.ground_texture_scale_m,
-                                                                   opt.ground_seed, texture));
+    const double rho =
+        opt.ground_albedo *
+        std::max(0.0, 1.0 + opt.ground_texture_contrast * ground_texture_impl(g.x(), g.y(), opt.ground_texture_scale_m,
+                                                                              opt.ground_seed, texture));
     double Tl = 1.0, Tz = 1.0;
     if (opt.shadow != IcePhotoOptions::Shadow::kNone && opt.extinction_per_m > 0) {
       Tl = march_T(g, to_lamp);
@@ -546,9 +552,7 @@ void for_rows(int rows, bool parallel, const RowFn& fn) {
   }
 }
 
-double top_of_scene(const IceFraction& ice, double ground_z) {
-  return std::max(ice.max_m().z(), ground_z) + 1.0;
-}
+double top_of_scene(const IceFraction& ice, double ground_z) { return std::max(ice.max_m().z(), ground_z) + 1.0; }
 
 }  // namespace
 
@@ -565,7 +569,8 @@ double ground_texture(double x_m, double y_m, double scale_m, std::uint64_t seed
 cv::Mat render_ice_radiance(const IceFraction& ice_in, const Camera& camera, const IcePhotoOptions& options,
                             const cv::Mat& only) {
   if (!(options.interface_width >= 0.0) || !std::isfinite(options.interface_width))
-    throw InputError(fmt::format("ice photo: interface_width must be a finite number >= 0 (got {})", options.interface_width));
+    throw InputError(
+        fmt::format("ice photo: interface_width must be a finite number >= 0 (got {})", options.interface_width));
   IceFraction sharpened;
   if (options.interface_width > 0) {
     sharpened = ice_in;
@@ -617,7 +622,8 @@ cv::Mat develop_photo(const cv::Mat& radiance, const IcePhotoOptions& options) {
       for (int c = 0; c < 3; ++c) {
         double x = 255.0 * std::pow(std::clamp(double(in[u][c]), 0.0, 1.0), inv_gamma);
         if (options.noise_sigma > 0) {
-          const std::uint64_t id = (std::uint64_t(v) * std::uint64_t(lin.cols) + std::uint64_t(u)) * 3 + std::uint64_t(c);
+          const std::uint64_t id =
+              (std::uint64_t(v) * std::uint64_t(lin.cols) + std::uint64_t(u)) * 3 + std::uint64_t(c);
           const std::uint64_t h = hash3(options.seed, id, 0x6e6f697365ull);
           const double u1 = to_unit(h), u2 = to_unit(splitmix64(h));
           x += options.noise_sigma * std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);

@@ -98,7 +98,8 @@ IceRenderer::IceRenderer(RenderScene scene) : scene_(std::move(scene)) {
   // Image files named by the scene replace the procedural assets (read through OpenImageIO).
   env_ = scene_.environment.file.empty() ? latlong_environment(scene_.environment)
                                          : read_environment(scene_.environment.file, scene_.environment.layout);
-  ground_tex_ = scene_.ground.texture_file.empty() ? ground_texture(256, 1) : read_rgb_image(scene_.ground.texture_file);
+  ground_tex_ =
+      scene_.ground.texture_file.empty() ? ground_texture(256, 1) : read_rgb_image(scene_.ground.texture_file);
   if (scene_.ice.normal_map)
     normal_tex_ = scene_.ice.normal_map_file.empty() ? normal_map(256, scene_.ice.normal_map_bump, 2)
                                                      : read_rgb_image(scene_.ice.normal_map_file);
@@ -167,15 +168,21 @@ ShadingPlan IceRenderer::plan() const {
     p.ice_reflection = p.ice_transmission = p.fresnel = true;
   }
   const bool distinct_eta = m.eta_rgb[0] != m.eta_rgb[1] || m.eta_rgb[1] != m.eta_rgb[2];
-  if (p.ice_transmission) skip(p.dispersion, m.dispersion && distinct_eta, "dispersion (off or equal indices: one refraction)");
-  else p.dispersion = false;
+  if (p.ice_transmission)
+    skip(p.dispersion, m.dispersion && distinct_eta, "dispersion (off or equal indices: one refraction)");
+  else
+    p.dispersion = false;
   p.normal_map = m.normal_map;
   skip(p.ground_specular, g.cs > 0 && !scene_.lights.empty(), "ground specular (cs = 0 or no light)");
   const bool visible = g.a > 0 || g.cr > 0 || g.tilt_s > 0 || g.tilt_t > 0 || g.d > 0;
-  if (!g.liquid) skip(p.liquid, false, "liquid (ground.liquid off)");
-  else if (!mask_) skip(p.liquid, false, "liquid (no mask: sublimation or no liquid stage)");
-  else if (!visible) skip(p.liquid, false, "liquid (a = cr = tilt = d = 0)");
-  else skip(p.liquid, mask_->any_wet(), "liquid (no texel at or above the threshold)");
+  if (!g.liquid)
+    skip(p.liquid, false, "liquid (ground.liquid off)");
+  else if (!mask_)
+    skip(p.liquid, false, "liquid (no mask: sublimation or no liquid stage)");
+  else if (!visible)
+    skip(p.liquid, false, "liquid (a = cr = tilt = d = 0)");
+  else
+    skip(p.liquid, mask_->any_wet(), "liquid (no texel at or above the threshold)");
   if (p.liquid) {
     skip(p.liquid_rim, g.tilt_s > 0 || g.tilt_t > 0, "liquid rim normals (tilt = 0)");
     skip(p.liquid_offset, g.d > 0, "liquid film offset (d = 0)");
@@ -232,7 +239,7 @@ struct FrameContext {
   double eps;
   double ground_far;
   std::vector<Vector3d> to_light;
-  std::vector<std::uint8_t> wet_window;  ///< per texel (WetWindow), empty if not usable
+  std::vector<std::uint8_t> wet_window;        ///< per texel (WetWindow), empty if not usable
   const FilteredTextures* filtered = nullptr;  ///< texture_filter: mipmap
   FilteredIds ids;
 
@@ -258,27 +265,31 @@ struct FrameContext {
       return static_cast<double>(v[static_cast<std::size_t>(j) * p.width + i]);
     };
     const int i = static_cast<int>(x0), j = static_cast<int>(y0);
-    return (1 - fy) * ((1 - fx) * texel(i, j) + fx * texel(i + 1, j)) + fy * ((1 - fx) * texel(i, j + 1) + fx * texel(i + 1, j + 1));
+    return (1 - fy) * ((1 - fx) * texel(i, j) + fx * texel(i + 1, j)) +
+           fy * ((1 - fx) * texel(i, j + 1) + fx * texel(i + 1, j + 1));
   }
   // step(p, mask) at texel coordinates (texel centres at integers).
   double wet(double tx, double ty) const {
     const double m = mask_bilinear(mask->values(), tx, ty, true);
     const double p = mask->threshold_texture().empty() ? static_cast<double>(mask->params().threshold)
-                                                        : mask_bilinear(mask->threshold_texture(), tx, ty, false);
+                                                       : mask_bilinear(mask->threshold_texture(), tx, ty, false);
     return m >= p ? 1.0 : 0.0;
   }
 
   // A tiled image at (s, t) in periods: bilinear, or filtered (`id`) with the footprint
   // (d(s,t)/dx, d(s,t)/dy; nullptr: none, the finest level).
-  Rgb image_at(const RgbImage& img, int id, const Eigen::Vector2d& st, const Eigen::Vector2d* dx, const Eigen::Vector2d* dy) const {
+  Rgb image_at(const RgbImage& img, int id, const Eigen::Vector2d& st, const Eigen::Vector2d* dx,
+               const Eigen::Vector2d* dy) const {
     if (!filtered)
       return sample_bilinear_rgb(img, st.x() * img.width() - 0.5, st.y() * img.height() - 0.5, ImageWrap::kRepeat,
                                  ImageWrap::kRepeat);
-    return filtered->texture(id, st.x(), st.y(), dx ? *dx : Eigen::Vector2d::Zero(), dy ? *dy : Eigen::Vector2d::Zero());
+    return filtered->texture(id, st.x(), st.y(), dx ? *dx : Eigen::Vector2d::Zero(),
+                             dy ? *dy : Eigen::Vector2d::Zero());
   }
   // The same for an image projected along world axis `axis` with period `tile` at point x
   // (the normal map and the ice texture); `dx` the footprint of x.
-  Rgb projected_image_at(const RgbImage& img, int id, const Vector3d& x, int axis, double tile, const Differential* dx) const {
+  Rgb projected_image_at(const RgbImage& img, int id, const Vector3d& x, int axis, double tile,
+                         const Differential* dx) const {
     auto uv = [&](const Vector3d& q) {
       return Eigen::Vector2d((axis == 0 ? q.y() : q.x()) / tile, (axis == 2 ? q.y() : q.z()) / tile);
     };
@@ -323,7 +334,8 @@ struct FrameContext {
       // Beyond the grid the border reads zero: no liquid and no rim there.
       if (near_grid) w = wet(tx, ty);
       if (near_grid && plan.liquid_rim) {
-        n = Vector3d(g.tilt_s * (wet(tx - 1, ty) - wet(tx + 1, ty)), g.tilt_t * (wet(tx, ty - 1) - wet(tx, ty + 1)), 1.0)
+        n = Vector3d(g.tilt_s * (wet(tx - 1, ty) - wet(tx + 1, ty)), g.tilt_t * (wet(tx, ty - 1) - wet(tx, ty + 1)),
+                     1.0)
                 .normalized();
       }
     }
@@ -386,7 +398,8 @@ struct FrameContext {
   // The shading normal facing V (normal-mapped if planned); with a footprint `dp` of p also
   // its change dN (of the interpolated normal; the normal map's own slope change is not
   // followed) and the map's filtered lookup.
-  Vector3d ice_normal(const Vector3d& p, const MeshHit& h, const Vector3d& V, const Differential* dp, Differential* dN) const {
+  Vector3d ice_normal(const Vector3d& p, const MeshHit& h, const Vector3d& V, const Differential* dp,
+                      Differential* dN) const {
     Vector3d n = bvh.shading_normal(h);
     if (dp) *dN = {bvh.shading_normal_differential(h, dp->dx), bvh.shading_normal_differential(h, dp->dy)};
     if (plan.normal_map) {
@@ -445,7 +458,8 @@ struct FrameContext {
       };
       if (plan.dispersion) {
         for (int c = 0; c < 3; ++c)
-          if (const auto L = seen_through(1.0 / m.eta_rgb[static_cast<std::size_t>(c)])) I[c] += m.ct * (1 - F) * (*L)[c];
+          if (const auto L = seen_through(1.0 / m.eta_rgb[static_cast<std::size_t>(c)]))
+            I[c] += m.ct * (1 - F) * (*L)[c];
       } else if (const auto L = seen_through(1.0 / m.eta)) {
         I += m.ct * (1 - F) * *L;
       }
@@ -464,7 +478,8 @@ struct FrameContext {
     // Reflection with each channel's own Fresnel weight, so that reflected + transmitted = 1
     // per channel (the white-furnace test checks this bookkeeping). Only the mirrored ray
     // carries a footprint; the paths through the ice look up the finest level.
-    const RayDifferential mirror = rd ? RayDifferential{rd->o, reflected_footprint(V, rd->d, N, dN)} : RayDifferential{};
+    const RayDifferential mirror =
+        rd ? RayDifferential{rd->o, reflected_footprint(V, rd->d, N, dN)} : RayDifferential{};
     const Rgb from_mirror = trace_secondary(p + eps * N, reflect(V, N), rd ? &mirror : nullptr);
     if (!plan.dispersion) I += fresnel(m.fresnel, cos_i, 1.0, m.eta) * from_mirror;
     for (int c = 0; c < channels; ++c) {
@@ -479,8 +494,10 @@ struct FrameContext {
         MeshHit e;
         if (!bvh.intersect(o, dir, eps, kInf, e)) {  // leaked through a crack: see the environment
           const Rgb L = env_at(dir);
-          if (plan.dispersion) I[c] += weight[c] * L[c];
-          else I += weight.cwiseProduct(L);
+          if (plan.dispersion)
+            I[c] += weight[c] * L[c];
+          else
+            I += weight.cwiseProduct(L);
           break;
         }
         for (int k = 0; k < 3; ++k) weight[k] *= std::exp(-m.absorption[static_cast<std::size_t>(k)] * e.t);
@@ -492,8 +509,10 @@ struct FrameContext {
         const Vector3d reflected = dir - 2.0 * dir.dot(n_out) * n_out;
         if (const auto out = refract(dir, -n_out, eta)) {
           const Rgb L = trace_secondary(q + eps * n_out, *out, nullptr);
-          if (plan.dispersion) I[c] += weight[c] * (1 - Fx) * L[c];
-          else I += (1 - Fx) * weight.cwiseProduct(L);
+          if (plan.dispersion)
+            I[c] += weight[c] * (1 - Fx) * L[c];
+          else
+            I += (1 - Fx) * weight.cwiseProduct(L);
           weight *= Fx;
         }
         dir = reflected.normalized();
@@ -510,9 +529,11 @@ struct FrameContext {
     const double t_ground = (d.z() < 0 && o.z() > ground_z) ? (ground_z - o.z()) / d.z() : kInf;
     if (bvh.intersect(o, d, 0.0, t_ground, h)) {
       const Vector3d p = o + h.t * d;
-      const RayDifferential at_hit = rd ? RayDifferential{plane_footprint(o, d, *rd, p, h.ng, ground_far), rd->d} : RayDifferential{};
+      const RayDifferential at_hit =
+          rd ? RayDifferential{plane_footprint(o, d, *rd, p, h.ng, ground_far), rd->d} : RayDifferential{};
       const RayDifferential* hit_rd = rd ? &at_hit : nullptr;
-      return scene.ice.model == IceModel::kMonograph ? shade_ice_monograph(p, h, d, hit_rd) : shade_ice_physical(p, h, d, hit_rd);
+      return scene.ice.model == IceModel::kMonograph ? shade_ice_monograph(p, h, d, hit_rd)
+                                                     : shade_ice_physical(p, h, d, hit_rd);
     }
     return background(o, d, rd);
   }
@@ -523,8 +544,10 @@ struct FrameContext {
 RgbImage IceRenderer::render() {
   const auto t0 = std::chrono::steady_clock::now();
   if (!camera_) {
-    if (!scene_.camera) camera_ = auto_camera(Vector3d(-1, -1, 0), Vector3d(1, 1, 1), scene_.width, scene_.height);
-    else camera_ = scene_.camera;
+    if (!scene_.camera)
+      camera_ = auto_camera(Vector3d(-1, -1, 0), Vector3d(1, 1, 1), scene_.width, scene_.height);
+    else
+      camera_ = scene_.camera;
   }
   const ShadingPlan p = plan();
   std::string log = fmt::format("{}", fmt::join(p.skipped, "; "));
@@ -533,10 +556,24 @@ RgbImage IceRenderer::render() {
     last_plan_log_ = log;
   }
   const double ground_z = scene_.ground.z.value_or(0.0);
-  FrameContext ctx{scene_,  p,  bvh_, mask_, env_, ground_tex_, normal_tex_, ice_tex_, ground_z, 1e-4 * object_size_, 1e6 * object_size_,
-                   {},      {}, filtered_.get(), {env_id_, ground_id_, normal_id_, ice_id_}};
+  FrameContext ctx{scene_,
+                   p,
+                   bvh_,
+                   mask_,
+                   env_,
+                   ground_tex_,
+                   normal_tex_,
+                   ice_tex_,
+                   ground_z,
+                   1e-4 * object_size_,
+                   1e6 * object_size_,
+                   {},
+                   {},
+                   filtered_.get(),
+                   {env_id_, ground_id_, normal_id_, ice_id_}};
   for (const auto& l : scene_.lights) ctx.to_light.push_back(l.to_light.normalized());
-  if (p.liquid && mask_->threshold_texture().empty() && mask_->params().threshold > 0) ctx.wet_window = wet_windows(*mask_);
+  if (p.liquid && mask_->threshold_texture().empty() && mask_->params().threshold > 0)
+    ctx.wet_window = wet_windows(*mask_);
   const Camera& cam = *camera_;
   const int w = camera_width(cam), h = camera_height(cam);
   const double z_top = std::max(bvh_.upper().z(), ground_z) + object_size_;

@@ -49,13 +49,13 @@ std::optional<Eigen::Vector3d> refract(const Eigen::Vector3d& incident, const Ei
   return (eta * incident - (eta * ni + std::sqrt(k)) * n).normalized();
 }
 
-Eigen::Vector3d reflect_differential(const Eigen::Vector3d& to_eye, const Eigen::Vector3d& d_to_eye, const Eigen::Vector3d& n,
-                                     const Eigen::Vector3d& dn) {
+Eigen::Vector3d reflect_differential(const Eigen::Vector3d& to_eye, const Eigen::Vector3d& d_to_eye,
+                                     const Eigen::Vector3d& n, const Eigen::Vector3d& dn) {
   return 2.0 * n.dot(to_eye) * dn + 2.0 * (dn.dot(to_eye) + n.dot(d_to_eye)) * n - d_to_eye;
 }
 
-Eigen::Vector3d refract_differential(const Eigen::Vector3d& incident, const Eigen::Vector3d& d_incident, const Eigen::Vector3d& n,
-                                     const Eigen::Vector3d& dn, double eta) {
+Eigen::Vector3d refract_differential(const Eigen::Vector3d& incident, const Eigen::Vector3d& d_incident,
+                                     const Eigen::Vector3d& n, const Eigen::Vector3d& dn, double eta) {
   const double c = n.dot(incident);
   const double root = std::sqrt(std::max(0.0, 1.0 - eta * eta * (1.0 - c * c)));
   const double dc = dn.dot(incident) + n.dot(d_incident);

@@ -40,12 +40,12 @@ namespace {
 using i64 = std::int64_t;
 using i32 = std::int32_t;
 
-constexpr i64 kSub = 256;                // fixed-point sub-pixel steps per grid pixel
-constexpr double kGuard = 524288.0;      // 2^19 grid pixels: |coordinate| bound of snapped vertices
-constexpr double kNearZ = 1e-9;          // near plane of a pinhole camera, mesh units
-constexpr int kMaxGrid = 1 << 18;        // image (or canvas) size x supersample, well inside the guard band
-constexpr int kBinaryBandRows = 32;      // rows per band, binary mask
-constexpr int kCoverageBandRows = 8;     // output rows per band, coverage
+constexpr i64 kSub = 256;             // fixed-point sub-pixel steps per grid pixel
+constexpr double kGuard = 524288.0;   // 2^19 grid pixels: |coordinate| bound of snapped vertices
+constexpr double kNearZ = 1e-9;       // near plane of a pinhole camera, mesh units
+constexpr int kMaxGrid = 1 << 18;     // image (or canvas) size x supersample, well inside the guard band
+constexpr int kBinaryBandRows = 32;   // rows per band, binary mask
+constexpr int kCoverageBandRows = 8;  // output rows per band, coverage
 
 inline i64 floor_div(i64 a, i64 b) {  // b > 0
   i64 q = a / b;
@@ -195,7 +195,6 @@ void check_camera(const Camera& camera) {
   if (!ok) throw InputError("silhouette: pinhole camera needs fx, fy > 0 and finite intrinsics, distortion and pose");
 }
 
-
 // o[p] += number of covered samples (bytes 0/1) among row[p k .. p k + k) for p in [p0, p1).
 // k = 2, 4, 8 add the bytes of one word at a time (a multiply sums them into the top byte).
 inline void add_sample_counts(const std::uint8_t* row, i32 k, i32 p0, i32 p1, float* o) {
@@ -232,9 +231,9 @@ struct Scratch {
 struct SilhouetteRenderer::Impl {
   Camera camera;
   SilhouetteOptions options;
-  int width = 0, height = 0;                  // output image
-  int canvas_w = 0, canvas_h = 0;             // ideal canvas (== output unless distorted)
-  double ox = 0, oy = 0;                      // ideal pixel of canvas pixel (0, 0)
+  int width = 0, height = 0;       // output image
+  int canvas_w = 0, canvas_h = 0;  // ideal canvas (== output unless distorted)
+  double ox = 0, oy = 0;           // ideal pixel of canvas pixel (0, 0)
   bool distorted = false;
   cv::Mat map_nearest, map_linear1, map_linear2;  // output pixel -> canvas position
   cv::Mat canvas8, canvas32;
@@ -321,8 +320,8 @@ struct SilhouetteRenderer::Impl {
     fix_ok.resize(nv);
     const double k = options.supersample, half = 0.5 * (k - 1);
     auto store = [&](std::size_t i, const Hom& h) {
-      const bool ok = std::isfinite(h.w) && h.w >= kNearZ && std::abs(h.x) <= kGuard * h.w &&
-                      std::abs(h.y) <= kGuard * h.w;
+      const bool ok =
+          std::isfinite(h.w) && h.w >= kNearZ && std::abs(h.x) <= kGuard * h.w && std::abs(h.y) <= kGuard * h.w;
       fix_ok[i] = ok;
       if (ok) fix[i] = Fix{snap(h.x / h.w), snap(h.y / h.w)};
       if (hom_out) (*hom_out)[i] = h;
@@ -364,9 +363,11 @@ struct SilhouetteRenderer::Impl {
       const sim::Triangle& tri = F[f];
       for (sim::Index v : tri)
         if (v < 0 || std::size_t(v) >= nv)
-          throw InputError(fmt::format("silhouette: triangle {} references vertex {} (mesh has {} vertex slots)", f, v, nv));
+          throw InputError(
+              fmt::format("silhouette: triangle {} references vertex {} (mesh has {} vertex slots)", f, v, nv));
       if (fix_ok[std::size_t(tri[0])] && fix_ok[std::size_t(tri[1])] && fix_ok[std::size_t(tri[2])])
-        setup_triangle(fix[std::size_t(tri[0])], fix[std::size_t(tri[1])], fix[std::size_t(tri[2])], cull, gw, gh, tris);
+        setup_triangle(fix[std::size_t(tri[0])], fix[std::size_t(tri[1])], fix[std::size_t(tri[2])], cull, gw, gh,
+                       tris);
       else
         any_slow = true;
     }
@@ -381,7 +382,8 @@ struct SilhouetteRenderer::Impl {
       if (fix_ok[a] && fix_ok[b] && fix_ok[c]) continue;
       Hom poly[16] = {hom[a], hom[b], hom[c]};
       bool finite = true;
-      for (int i = 0; i < 3; ++i) finite = finite && std::isfinite(poly[i].x) && std::isfinite(poly[i].y) && std::isfinite(poly[i].w);
+      for (int i = 0; i < 3; ++i)
+        finite = finite && std::isfinite(poly[i].x) && std::isfinite(poly[i].y) && std::isfinite(poly[i].w);
       if (!finite) continue;  // a non-finite vertex: nothing sensible to draw
       const int n = clip_polygon(poly, 3, std::holds_alternative<Pinhole>(camera) ? kNearZ : -1.0);
       if (n < 3) continue;
@@ -430,9 +432,8 @@ struct SilhouetteRenderer::Impl {
         for (i32 r = ra; r < rb; ++r) std::memset(mask.ptr<std::uint8_t>(r), 0, std::size_t(gw));
       }
       for (i32 j = band_offset[std::size_t(b)]; j < band_offset[std::size_t(b) + 1]; ++j) {
-        raster(tris[std::size_t(band_items[std::size_t(j)])], ra, rb, gw, [&](i32 r, i32 x0, i32 x1) {
-          std::memset(mask.ptr<std::uint8_t>(r) + x0, 255, std::size_t(x1 - x0));
-        });
+        raster(tris[std::size_t(band_items[std::size_t(j)])], ra, rb, gw,
+               [&](i32 r, i32 x0, i32 x1) { std::memset(mask.ptr<std::uint8_t>(r) + x0, 255, std::size_t(x1 - x0)); });
       }
     });
   }

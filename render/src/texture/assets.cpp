@@ -56,7 +56,8 @@ double value_noise3(const Vector3d& p, std::uint64_t seed) {
   const Vector3d f0 = p.array().floor();
   const Vector3d f = p - f0;
   const Vector3d w(smooth(f.x()), smooth(f.y()), smooth(f.z()));
-  const auto x = static_cast<std::int64_t>(f0.x()), y = static_cast<std::int64_t>(f0.y()), z = static_cast<std::int64_t>(f0.z());
+  const auto x = static_cast<std::int64_t>(f0.x()), y = static_cast<std::int64_t>(f0.y()),
+             z = static_cast<std::int64_t>(f0.z());
   double s = 0;
   for (int c = 0; c < 8; ++c) {
     const int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
@@ -97,8 +98,10 @@ RgbImage latlong_environment(const EnvironmentOptions& o) {
         const double panel = std::fmod((phi / (2 * std::numbers::pi) + 1.0) * 8.0, 1.0);
         if (elev > 3 && elev < 25 && panel > 0.15 && panel < 0.45) c = Vector3d(2.5, 2.4, 2.2);
         const double cs = d.dot(sun);
-        if (cs > sun_cos) c = Vector3d::Constant(o.sun_radiance);
-        else c += Vector3d(1.0, 0.9, 0.7) * 0.6 * std::pow(std::max(0.0, cs), 64.0);  // glow
+        if (cs > sun_cos)
+          c = Vector3d::Constant(o.sun_radiance);
+        else
+          c += Vector3d(1.0, 0.9, 0.7) * 0.6 * std::pow(std::max(0.0, cs), 64.0);  // glow
       } else {
         // A checkered floor seen from the centre of a room (2 m below, 1 m squares).
         const double r = 2.0 / std::max(1e-3, -d.z());
@@ -128,7 +131,8 @@ RgbImage ground_texture(int size, std::uint64_t seed) {
       // 4 x 4 tiles per texture period, alternating tones, thin grout lines.
       const double tu = u * 4, tv = v * 4;
       const bool alt = ((static_cast<int>(tu) + static_cast<int>(tv)) & 1) != 0;
-      const double eu = std::min(tu - std::floor(tu), std::ceil(tu) - tu), ev = std::min(tv - std::floor(tv), std::ceil(tv) - tv);
+      const double eu = std::min(tu - std::floor(tu), std::ceil(tu) - tu),
+                   ev = std::min(tv - std::floor(tv), std::ceil(tv) - tv);
       Vector3d c = (alt ? light : dark) * (0.75 + 0.5 * n);
       if (std::min(eu, ev) < 0.025) c = grout;
       set_rgb(img, i, j, c.cwiseMin(1.0));
@@ -171,8 +175,8 @@ void write_png(const std::filesystem::path& file, const RgbImage& image, double 
   write_image(file, px);
 }
 
-void write_gray_png(const std::filesystem::path& file, const std::vector<float>& values, int width, int height, float white,
-                    bool flip_y) {
+void write_gray_png(const std::filesystem::path& file, const std::vector<float>& values, int width, int height,
+                    float white, bool flip_y) {
   Image8 px(width, height, 1);
   for (int j = 0; j < height; ++j)
     for (int i = 0; i < width; ++i) {
@@ -219,11 +223,16 @@ struct CubeGeometry {
 
 CubeGeometry cube_geometry(EnvironmentLayout layout) {
   switch (layout) {
-    case EnvironmentLayout::kCube3x2: return {3, 2, {{{0, 0}, {0, 1}, {1, 0}, {1, 1}, {2, 0}, {2, 1}}}};
-    case EnvironmentLayout::kCube1x6: return {1, 6, {{{0, 0}, {0, 1}, {0, 2}, {0, 3}, {0, 4}, {0, 5}}}};
-    case EnvironmentLayout::kCrossHorizontal: return {4, 3, {{{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {3, 1}}}};
-    case EnvironmentLayout::kCrossVertical: return {3, 4, {{{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {1, 3, true}}}};
-    default: throw InvariantError("cube_geometry: not a cube-map layout");
+    case EnvironmentLayout::kCube3x2:
+      return {3, 2, {{{0, 0}, {0, 1}, {1, 0}, {1, 1}, {2, 0}, {2, 1}}}};
+    case EnvironmentLayout::kCube1x6:
+      return {1, 6, {{{0, 0}, {0, 1}, {0, 2}, {0, 3}, {0, 4}, {0, 5}}}};
+    case EnvironmentLayout::kCrossHorizontal:
+      return {4, 3, {{{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {3, 1}}}};
+    case EnvironmentLayout::kCrossVertical:
+      return {3, 4, {{{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {1, 3, true}}}};
+    default:
+      throw InvariantError("cube_geometry: not a cube-map layout");
   }
 }
 
@@ -292,19 +301,25 @@ RgbImage latlong_from_cube(const RgbImage& img, EnvironmentLayout layout, const 
 
 const char* environment_layout_name(EnvironmentLayout layout) {
   switch (layout) {
-    case EnvironmentLayout::kAuto: return "auto";
-    case EnvironmentLayout::kLatLong: return "latlong";
-    case EnvironmentLayout::kCube3x2: return "cube_3x2";
-    case EnvironmentLayout::kCube1x6: return "cube_1x6";
-    case EnvironmentLayout::kCrossHorizontal: return "cross_horizontal";
-    case EnvironmentLayout::kCrossVertical: return "cross_vertical";
+    case EnvironmentLayout::kAuto:
+      return "auto";
+    case EnvironmentLayout::kLatLong:
+      return "latlong";
+    case EnvironmentLayout::kCube3x2:
+      return "cube_3x2";
+    case EnvironmentLayout::kCube1x6:
+      return "cube_1x6";
+    case EnvironmentLayout::kCrossHorizontal:
+      return "cross_horizontal";
+    case EnvironmentLayout::kCrossVertical:
+      return "cross_vertical";
   }
   return "?";
 }
 
 std::optional<EnvironmentLayout> environment_layout_from_name(const std::string& name) {
-  for (auto l : {EnvironmentLayout::kAuto, EnvironmentLayout::kLatLong, EnvironmentLayout::kCube3x2, EnvironmentLayout::kCube1x6,
-                 EnvironmentLayout::kCrossHorizontal, EnvironmentLayout::kCrossVertical})
+  for (auto l : {EnvironmentLayout::kAuto, EnvironmentLayout::kLatLong, EnvironmentLayout::kCube3x2,
+                 EnvironmentLayout::kCube1x6, EnvironmentLayout::kCrossHorizontal, EnvironmentLayout::kCrossVertical})
     if (name == environment_layout_name(l)) return l;
   return std::nullopt;
 }
@@ -313,15 +328,21 @@ RgbImage read_environment(const std::filesystem::path& file, EnvironmentLayout l
   RgbImage img = read_rgb_image(file);
   if (layout == EnvironmentLayout::kAuto) {
     const int w = img.width(), h = img.height();
-    if (w == 2 * h) layout = EnvironmentLayout::kLatLong;
-    else if (2 * w == 3 * h) layout = EnvironmentLayout::kCube3x2;
-    else if (h == 6 * w) layout = EnvironmentLayout::kCube1x6;
-    else if (3 * w == 4 * h) layout = EnvironmentLayout::kCrossHorizontal;
-    else if (4 * w == 3 * h) layout = EnvironmentLayout::kCrossVertical;
+    if (w == 2 * h)
+      layout = EnvironmentLayout::kLatLong;
+    else if (2 * w == 3 * h)
+      layout = EnvironmentLayout::kCube3x2;
+    else if (h == 6 * w)
+      layout = EnvironmentLayout::kCube1x6;
+    else if (3 * w == 4 * h)
+      layout = EnvironmentLayout::kCrossHorizontal;
+    else if (4 * w == 3 * h)
+      layout = EnvironmentLayout::kCrossVertical;
     else
-      throw InputError(fmt::format("{}: a {} x {} environment is neither a 2:1 lat-long map nor a cube map (3:2, 1:6, 4:3, 3:4); "
-                                   "set environment.layout",
-                                   file.string(), w, h));
+      throw InputError(
+          fmt::format("{}: a {} x {} environment is neither a 2:1 lat-long map nor a cube map (3:2, 1:6, 4:3, 3:4); "
+                      "set environment.layout",
+                      file.string(), w, h));
   }
   return layout == EnvironmentLayout::kLatLong ? img : latlong_from_cube(img, layout, file);
 }

@@ -68,8 +68,12 @@ FilteredTextures::FilteredTextures() : impl_(std::make_unique<Impl>()) {}
 FilteredTextures::~FilteredTextures() = default;
 
 int FilteredTextures::add(const RgbImage& image, Kind kind, const std::string& name) {
-  if (image.width() <= 0 || image.height() <= 0 || image.channels() != 3) throw InputError(fmt::format("{}: the image holds no pixels", name));
-  const std::filesystem::path file = impl_->dir / fmt::format("{}.tx", impl_->entries.size());  // TIFF: OpenEXR would force its y-up, border-sampled lat-long convention
+  if (image.width() <= 0 || image.height() <= 0 || image.channels() != 3)
+    throw InputError(fmt::format("{}: the image holds no pixels", name));
+  const std::filesystem::path file =
+      impl_->dir /
+      fmt::format("{}.tx",
+                  impl_->entries.size());  // TIFF: OpenEXR would force its y-up, border-sampled lat-long convention
   OIIO::ImageSpec spec(image.width(), image.height(), 3, OIIO::TypeDesc::FLOAT);
   const OIIO::ImageBuf src(spec, const_cast<float*>(image.data()));  // wraps, read only
   OIIO::ImageSpec config;
@@ -84,7 +88,8 @@ int FilteredTextures::add(const RgbImage& image, Kind kind, const std::string& n
   Impl::Entry e;
   e.kind = kind;
   e.handle = impl_->ts->get_texture_handle(OIIO::ustring(file.string()));
-  if (!e.handle) throw InputError(fmt::format("{}: the texture system cannot open it: {}", name, impl_->ts->geterror()));
+  if (!e.handle)
+    throw InputError(fmt::format("{}: the texture system cannot open it: {}", name, impl_->ts->geterror()));
   impl_->entries.push_back(e);
   return static_cast<int>(impl_->entries.size()) - 1;
 }

@@ -29,15 +29,14 @@ namespace fs = std::filesystem;
 std::string mesh_format_of(const fs::path& file) {
   std::string ext = file.extension().string();
   if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
 }
 
 namespace {
 
-bool supported_format(const std::string& ext) {
-  return ext == "obj" || ext == "ply" || ext == "off" || ext == "stl";
-}
+bool supported_format(const std::string& ext) { return ext == "obj" || ext == "ply" || ext == "off" || ext == "stl"; }
 
 // Collects vertices and polygons exactly as the reader delivers them.
 // OpenMesh reports parse problems on its own log streams (omerr -> std::cerr, omlog ->
@@ -101,7 +100,6 @@ PolygonMesh read_polygon_mesh(const fs::path& file) {
                                    m.V[v].y(), m.V[v].z()));
   return m;
 }
-
 
 LoadedMesh load_mesh(const fs::path& file, const LoadOptions& options) {
   LoadedMesh out;

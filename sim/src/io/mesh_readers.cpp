@@ -123,17 +123,20 @@ PolygonMesh read_off_ascii(const fs::path& file, std::int64_t file_size) {
     header_line = in.line();
     for (auto& t : tokens_of(line)) header.push_back(t);
   }
-  if (header.size() < 2) throw InputError(fmt::format("{}: OFF header lacks the vertex and face counts", at(name, header_line)));
+  if (header.size() < 2)
+    throw InputError(fmt::format("{}: OFF header lacks the vertex and face counts", at(name, header_line)));
   const auto v = parse_int(header[0]), f = parse_int(header[1]);
   if (!v || !f)
-    throw InputError(fmt::format("{}: OFF counts '{}' '{}' are not whole numbers", at(name, header_line), header[0], header[1]));
+    throw InputError(
+        fmt::format("{}: OFF counts '{}' '{}' are not whole numbers", at(name, header_line), header[0], header[1]));
   check_counts(at(name, header_line), *v, *f);
   // The smallest records: a vertex "0 0 0\n" (6 bytes), a triangle "3 0 0 0\n" (8 bytes).
   const std::int64_t need = 6 * *v + 8 * *f - 1;
   if (need > file_size)
-    throw InputError(fmt::format("{}: truncated OFF: header declares {} vertices and {} faces, which need at least {} bytes; "
-                                 "the file has {}",
-                                 at(name, header_line), *v, *f, need, file_size));
+    throw InputError(
+        fmt::format("{}: truncated OFF: header declares {} vertices and {} faces, which need at least {} bytes; "
+                    "the file has {}",
+                    at(name, header_line), *v, *f, need, file_size));
   PolygonMesh mesh;
   mesh.V.reserve(static_cast<std::size_t>(*v));  // bounded: 6 bytes of file per vertex
   mesh.faces.reserve(static_cast<std::size_t>(*f));
@@ -147,8 +150,8 @@ PolygonMesh read_off_ascii(const fs::path& file, std::int64_t file_size) {
     for (std::size_t c = 0; c < 3; ++c) {
       const auto x = parse_coordinate(toks[c]);
       if (!x)
-        throw InputError(fmt::format("{}:line {}: vertex v{} coordinate '{}' is not a finite number", name, in.line(), k,
-                                     toks[c]));
+        throw InputError(
+            fmt::format("{}:line {}: vertex v{} coordinate '{}' is not a finite number", name, in.line(), k, toks[c]));
       p[c] = *x;
     }
     mesh.V.emplace_back(p[0], p[1], p[2]);
@@ -167,8 +170,8 @@ PolygonMesh read_off_ascii(const fs::path& file, std::int64_t file_size) {
     for (std::int64_t c = 1; c <= *n; ++c) {
       const auto idx = parse_int(toks[static_cast<std::size_t>(c)]);
       if (!idx || *idx < 0 || *idx >= *v)
-        throw InputError(fmt::format("{}:line {}: face f{} corner '{}' is not a vertex index in [0, {})", name, in.line(),
-                                     k, toks[static_cast<std::size_t>(c)], *v));
+        throw InputError(fmt::format("{}:line {}: face f{} corner '{}' is not a vertex index in [0, {})", name,
+                                     in.line(), k, toks[static_cast<std::size_t>(c)], *v));
       face.outer.push_back(static_cast<Index>(*idx));
     }
     mesh.faces.push_back(std::move(face));
@@ -179,7 +182,8 @@ PolygonMesh read_off_ascii(const fs::path& file, std::int64_t file_size) {
 PolygonMesh read_off_binary(const fs::path& file, const OffMagic& m, std::int64_t file_size) {
   const std::string name = file.string();
   if (m.colours)
-    throw InputError(fmt::format("{}: binary OFF with colours is not supported (convert it to ASCII OFF or PLY)", name));
+    throw InputError(
+        fmt::format("{}: binary OFF with colours is not supported (convert it to ASCII OFF or PLY)", name));
   std::ifstream in(file, std::ios::binary);
   std::string header;
   std::getline(in, header);
@@ -197,9 +201,10 @@ PolygonMesh read_off_binary(const fs::path& file, const OffMagic& m, std::int64_
   const std::int64_t vertex_bytes = 12 + (m.normals ? 12 : 0) + (m.texcoords ? 8 : 0);
   const std::int64_t body = file_size - static_cast<std::int64_t>(in.tellg());
   if (vertex_bytes * v + 16 * std::int64_t{f} > body)
-    throw InputError(fmt::format("{}: truncated binary OFF: header declares {} vertices and {} faces, which need at least {} "
-                                 "bytes; the file holds {} after the header",
-                                 name, v, f, vertex_bytes * v + 16 * std::int64_t{f}, body));
+    throw InputError(
+        fmt::format("{}: truncated binary OFF: header declares {} vertices and {} faces, which need at least {} "
+                    "bytes; the file holds {} after the header",
+                    name, v, f, vertex_bytes * v + 16 * std::int64_t{f}, body));
   PolygonMesh mesh;
   mesh.V.reserve(v);  // bounded by the size check above
   mesh.faces.reserve(f);
@@ -218,14 +223,16 @@ PolygonMesh read_off_binary(const fs::path& file, const OffMagic& m, std::int64_
     if (!read_u32(n)) throw InputError(fmt::format("{}: truncated binary OFF: face f{} is missing", name, k));
     const std::int64_t left = file_size - static_cast<std::int64_t>(in.tellg());
     if (n < 3 || 4 * std::int64_t{n} > left)
-      throw InputError(fmt::format("{}: binary OFF face f{} declares {} corners ({} bytes are left)", name, k, n, left));
+      throw InputError(
+          fmt::format("{}: binary OFF face f{} declares {} corners ({} bytes are left)", name, k, n, left));
     PolygonFace face;
     face.outer.reserve(n);
     for (std::uint32_t c = 0; c < n; ++c) {
       std::uint32_t idx = 0;
       read_u32(idx);
       if (idx >= v)
-        throw InputError(fmt::format("{}: binary OFF face f{} corner {} is not a vertex index in [0, {})", name, k, idx, v));
+        throw InputError(
+            fmt::format("{}: binary OFF face f{} corner {} is not a vertex index in [0, {})", name, k, idx, v));
       face.outer.push_back(static_cast<Index>(idx));
     }
     mesh.faces.push_back(std::move(face));
@@ -242,10 +249,10 @@ PolygonMesh read_off_file(const fs::path& file, std::int64_t file_size) {
   }
   const OffMagic m = parse_off_magic(first);
   if (!m.ok) throw InputError(fmt::format("{}: not an OFF file (the first line is not an OFF header)", name));
-  if (m.other_dimension) throw InputError(fmt::format("{}: OFF with a vertex dimension other than 3 is not supported", name));
+  if (m.other_dimension)
+    throw InputError(fmt::format("{}: OFF with a vertex dimension other than 3 is not supported", name));
   return m.binary ? read_off_binary(file, m, file_size) : read_off_ascii(file, file_size);
 }
-
 
 // ---- PLY ------------------------------------------------------------------------------------
 
@@ -254,10 +261,18 @@ enum class PlyType { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, 
 
 int ply_size(PlyType t) {
   switch (t) {
-    case PlyType::kInt8: case PlyType::kUint8: return 1;
-    case PlyType::kInt16: case PlyType::kUint16: return 2;
-    case PlyType::kInt32: case PlyType::kUint32: case PlyType::kFloat32: return 4;
-    case PlyType::kFloat64: return 8;
+    case PlyType::kInt8:
+    case PlyType::kUint8:
+      return 1;
+    case PlyType::kInt16:
+    case PlyType::kUint16:
+      return 2;
+    case PlyType::kInt32:
+    case PlyType::kUint32:
+    case PlyType::kFloat32:
+      return 4;
+    case PlyType::kFloat64:
+      return 8;
   }
   return 0;
 }
@@ -276,7 +291,7 @@ std::optional<PlyType> ply_type(std::string_view t) {
 
 struct PlyProperty {
   std::string name;
-  PlyType type = PlyType::kFloat32;  ///< the scalar, or a list's items
+  PlyType type = PlyType::kFloat32;   ///< the scalar, or a list's items
   std::optional<PlyType> count_type;  ///< set for lists
 };
 struct PlyElement {
@@ -307,14 +322,30 @@ class PlyBody {
     std::uint64_t u = 0;
     for (int i = n - 1; i >= 0; --i) u = (u << 8) | b[static_cast<std::size_t>(i)];
     switch (t) {
-      case PlyType::kInt8: out = static_cast<std::int8_t>(u); break;
-      case PlyType::kUint8: out = static_cast<std::uint8_t>(u); break;
-      case PlyType::kInt16: out = static_cast<std::int16_t>(u); break;
-      case PlyType::kUint16: out = static_cast<std::uint16_t>(u); break;
-      case PlyType::kInt32: out = static_cast<std::int32_t>(u); break;
-      case PlyType::kUint32: out = static_cast<std::uint32_t>(u); break;
-      case PlyType::kFloat32: out = static_cast<double>(std::bit_cast<float>(static_cast<std::uint32_t>(u))); break;
-      case PlyType::kFloat64: out = std::bit_cast<double>(u); break;
+      case PlyType::kInt8:
+        out = static_cast<std::int8_t>(u);
+        break;
+      case PlyType::kUint8:
+        out = static_cast<std::uint8_t>(u);
+        break;
+      case PlyType::kInt16:
+        out = static_cast<std::int16_t>(u);
+        break;
+      case PlyType::kUint16:
+        out = static_cast<std::uint16_t>(u);
+        break;
+      case PlyType::kInt32:
+        out = static_cast<std::int32_t>(u);
+        break;
+      case PlyType::kUint32:
+        out = static_cast<std::uint32_t>(u);
+        break;
+      case PlyType::kFloat32:
+        out = static_cast<double>(std::bit_cast<float>(static_cast<std::uint32_t>(u)));
+        break;
+      case PlyType::kFloat64:
+        out = std::bit_cast<double>(u);
+        break;
     }
     return true;
   }
@@ -330,7 +361,8 @@ class PlyBody {
     const std::string tok = bytes_.substr(start, pos_ - start);
     if (t == PlyType::kFloat32 || t == PlyType::kFloat64) {
       char* end = nullptr;
-      out = t == PlyType::kFloat32 ? static_cast<double>(std::strtof(tok.c_str(), &end)) : std::strtod(tok.c_str(), &end);
+      out =
+          t == PlyType::kFloat32 ? static_cast<double>(std::strtof(tok.c_str(), &end)) : std::strtod(tok.c_str(), &end);
       return end != tok.c_str() && *end == '\0';
     }
     const auto v = parse_int(tok);
@@ -361,12 +393,14 @@ PlyHeader read_ply_header(std::ifstream& in, const std::string& name, std::int64
     if (!line.empty() && line.back() == '\r') line.pop_back();
     return true;
   };
-  if (!next_line() || line != "ply") throw InputError(fmt::format("{}:1: not a PLY file (the first line is not 'ply')", name));
+  if (!next_line() || line != "ply")
+    throw InputError(fmt::format("{}:1: not a PLY file (the first line is not 'ply')", name));
   std::optional<PlyFormat> format;
   std::vector<PlyElement> elements;
   constexpr int kMaxHeaderLines = 10000;
   for (bool ended = false; !ended;) {
-    if (line_no > kMaxHeaderLines || !next_line()) throw InputError(fmt::format("{}: PLY header has no 'end_header' line", name));
+    if (line_no > kMaxHeaderLines || !next_line())
+      throw InputError(fmt::format("{}: PLY header has no 'end_header' line", name));
     const auto toks = tokens_of(line);
     const std::string where = at(name, line_no);
     if (toks.empty() || toks[0] == "comment" || toks[0] == "obj_info") continue;
@@ -374,11 +408,16 @@ PlyHeader read_ply_header(std::ifstream& in, const std::string& name, std::int64
       ended = true;
     } else if (toks[0] == "format") {
       if (format) throw InputError(fmt::format("{}: second PLY 'format' line", where));
-      if (toks.size() != 3 || toks[2] != "1.0") throw InputError(fmt::format("{}: PLY 'format' line is not 'format TYPE 1.0'", where));
-      if (toks[1] == "ascii") format = PlyFormat::kAscii;
-      else if (toks[1] == "binary_little_endian") format = PlyFormat::kLittle;
-      else if (toks[1] == "binary_big_endian") format = PlyFormat::kBig;
-      else throw InputError(fmt::format("{}: unknown PLY format '{}'", where, toks[1]));
+      if (toks.size() != 3 || toks[2] != "1.0")
+        throw InputError(fmt::format("{}: PLY 'format' line is not 'format TYPE 1.0'", where));
+      if (toks[1] == "ascii")
+        format = PlyFormat::kAscii;
+      else if (toks[1] == "binary_little_endian")
+        format = PlyFormat::kLittle;
+      else if (toks[1] == "binary_big_endian")
+        format = PlyFormat::kBig;
+      else
+        throw InputError(fmt::format("{}: unknown PLY format '{}'", where, toks[1]));
     } else if (toks[0] == "element") {
       const auto n = toks.size() == 3 ? parse_int(toks[2]) : std::nullopt;
       if (!n) throw InputError(fmt::format("{}: PLY 'element' line is not 'element NAME COUNT'", where));
@@ -387,8 +426,8 @@ PlyHeader read_ply_header(std::ifstream& in, const std::string& name, std::int64
       if (toks[1] == "face") check_count(where, "face count", *n, input_limits().mesh_elements, kLimitName);
       // Every element instance takes at least one byte, whatever its properties.
       if (*n > file_size)
-        throw InputError(fmt::format("{}: element '{}' count {} is more than a file of {} bytes can hold", where, toks[1], *n,
-                                     file_size));
+        throw InputError(fmt::format("{}: element '{}' count {} is more than a file of {} bytes can hold", where,
+                                     toks[1], *n, file_size));
       for (const auto& e : elements)
         if (e.name == toks[1]) throw InputError(fmt::format("{}: element '{}' declared twice", where, toks[1]));
       elements.push_back({toks[1], *n, line_no, {}});
@@ -399,7 +438,8 @@ PlyHeader read_ply_header(std::ifstream& in, const std::string& name, std::int64
         const auto ct = ply_type(toks[2]);
         const auto it = ply_type(toks[3]);
         if (!ct || !it || *ct == PlyType::kFloat32 || *ct == PlyType::kFloat64)
-          throw InputError(fmt::format("{}: PLY list property is not 'property list COUNT_TYPE ITEM_TYPE NAME'", where));
+          throw InputError(
+              fmt::format("{}: PLY list property is not 'property list COUNT_TYPE ITEM_TYPE NAME'", where));
         p = {toks[4], *it, *ct};
       } else {
         const auto t = toks.size() == 3 ? ply_type(toks[1]) : std::nullopt;
@@ -414,7 +454,8 @@ PlyHeader read_ply_header(std::ifstream& in, const std::string& name, std::int64
   if (!format) throw InputError(fmt::format("{}: PLY header has no 'format' line", name));
   // tellg() fails (-1) when the header's last line ended the file.
   const std::streamoff header_pos = in.tellg();
-  const std::size_t header_end = header_pos < 0 ? static_cast<std::size_t>(file_size) : static_cast<std::size_t>(header_pos);
+  const std::size_t header_end =
+      header_pos < 0 ? static_cast<std::size_t>(file_size) : static_cast<std::size_t>(header_pos);
   return {*format, std::move(elements), header_end};
 }
 
@@ -427,8 +468,10 @@ void read_ply_element(PlyBody& body, const PlyElement& e, std::int64_t vertex_co
   int corners = -1;
   for (std::size_t k = 0; k < e.properties.size(); ++k) {
     const auto& p = e.properties[k];
-    if (is_vertex && !p.count_type && (p.name == "x" || p.name == "y" || p.name == "z")) xyz[static_cast<std::size_t>(p.name[0] - 'x')] = static_cast<int>(k);
-    if (is_face && p.count_type && (p.name == "vertex_indices" || p.name == "vertex_index")) corners = static_cast<int>(k);
+    if (is_vertex && !p.count_type && (p.name == "x" || p.name == "y" || p.name == "z"))
+      xyz[static_cast<std::size_t>(p.name[0] - 'x')] = static_cast<int>(k);
+    if (is_face && p.count_type && (p.name == "vertex_indices" || p.name == "vertex_index"))
+      corners = static_cast<int>(k);
   }
   if (is_vertex && (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0))
     throw InputError(fmt::format("{}:{}: element 'vertex' lacks scalar properties x, y and z", name, e.line));
@@ -444,8 +487,8 @@ void read_ply_element(PlyBody& body, const PlyElement& e, std::int64_t vertex_co
       double value = 0;
       if (!prop.count_type) {
         if (!body.read(prop.type, value))
-          throw InputError(fmt::format("{}: truncated or corrupt PLY: element '{}' {} property '{}' cannot be read", name,
-                                       e.name, i, prop.name));
+          throw InputError(fmt::format("{}: truncated or corrupt PLY: element '{}' {} property '{}' cannot be read",
+                                       name, e.name, i, prop.name));
         for (std::size_t c = 0; c < 3; ++c)
           if (static_cast<int>(k) == xyz[c]) p[c] = static_cast<double>(static_cast<float>(value));
         continue;
@@ -456,20 +499,22 @@ void read_ply_element(PlyBody& body, const PlyElement& e, std::int64_t vertex_co
                                      e.name, i, prop.name));
       const auto n = static_cast<std::int64_t>(count);
       const bool is_corners = static_cast<int>(k) == corners;
-      if (is_corners && n < 3)
-        throw InputError(fmt::format("{}: PLY face {} has {} corners (at least 3)", name, i, n));
+      if (is_corners && n < 3) throw InputError(fmt::format("{}: PLY face {} has {} corners (at least 3)", name, i, n));
       // A list cannot hold more values than bytes (binary) or characters (ASCII) are left.
       if (static_cast<std::size_t>(n) > body.left())
-        throw InputError(fmt::format("{}: PLY element '{}' {} lists {} values; the file ends first", name, e.name, i, n));
+        throw InputError(
+            fmt::format("{}: PLY element '{}' {} lists {} values; the file ends first", name, e.name, i, n));
       if (is_corners) face.outer.reserve(static_cast<std::size_t>(n));
       for (std::int64_t j = 0; j < n; ++j) {
         if (!body.read(prop.type, value))
-          throw InputError(fmt::format("{}: truncated or corrupt PLY: element '{}' {} list '{}' ends after {} of {} values",
-                                       name, e.name, i, prop.name, j, n));
+          throw InputError(
+              fmt::format("{}: truncated or corrupt PLY: element '{}' {} list '{}' ends after {} of {} values", name,
+                          e.name, i, prop.name, j, n));
         if (!is_corners) continue;
-        if (!(value >= 0) || (vertex_count >= 0 && value >= static_cast<double>(vertex_count)) || value != std::floor(value))
-          throw InputError(fmt::format("{}: PLY face {} corner {} is not a vertex index in [0, {})", name, i, value,
-                                       vertex_count));
+        if (!(value >= 0) || (vertex_count >= 0 && value >= static_cast<double>(vertex_count)) ||
+            value != std::floor(value))
+          throw InputError(
+              fmt::format("{}: PLY face {} corner {} is not a vertex index in [0, {})", name, i, value, vertex_count));
         face.outer.push_back(static_cast<Index>(value));
       }
     }
@@ -513,9 +558,12 @@ PolygonMesh read_obj_file(const fs::path& file) {
       std::array<double, 3> p{};
       std::string tok;
       for (std::size_t c = 0; c < 3; ++c) {
-        if (!(ls >> tok)) throw InputError(fmt::format("{}:line {}: vertex has fewer than 3 coordinates", name, in.line()));
+        if (!(ls >> tok))
+          throw InputError(fmt::format("{}:line {}: vertex has fewer than 3 coordinates", name, in.line()));
         const auto x = parse_coordinate(tok);
-        if (!x) throw InputError(fmt::format("{}:line {}: vertex coordinate '{}' is not a finite number", name, in.line(), tok));
+        if (!x)
+          throw InputError(
+              fmt::format("{}:line {}: vertex coordinate '{}' is not a finite number", name, in.line(), tok));
         p[c] = *x;
       }
       if (static_cast<std::int64_t>(mesh.V.size()) >= limit)
@@ -530,12 +578,14 @@ PolygonMesh read_obj_file(const fs::path& file) {
         // 1-based, or negative: relative to the vertices read so far (-1 = the last one).
         const std::int64_t v = !idx ? -1 : *idx > 0 ? *idx - 1 : *idx < 0 ? nv + *idx : -1;
         if (v < 0 || v >= nv)
-          throw InputError(fmt::format("{}:line {}: face corner '{}' is not the index of a vertex read before it (1..{})", name,
-                                       in.line(), tok, nv));
+          throw InputError(
+              fmt::format("{}:line {}: face corner '{}' is not the index of a vertex read before it (1..{})", name,
+                          in.line(), tok, nv));
         face.outer.push_back(static_cast<Index>(v));
       }
       if (face.outer.size() < 3)
-        throw InputError(fmt::format("{}:line {}: face has {} corners (at least 3)", name, in.line(), face.outer.size()));
+        throw InputError(
+            fmt::format("{}:line {}: face has {} corners (at least 3)", name, in.line(), face.outer.size()));
       if (static_cast<std::int64_t>(mesh.faces.size()) >= limit)
         check_count(at(name, in.line()), "face count", limit + 1, limit, kLimitName);
       mesh.faces.push_back(std::move(face));
@@ -562,7 +612,8 @@ class StlBuilder {
       f[c] = it->second;
     }
     const std::int64_t limit = input_limits().mesh_elements;
-    if (static_cast<std::int64_t>(mesh.faces.size()) >= limit) check_count(where, "facet count", limit + 1, limit, kLimitName);
+    if (static_cast<std::int64_t>(mesh.faces.size()) >= limit)
+      check_count(where, "facet count", limit + 1, limit, kLimitName);
     if (f[0] == f[1] || f[0] == f[2] || f[1] == f[2]) return;
     mesh.faces.push_back({{f[0], f[1], f[2]}, {}});
   }
@@ -586,7 +637,8 @@ PolygonMesh read_stl_file(const fs::path& file, std::int64_t file_size) {
       check_count(name, "facet count", n, input_limits().mesh_elements, kLimitName);
       std::array<unsigned char, 50> rec{};
       for (std::int64_t k = 0; k < n; ++k) {
-        if (!in.read(reinterpret_cast<char*>(rec.data()), 50)) throw InputError(fmt::format("{}: truncated binary STL", name));
+        if (!in.read(reinterpret_cast<char*>(rec.data()), 50))
+          throw InputError(fmt::format("{}: truncated binary STL", name));
         std::array<std::array<float, 3>, 3> corners{};
         for (std::size_t c = 0; c < 3; ++c)
           for (std::size_t d = 0; d < 3; ++d) {
@@ -617,15 +669,19 @@ PolygonMesh read_stl_file(const fs::path& file, std::int64_t file_size) {
       std::string tok;
       for (std::size_t d = 0; d < 3; ++d) {
         char* end = nullptr;
-        if (!(ls >> tok)) throw InputError(fmt::format("{}:line {}: vertex has fewer than 3 coordinates", name, in.line()));
+        if (!(ls >> tok))
+          throw InputError(fmt::format("{}:line {}: vertex has fewer than 3 coordinates", name, in.line()));
         const float x = std::strtof(tok.c_str(), &end);
         if (end == tok.c_str() || *end != '\0' || !std::isfinite(x))
-          throw InputError(fmt::format("{}:line {}: vertex coordinate '{}' is not a finite number", name, in.line(), tok));
+          throw InputError(
+              fmt::format("{}:line {}: vertex coordinate '{}' is not a finite number", name, in.line(), tok));
         corners[static_cast<std::size_t>(have)][d] = x;
       }
       ++have;
     } else if (key == "endfacet") {
-      if (have != 3) throw InputError(fmt::format("{}:line {}: facet with {} vertices (3 needed)", name, in.line(), std::max(have, 0)));
+      if (have != 3)
+        throw InputError(
+            fmt::format("{}:line {}: facet with {} vertices (3 needed)", name, in.line(), std::max(have, 0)));
       out.add_facet(corners, at(name, in.line()));
       have = -1;
     }

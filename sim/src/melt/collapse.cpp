@@ -66,7 +66,8 @@ void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec,
   ws.shrink_bound += 2.0 * ws.cycle_move_bound;
   ws.cycle_move_bound = 0.0;
   // Safety margin: the exact test compares squared lengths in Real (relative error ~4 eps).
-  const double skip_above = (kr + ws.shrink_bound) * (1.0 + 64.0 * static_cast<double>(std::numeric_limits<Real>::epsilon()));
+  const double skip_above =
+      (kr + ws.shrink_bound) * (1.0 + 64.0 * static_cast<double>(std::numeric_limits<Real>::epsilon()));
   const bool parallel = exec == Execution::kParallel;
   std::atomic<bool> any_mark{false};
   double* const edge_key = ws.edge_key.data();  // locals: the stores below cannot alias them

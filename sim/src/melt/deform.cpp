@@ -66,7 +66,8 @@ void accumulate_parallel(TriMesh<Real>& m, Execution exec, const VertexTriangles
                         for (std::size_t i = 0; i < count; ++i) {
                           TriangleTerms<Real>& out = terms[first + i];
                           out.normal = Vec3<Real>(b.nx[i], b.ny[i], b.nz[i]);
-                          for (std::size_t k = 0; k < 3; ++k) out.edge[k] = Vec3<Real>(b.ex[k][i], b.ey[k][i], b.ez[k][i]);
+                          for (std::size_t k = 0; k < 3; ++k)
+                            out.edge[k] = Vec3<Real>(b.ex[k][i], b.ey[k][i], b.ez[k][i]);
                           if (m.triangle_alive[first + i]) m.face_normal[first + i] = out.normal;
                         }
                       }
@@ -100,10 +101,10 @@ struct VertexGroup {
   const VertexSums<Real>* sums;  // 8 records
   const Index* count;            // triangles per vertex
   const std::uint8_t* alive;
-  Real* position;                // 8 packed xyz triples (in and out)
-  Real* normal;                  // out: 8 triples
-  Real* displacement;            // out: 8 triples
-  Index* triangle_count;         // out
+  Real* position;         // 8 packed xyz triples (in and out)
+  Real* normal;           // out: 8 triples
+  Real* displacement;     // out: 8 triples
+  Index* triangle_count;  // out
 };
 
 // Moves eight vertices (Eq. 2.10, 3.5, 3.6, 3.8) with lane arithmetic: every lane runs the
@@ -161,7 +162,8 @@ inline void move_group(const MoveConstants<Real>& c, const VertexGroup<Real>& g,
   interleave3<Real>(g.normal, has ? Nx : zero, has ? Ny : zero, has ? Nz : zero);
   interleave3<Real>(g.displacement, mx, my, mz);
   for (std::size_t i = 0; i < kLanes; ++i) g.triangle_count[i] = g.alive[i] ? g.count[i] : 0;
-  max_move = lane_max<Real>(max_move, lane_max<Real>(lane_max<Real>(lane_abs<Real>(mx), lane_abs<Real>(my)), lane_abs<Real>(mz)));
+  max_move = lane_max<Real>(max_move,
+                            lane_max<Real>(lane_max<Real>(lane_abs<Real>(mx), lane_abs<Real>(my)), lane_abs<Real>(mz)));
   const L coord = lane_max<Real>(lane_max<Real>(lane_abs<Real>(px), lane_abs<Real>(py)), lane_abs<Real>(pz));
   max_coord = lane_max<Real>(max_coord, has ? coord : zero);
 }
@@ -197,8 +199,13 @@ double move_vertices(TriMesh<Real>& m, const MeltParams& p, Execution exec, cons
     };
     std::size_t v = begin;
     for (; v + kLanes <= end; v += kLanes) {
-      const VertexGroup<Real> g{&sums[v], &counts[v], &m.vertex_alive[v], m.position[v].data(),
-                                m.normal[v].data(), m.displacement[v].data(), &m.triangle_count[v]};
+      const VertexGroup<Real> g{&sums[v],
+                                &counts[v],
+                                &m.vertex_alive[v],
+                                m.position[v].data(),
+                                m.normal[v].data(),
+                                m.displacement[v].data(),
+                                &m.triangle_count[v]};
       move_group<Real, kMode>(c, g, scale(v, g.count, g.alive), lane_move, lane_coord);
     }
     if (v < end) {  // the last n < 8 slots, through padded copies (padding lanes are dead)

@@ -22,8 +22,10 @@ void glued_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report) {
     if (!m.vertex_alive[vs]) continue;
     const auto count = static_cast<Index>(ws.adj.of(v).size());
     m.triangle_count[vs] = count;
-    if (count == 2) glued_vertices.push_back(v);
-    else if (count == 0) orphans.push_back(v);
+    if (count == 2)
+      glued_vertices.push_back(v);
+    else if (count == 0)
+      orphans.push_back(v);
   }
   std::vector<Index> killed;
   for (Index v : glued_vertices)

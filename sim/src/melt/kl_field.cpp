@@ -24,22 +24,28 @@ std::string vec_json(const Vec3<double>& v) { return fmt::format("[{}, {}, {}]",
 
 const char* falloff_name(Falloff f) {
   switch (f) {
-    case Falloff::kGaussian: return "gaussian";
-    case Falloff::kInverseSquare: return "inverse_square";
-    case Falloff::kLinear: return "linear";
-    case Falloff::kExponential: return "exponential";
+    case Falloff::kGaussian:
+      return "gaussian";
+    case Falloff::kInverseSquare:
+      return "inverse_square";
+    case Falloff::kLinear:
+      return "linear";
+    case Falloff::kExponential:
+      return "exponential";
   }
   return "?";
 }
 
 void check_unit(double x, const std::string& what) {
-  if (!std::isfinite(x) || x < 0.0 || x > 1.0) throw InputError(fmt::format("{}: must lie in [0, 1] (got {})", what, x));
+  if (!std::isfinite(x) || x < 0.0 || x > 1.0)
+    throw InputError(fmt::format("{}: must lie in [0, 1] (got {})", what, x));
 }
 void check_leaf(double base, double strength, const std::string& where) {
   check_unit(base, where + ".base");
   check_unit(strength, where + ".strength");
   if (base + strength > 1.0 + 1e-12)
-    throw InputError(fmt::format("{}: base + strength = {} exceeds 1 (kl must stay in [0, 1])", where, base + strength));
+    throw InputError(
+        fmt::format("{}: base + strength = {} exceeds 1 (kl must stay in [0, 1])", where, base + strength));
 }
 void check_positive(double x, const std::string& what) {
   if (!std::isfinite(x) || x <= 0.0) throw InputError(fmt::format("{}: must be a finite number > 0 (got {})", what, x));
@@ -65,16 +71,25 @@ class PointSourceKl final : public KlField {
     const double x = (p - c_).norm() / radius_;
     double f = 0.0;
     switch (falloff_) {
-      case Falloff::kGaussian: f = std::exp(-0.5 * x * x); break;
-      case Falloff::kInverseSquare: f = 1.0 / (1.0 + x * x); break;
-      case Falloff::kLinear: f = std::max(0.0, 1.0 - x); break;
-      case Falloff::kExponential: f = std::exp(-x); break;
+      case Falloff::kGaussian:
+        f = std::exp(-0.5 * x * x);
+        break;
+      case Falloff::kInverseSquare:
+        f = 1.0 / (1.0 + x * x);
+        break;
+      case Falloff::kLinear:
+        f = std::max(0.0, 1.0 - x);
+        break;
+      case Falloff::kExponential:
+        f = std::exp(-x);
+        break;
     }
     return base_ + strength_ * f;
   }
   std::string describe_json() const override {
-    return fmt::format(R"({{"type": "point_source", "position": {}, "base": {}, "strength": {}, "radius": {}, "falloff": "{}"}})",
-                       vec_json(c_), base_, strength_, radius_, falloff_name(falloff_));
+    return fmt::format(
+        R"({{"type": "point_source", "position": {}, "base": {}, "strength": {}, "radius": {}, "falloff": "{}"}})",
+        vec_json(c_), base_, strength_, radius_, falloff_name(falloff_));
   }
 
  private:
@@ -93,8 +108,9 @@ class GroundKl final : public KlField {
     return base_ + strength_ * std::exp(-h / scale_);
   }
   std::string describe_json() const override {
-    return fmt::format(R"({{"type": "ground", "up": {}, "height": {}, "base": {}, "strength": {}, "height_scale": {}}})",
-                       vec_json(up_), height_, base_, strength_, scale_);
+    return fmt::format(
+        R"({{"type": "ground", "up": {}, "height": {}, "base": {}, "strength": {}, "height_scale": {}}})",
+        vec_json(up_), height_, base_, strength_, scale_);
   }
 
  private:
@@ -140,8 +156,8 @@ class GridKl final : public KlField {
   }
   std::string describe_json() const override {
     return fmt::format(
-        R"({{"type": "grid", "file": "{}", "dims": [{}, {}, {}], "origin": {}, "spacing": {}, "outside": {}}})", source_,
-        g_.dims[0], g_.dims[1], g_.dims[2], vec_json(g_.origin), vec_json(g_.spacing),
+        R"({{"type": "grid", "file": "{}", "dims": [{}, {}, {}], "origin": {}, "spacing": {}, "outside": {}}})",
+        source_, g_.dims[0], g_.dims[1], g_.dims[2], vec_json(g_.origin), vec_json(g_.spacing),
         g_.clamp_outside ? std::string("\"clamp\"") : fmt::format("{}", g_.outside_value));
   }
 
@@ -162,9 +178,15 @@ class CombinedKl final : public KlField {
     for (std::size_t i = op_ == Combine::kProduct ? 0 : 1; i < parts_.size(); ++i) {
       const double x = parts_[i]->value(p);
       switch (op_) {
-        case Combine::kProduct: v *= x; break;
-        case Combine::kMax: v = std::max(v, x); break;
-        case Combine::kMin: v = std::min(v, x); break;
+        case Combine::kProduct:
+          v *= x;
+          break;
+        case Combine::kMax:
+          v = std::max(v, x);
+          break;
+        case Combine::kMin:
+          v = std::min(v, x);
+          break;
       }
     }
     return v;
@@ -189,14 +211,16 @@ KlFieldPtr make_constant_kl(double value) {
   return std::make_shared<ConstantKl>(value);
 }
 
-KlFieldPtr make_point_source_kl(const Vec3<double>& position, double base, double strength, double radius, Falloff falloff) {
+KlFieldPtr make_point_source_kl(const Vec3<double>& position, double base, double strength, double radius,
+                                Falloff falloff) {
   if (!position.allFinite()) throw InputError("kl point_source.position: must be finite");
   check_leaf(base, strength, "kl point_source");
   check_positive(radius, "kl point_source.radius");
   return std::make_shared<PointSourceKl>(position, base, strength, radius, falloff);
 }
 
-KlFieldPtr make_ground_kl(const Vec3<double>& up, double ground_height, double base, double strength, double height_scale) {
+KlFieldPtr make_ground_kl(const Vec3<double>& up, double ground_height, double base, double strength,
+                          double height_scale) {
   if (!up.allFinite() || up.norm() == 0.0) throw InputError("kl ground.up: must be a finite non-zero vector");
   if (!std::isfinite(ground_height)) throw InputError("kl ground.height: must be finite");
   check_leaf(base, strength, "kl ground");
@@ -284,7 +308,8 @@ KlGrid read_kl_grid(const std::filesystem::path& file) {
         throw InputError(fmt::format("{}:{}: 'origin' needs three finite numbers", name, line_no));
       have_origin = true;
     } else if (key == "spacing") {
-      if (!(ls >> g.spacing.x() >> g.spacing.y() >> g.spacing.z()) || !(g.spacing.minCoeff() > 0) || !g.spacing.allFinite())
+      if (!(ls >> g.spacing.x() >> g.spacing.y() >> g.spacing.z()) || !(g.spacing.minCoeff() > 0) ||
+          !g.spacing.allFinite())
         throw InputError(fmt::format("{}:{}: 'spacing' needs three finite numbers > 0", name, line_no));
       have_spacing = true;
     } else if (key == "values") {
@@ -310,7 +335,8 @@ double lowest_along(const Vec3<double>& up, const KlContext& ctx) {
   const Vec3<double> u = up.normalized();
   double lo = 0.0;
   for (int c = 0; c < 8; ++c) {
-    const Vec3<double> corner((c & 1) ? ctx.bbox_max.x() : ctx.bbox_min.x(), (c & 2) ? ctx.bbox_max.y() : ctx.bbox_min.y(),
+    const Vec3<double> corner((c & 1) ? ctx.bbox_max.x() : ctx.bbox_min.x(),
+                              (c & 2) ? ctx.bbox_max.y() : ctx.bbox_min.y(),
                               (c & 4) ? ctx.bbox_max.z() : ctx.bbox_min.z());
     lo = c == 0 ? u.dot(corner) : std::min(lo, u.dot(corner));
   }
@@ -361,7 +387,8 @@ KlFieldPtr parse_mapping(const ConfigSection& k, const KlContext& ctx) {
     const Combine op = type == "product" ? Combine::kProduct : (type == "max" ? Combine::kMax : Combine::kMin);
     return make_combined_kl(op, std::move(parts));
   }
-  k.fail_at("type", fmt::format("unknown kl field type '{}' (constant, point_source, ground, grid, product, max, min)", type));
+  k.fail_at("type",
+            fmt::format("unknown kl field type '{}' (constant, point_source, ground, grid, product, max, min)", type));
 }
 
 KlFieldPtr parse_field(const ConfigValue& node, const KlContext& ctx) {

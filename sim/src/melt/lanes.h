@@ -115,12 +115,12 @@ inline void deinterleave3(const Real* p, Lanes<Real>& x, Lanes<Real>& y, Lanes<R
 /// Lanes x, y, z -> eight packed triples p[3i + c].
 template <class Real>
 inline void interleave3(Real* p, const Lanes<Real>& x, const Lanes<Real>& y, const Lanes<Real>& z) {
-  store_lanes(p, __builtin_shufflevector(__builtin_shufflevector(x, y, 0, 8, 0, 1, 9, 0, 2, 10), z,
-                                         0, 1, 8, 3, 4, 9, 6, 7));
-  store_lanes(p + kLanes, __builtin_shufflevector(__builtin_shufflevector(x, y, 0, 3, 11, 0, 4, 12, 0, 5), z,
-                                                  10, 1, 2, 11, 4, 5, 12, 7));
-  store_lanes(p + 2 * kLanes, __builtin_shufflevector(__builtin_shufflevector(x, y, 13, 0, 6, 14, 0, 7, 15, 0), z,
-                                                      0, 13, 2, 3, 14, 5, 6, 15));
+  store_lanes(
+      p, __builtin_shufflevector(__builtin_shufflevector(x, y, 0, 8, 0, 1, 9, 0, 2, 10), z, 0, 1, 8, 3, 4, 9, 6, 7));
+  store_lanes(p + kLanes, __builtin_shufflevector(__builtin_shufflevector(x, y, 0, 3, 11, 0, 4, 12, 0, 5), z, 10, 1, 2,
+                                                  11, 4, 5, 12, 7));
+  store_lanes(p + 2 * kLanes, __builtin_shufflevector(__builtin_shufflevector(x, y, 13, 0, 6, 14, 0, 7, 15, 0), z, 0,
+                                                      13, 2, 3, 14, 5, 6, 15));
 }
 
 }  // namespace meltlab::sim

@@ -22,7 +22,8 @@ void LiquidMaskParams::validate() const {
   if (height < 5 || height > 16384) bad("height", fmt::format("must be in [5, 16384] (got {})", height));
   if (!(texel_size > 0.0) || !std::isfinite(texel_size)) bad("texel_size", "must be a finite number > 0");
   if (!origin.allFinite()) bad("origin", "must be finite");
-  if (!(far_fraction > 0.0 && far_fraction <= 1.0)) bad("far_fraction", fmt::format("must be in (0, 1] (got {})", far_fraction));
+  if (!(far_fraction > 0.0 && far_fraction <= 1.0))
+    bad("far_fraction", fmt::format("must be in (0, 1] (got {})", far_fraction));
   if (!(deposit_value > 0.0f) || !std::isfinite(deposit_value)) bad("deposit_value", "must be a finite number > 0");
   if (!(threshold > 0.0f) || !std::isfinite(threshold)) bad("threshold", "must be a finite number > 0");
 }
@@ -85,8 +86,9 @@ void spread_mask(const std::vector<float>& in, std::vector<float>& out, int widt
   std::vector<float> tmp(n);
   out.assign(n, 0.0f);
   if (parallel) {
-    tbb::parallel_for(tbb::blocked_range<int>(0, height, 16),
-                      [&](const tbb::blocked_range<int>& r) { spread_rows(in.data(), tmp.data(), width, r.begin(), r.end()); });
+    tbb::parallel_for(tbb::blocked_range<int>(0, height, 16), [&](const tbb::blocked_range<int>& r) {
+      spread_rows(in.data(), tmp.data(), width, r.begin(), r.end());
+    });
     tbb::parallel_for(tbb::blocked_range<int>(0, height, 16), [&](const tbb::blocked_range<int>& r) {
       spread_cols(tmp.data(), out.data(), width, height, r.begin(), r.end());
     });
@@ -167,7 +169,8 @@ void fill_triangle(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eig
 }  // namespace
 
 template <class Real>
-std::vector<std::uint8_t> footprint_below(const TriMesh<Real>& mesh, const LiquidMaskParams& params, double slab_top_z) {
+std::vector<std::uint8_t> footprint_below(const TriMesh<Real>& mesh, const LiquidMaskParams& params,
+                                          double slab_top_z) {
   const int w = params.width, h = params.height;
   std::vector<std::uint8_t> fp(static_cast<std::size_t>(w) * h, 0);
   if (!std::isfinite(slab_top_z)) return fp;
@@ -182,7 +185,9 @@ std::vector<std::uint8_t> footprint_below(const TriMesh<Real>& mesh, const Liqui
     if (!mesh.triangle_alive[t]) continue;
     int below = 0;
     for (int k = 0; k < 3; ++k) {
-      tri[static_cast<std::size_t>(k)] = mesh.position[static_cast<std::size_t>(mesh.triangle[t][static_cast<std::size_t>(k)])].template cast<double>();
+      tri[static_cast<std::size_t>(k)] =
+          mesh.position[static_cast<std::size_t>(mesh.triangle[t][static_cast<std::size_t>(k)])]
+              .template cast<double>();
       below += tri[static_cast<std::size_t>(k)].z() <= slab_top_z;
     }
     if (below == 0) continue;
@@ -200,7 +205,8 @@ std::vector<std::uint8_t> footprint_below(const TriMesh<Real>& mesh, const Liqui
     }
     const Eigen::Vector2d a = to_texel(poly[0]);
     for (int k = 1; k + 1 < n; ++k)
-      fill_triangle(a, to_texel(poly[static_cast<std::size_t>(k)]), to_texel(poly[static_cast<std::size_t>(k + 1)]), w, h, fp);
+      fill_triangle(a, to_texel(poly[static_cast<std::size_t>(k)]), to_texel(poly[static_cast<std::size_t>(k + 1)]), w,
+                    h, fp);
   }
   return fp;
 }
@@ -219,9 +225,11 @@ LiquidMask::LiquidMask(LiquidMaskParams params) : params_(std::move(params)) {
 
 void LiquidMask::set_threshold_texture(std::vector<float> tp) {
   if (!tp.empty() && tp.size() != values_.size())
-    throw InputError(fmt::format("liquid mask: threshold texture has {} texels, the mask {}", tp.size(), values_.size()));
+    throw InputError(
+        fmt::format("liquid mask: threshold texture has {} texels, the mask {}", tp.size(), values_.size()));
   for (float v : tp)
-    if (!(v > 0.0f) || !std::isfinite(v)) throw InputError("liquid mask: threshold texture values must be finite and > 0");
+    if (!(v > 0.0f) || !std::isfinite(v))
+      throw InputError("liquid mask: threshold texture values must be finite and > 0");
   tp_ = std::move(tp);
 }
 
@@ -277,6 +285,8 @@ double LiquidMask::total() const {
   return s;
 }
 
-float LiquidMask::max_value() const { return values_.empty() ? 0.0f : *std::max_element(values_.begin(), values_.end()); }
+float LiquidMask::max_value() const {
+  return values_.empty() ? 0.0f : *std::max_element(values_.begin(), values_.end());
+}
 
 }  // namespace meltlab::sim

@@ -25,8 +25,9 @@ struct MeltReplay::Impl {
 
 MeltReplay::MeltReplay(const IndexedMesh& initial, const MeltParams& params, KlFieldPtr kl, bool double_precision,
                        Execution exec)
-    : impl_(double_precision ? std::make_unique<Impl>(std::in_place_type<double>, initial, params, std::move(kl), exec)
-                             : std::make_unique<Impl>(std::in_place_type<float>, initial, params, std::move(kl), exec)) {}
+    : impl_(double_precision
+                ? std::make_unique<Impl>(std::in_place_type<double>, initial, params, std::move(kl), exec)
+                : std::make_unique<Impl>(std::in_place_type<float>, initial, params, std::move(kl), exec)) {}
 
 MeltReplay::~MeltReplay() = default;
 MeltReplay::MeltReplay(MeltReplay&&) noexcept = default;

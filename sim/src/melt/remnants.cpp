@@ -56,7 +56,8 @@ std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws) {
   }
   if (removed == 0) return 0;
   for (std::size_t t = 0; t < nt; ++t)
-    if (m.triangle_alive[t] && doomed[static_cast<std::size_t>(find_root(parent, m.triangle[t][0]))]) m.triangle_alive[t] = 0;
+    if (m.triangle_alive[t] && doomed[static_cast<std::size_t>(find_root(parent, m.triangle[t][0]))])
+      m.triangle_alive[t] = 0;
   for (std::size_t v = 0; v < nv; ++v) {
     if (!m.vertex_alive[v] || !doomed[static_cast<std::size_t>(find_root(parent, static_cast<Index>(v)))]) continue;
     m.vertex_alive[v] = 0;

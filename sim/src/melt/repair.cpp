@@ -161,7 +161,8 @@ class Repairer {
     std::vector<std::vector<Index>> cycles;
     std::vector<std::uint8_t> seen(link_.size(), 0);
     auto index_of_from = [&](Index x) -> std::ptrdiff_t {
-      auto it = std::lower_bound(link_.begin(), link_.end(), x, [](const LinkEdge& e, Index val) { return e.from < val; });
+      auto it =
+          std::lower_bound(link_.begin(), link_.end(), x, [](const LinkEdge& e, Index val) { return e.from < val; });
       return (it != link_.end() && it->from == x) ? it - link_.begin() : -1;
     };
     for (std::size_t s = 0; s < link_.size(); ++s) {

@@ -71,7 +71,9 @@ CycleReport MeltSimulator<Real>::step() {
   CycleReport r;
   MeltWorkspace& ws = *ws_;
   using Clock = std::chrono::steady_clock;
-  auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
+  auto ms_since = [](Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  };
   auto t = Clock::now();
   deform_pass(mesh_, params_, *kl_, exec_, ws);
   r.deform_ms = ms_since(t);

@@ -54,18 +54,17 @@ struct MeltWorkspace {
   std::vector<VertexSums<float>> sums_f;
   std::vector<VertexSums<double>> sums_d;
 
-
   // Conservative skip of the short-edge test. An edge shrinks per cycle by at most twice the
   // largest vertex move (plus rounding of the position update). `edge_key[t]` is t's shortest
   // edge at its last exact test plus `shrink_bound` at that time; while edge_key[t] - the
   // current shrink_bound stays above kr (with a safety margin), t cannot have a short edge
   // and is not tested. Triangles a merge or the repair changes get -inf (test next cycle).
   std::vector<double> edge_key;
-  double shrink_bound = 0.0;   ///< sum over cycles of 2 * (largest vertex move + rounding)
+  double shrink_bound = 0.0;      ///< sum over cycles of 2 * (largest vertex move + rounding)
   double cycle_move_bound = 0.0;  ///< this cycle's largest vertex move + rounding, mesh units
 
-  std::vector<Index> root;        ///< flattened merge target of every vertex
-  std::vector<Index> merged;      ///< vertices merged this cycle (ascending)
+  std::vector<Index> root;    ///< flattened merge target of every vertex
+  std::vector<Index> merged;  ///< vertices merged this cycle (ascending)
   std::vector<std::int32_t> cluster_size;
   std::vector<Index> touched_roots;
 
@@ -76,13 +75,17 @@ struct MeltWorkspace {
 
   template <class Real>
   std::vector<TriangleTerms<Real>>& triangle_terms() {
-    if constexpr (std::is_same_v<Real, float>) return terms_f;
-    else return terms_d;
+    if constexpr (std::is_same_v<Real, float>)
+      return terms_f;
+    else
+      return terms_d;
   }
   template <class Real>
   std::vector<VertexSums<Real>>& vertex_sums() {
-    if constexpr (std::is_same_v<Real, float>) return sums_f;
-    else return sums_d;
+    if constexpr (std::is_same_v<Real, float>)
+      return sums_f;
+    else
+      return sums_d;
   }
   void mark_dirty(Index v) {
     auto& d = dirty[static_cast<std::size_t>(v)];

@@ -77,8 +77,7 @@ IndexedMesh TriMesh<Real>::to_indexed() const {
   for (std::size_t t = 0; t < triangle.size(); ++t) {
     if (!triangle_alive[t]) continue;
     const Triangle& tri = triangle[t];
-    out.F.push_back({new_index[static_cast<std::size_t>(tri[0])],
-                     new_index[static_cast<std::size_t>(tri[1])],
+    out.F.push_back({new_index[static_cast<std::size_t>(tri[0])], new_index[static_cast<std::size_t>(tri[1])],
                      new_index[static_cast<std::size_t>(tri[2])]});
   }
   return out;

@@ -39,8 +39,9 @@ Reordered reorder_for_locality(const IndexedMesh& in) {
   }
   std::vector<Index> order(nv);
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](Index a, Index b) { return code[static_cast<std::size_t>(a)] < code[static_cast<std::size_t>(b)]; });
+  std::stable_sort(order.begin(), order.end(), [&](Index a, Index b) {
+    return code[static_cast<std::size_t>(a)] < code[static_cast<std::size_t>(b)];
+  });
   Reordered out;
   out.new_from_old_vertex.resize(nv);
   out.mesh.V.resize(nv);
@@ -52,13 +53,15 @@ Reordered reorder_for_locality(const IndexedMesh& in) {
   for (std::size_t t = 0; t < in.F.size(); ++t) {
     Triangle r;
     for (int k = 0; k < 3; ++k)
-      r[static_cast<std::size_t>(k)] = out.new_from_old_vertex[static_cast<std::size_t>(in.F[t][static_cast<std::size_t>(k)])];
+      r[static_cast<std::size_t>(k)] =
+          out.new_from_old_vertex[static_cast<std::size_t>(in.F[t][static_cast<std::size_t>(k)])];
     tris[t] = rotate_min_first(r);
   }
   out.old_from_new_triangle.resize(in.F.size());
   std::iota(out.old_from_new_triangle.begin(), out.old_from_new_triangle.end(), 0);
-  std::stable_sort(out.old_from_new_triangle.begin(), out.old_from_new_triangle.end(),
-                   [&](Index a, Index b) { return tris[static_cast<std::size_t>(a)] < tris[static_cast<std::size_t>(b)]; });
+  std::stable_sort(out.old_from_new_triangle.begin(), out.old_from_new_triangle.end(), [&](Index a, Index b) {
+    return tris[static_cast<std::size_t>(a)] < tris[static_cast<std::size_t>(b)];
+  });
   out.mesh.F.resize(in.F.size());
   for (std::size_t t = 0; t < in.F.size(); ++t)
     out.mesh.F[t] = tris[static_cast<std::size_t>(out.old_from_new_triangle[t])];

@@ -61,7 +61,8 @@ std::vector<Index> coincident_representatives(const std::vector<Vec3<double>>& V
   const double tol2 = tolerance * tolerance;
   for (std::size_t k = 0; k < n; ++k) {
     std::array<std::int64_t, 3> c{};
-    for (int d = 0; d < 3; ++d) c[static_cast<std::size_t>(d)] = static_cast<std::int64_t>(std::floor(V[k][d] / tolerance));
+    for (int d = 0; d < 3; ++d)
+      c[static_cast<std::size_t>(d)] = static_cast<std::int64_t>(std::floor(V[k][d] / tolerance));
     for (std::int64_t dx = -1; dx <= 1; ++dx)
       for (std::int64_t dy = -1; dy <= 1; ++dy)
         for (std::int64_t dz = -1; dz <= 1; ++dz) {
@@ -147,8 +148,7 @@ WeldResult weld_vertices(const PolygonMesh& in, double tolerance) {
 namespace {
 
 // Ear clipping of one simple polygon (projected on the plane of its Newell normal).
-void triangulate_loop(const std::vector<Vec3<double>>& V, const std::vector<Index>& loop,
-                      std::vector<Triangle>& out) {
+void triangulate_loop(const std::vector<Vec3<double>>& V, const std::vector<Index>& loop, std::vector<Triangle>& out) {
   const std::size_t n = loop.size();
   if (n == 3) {
     out.push_back({loop[0], loop[1], loop[2]});

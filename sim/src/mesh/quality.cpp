@@ -107,9 +107,8 @@ QualityReport mesh_quality(const TriMesh<Real>& m) {
   }
   r.Qs = sum_s / static_cast<double>(nf);
   r.Qq = sum_q / static_cast<double>(nf);
-  std::sort(half.begin(), half.end(), [](const HalfEdge& a, const HalfEdge& b) {
-    return a.key != b.key ? a.key < b.key : a.tri < b.tri;
-  });
+  std::sort(half.begin(), half.end(),
+            [](const HalfEdge& a, const HalfEdge& b) { return a.key != b.key ? a.key < b.key : a.tri < b.tri; });
   double sum_d = 0, sum_len = 0;
   std::int64_t n_len = 0;
   for (std::size_t i = 0; i < half.size();) {

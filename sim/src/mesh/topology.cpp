@@ -115,9 +115,8 @@ std::int64_t check_edges(const Loops& L, UnionFind& uf, std::vector<std::int64_t
       edges.push_back({(lo << 32) | hi, from < to});
     }
   }
-  std::sort(edges.begin(), edges.end(), [](const DirEdge& a, const DirEdge& b) {
-    return a.key != b.key ? a.key < b.key : a.forward < b.forward;
-  });
+  std::sort(edges.begin(), edges.end(),
+            [](const DirEdge& a, const DirEdge& b) { return a.key != b.key ? a.key < b.key : a.forward < b.forward; });
 
   std::int64_t E = 0;
   for (std::size_t i = 0; i < edges.size();) {
@@ -189,7 +188,6 @@ void check_vertex_fans(const Loops& L, TopologyReport& r, std::size_t max_proble
     }
     i = j;
   }
-
 }
 
 /// The Euler counts (Eq. 2.3), the genus derived per component from its V - E + F - H.
@@ -208,8 +206,7 @@ void euler_counts(const Loops& L, std::int64_t E, Components& parts, std::vector
   }
   // Faces and holes: one per outer loop, holes counted negatively, at the loop's component.
   std::vector<std::uint8_t> is_outer(L.count(), 0);
-  for (std::size_t k = 0; k < L.count(); ++k)
-    is_outer[k] = (k == 0 || L.face_of[k] != L.face_of[k - 1]) ? 1 : 0;
+  for (std::size_t k = 0; k < L.count(); ++k) is_outer[k] = (k == 0 || L.face_of[k] != L.face_of[k - 1]) ? 1 : 0;
   for (std::size_t k = 0; k < L.count(); ++k)
     comp_sum[static_cast<std::size_t>(uf.find(L.verts[L.start[k]]))] += is_outer[k] ? 1 : -1;
   for (std::size_t v = 0; v < n; ++v) {
@@ -225,7 +222,6 @@ void euler_counts(const Loops& L, std::int64_t E, Components& parts, std::vector
   }
   c.chi = c.V - c.E + c.F - c.H - 2 * (c.S - c.G);
   if (c.chi != 0) c.genus_valid = false;
-
 }
 
 TopologyReport analyse(const Loops& L, std::size_t max_problems) {
@@ -272,9 +268,9 @@ TopologyReport check_topology(const TriMesh<Real>& m, std::size_t max_problems) 
     if (!m.triangle_alive[t]) continue;
     const Triangle& tri = m.triangle[t];
     if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) {
-      add_problem(pre, max_problems,
-                  {TopologyProblem::Kind::kDegenerateFace, tri[0] == tri[1] ? tri[0] : tri[2],
-                   static_cast<Index>(t), 0});
+      add_problem(
+          pre, max_problems,
+          {TopologyProblem::Kind::kDegenerateFace, tri[0] == tri[1] ? tri[0] : tri[2], static_cast<Index>(t), 0});
       continue;
     }
     L.add(tri.data(), 3, static_cast<Index>(t));

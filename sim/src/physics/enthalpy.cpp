@@ -37,8 +37,10 @@ EnthalpySolver::EnthalpySolver(const Grid3<std::uint8_t>& ice_occupancy, const I
 
 EnthalpySolver::EnthalpySolver(const Grid3<float>& initial_fraction, const IceMeltParams& params) : p_(params) {
   const auto& g = initial_fraction;
-  if (g.nx <= 0 || g.ny <= 0 || g.nz <= 0 || !(g.h_m > 0)) throw std::invalid_argument("EnthalpySolver: empty grid or h <= 0");
-  if (!(p_.initial_temperature_C <= 0)) throw std::invalid_argument("EnthalpySolver: initial ice temperature must be <= 0 °C");
+  if (g.nx <= 0 || g.ny <= 0 || g.nz <= 0 || !(g.h_m > 0))
+    throw std::invalid_argument("EnthalpySolver: empty grid or h <= 0");
+  if (!(p_.initial_temperature_C <= 0))
+    throw std::invalid_argument("EnthalpySolver: initial ice temperature must be <= 0 °C");
   if (!(p_.time_step_fraction > 0 && p_.time_step_fraction <= 1))
     throw std::invalid_argument("EnthalpySolver: time_step_fraction must be in (0, 1]");
   if (!(p_.density_kg_m3 > 0 && p_.latent_heat_J_kg > 0 && p_.k_ice_W_mK > 0 && p_.c_ice_J_kgK > 0 &&
@@ -62,7 +64,8 @@ EnthalpySolver::EnthalpySolver(const Grid3<float>& initial_fraction, const IceMe
   H_next_.assign(n, 0.0);
   drained_.assign(n, 0);
   const auto nzs = static_cast<std::size_t>(g.nz);
-  for (auto* v : {&slab_conv_, &slab_rad_, &slab_lamp_, &slab_ground_, &slab_drain_lat_, &slab_drain_sens_}) v->assign(nzs, 0.0);
+  for (auto* v : {&slab_conv_, &slab_rad_, &slab_lamp_, &slab_ground_, &slab_drain_lat_, &slab_drain_sens_})
+    v->assign(nzs, 0.0);
 
   const int dims = (g.nx > 1) + (g.ny > 1) + (g.nz > 1);
   const double alpha_max = std::max(p_.k_ice_W_mK / (p_.density_kg_m3 * p_.c_ice_J_kgK),
@@ -211,7 +214,8 @@ void EnthalpySolver::step(double dt) {
           const int axis = d / 2;
           const double sign = (d % 2) ? 1.0 : -1.0;  // +1: neighbour on the + side
           Eigen::Vector3d g(gx_[c] + gx_[n], gy_[c] + gy_[n], gz_[c] + gz_[n]);
-          if (!(g[axis] * sign * (bn - bc) > 0)) g[axis] = sign * (bn - bc) / h;  // smoothed normal disagrees with the jump
+          if (!(g[axis] * sign * (bn - bc) > 0))
+            g[axis] = sign * (bn - bc) / h;  // smoothed normal disagrees with the jump
           const double gn = g.norm();
           if (!(gn > 0)) continue;
           const double area = chunk * A0 * std::abs(bn - bc) * std::abs(g[axis]) / gn;

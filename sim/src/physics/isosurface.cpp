@@ -14,7 +14,9 @@ IndexedMesh isosurface(const Grid3<float>& fraction, double level) {
   if (fraction.empty()) return out;
   // padded lattice of cell centres: node (I, J, K), I in [-1, nx], value 0 outside the grid
   const std::int64_t px = nx + 2, py = ny + 2;
-  auto node_id = [&](int I, int J, int K) -> std::int64_t { return (I + 1) + px * ((J + 1) + py * static_cast<std::int64_t>(K + 1)); };
+  auto node_id = [&](int I, int J, int K) -> std::int64_t {
+    return (I + 1) + px * ((J + 1) + py * static_cast<std::int64_t>(K + 1));
+  };
   auto value = [&](int I, int J, int K) -> double {
     return fraction.inside(I, J, K) ? static_cast<double>(fraction.at(I, J, K)) : 0.0;
   };
@@ -55,7 +57,8 @@ IndexedMesh isosurface(const Grid3<float>& fraction, double level) {
   auto emit = [&](const std::array<std::pair<const Corner*, const Corner*>, 3>& e, const Eigen::Vector3d& inside_c) {
     Eigen::Vector3d m[3];
     for (int q = 0; q < 3; ++q)
-      m[q] = 0.5 * (position(e[q].first->I, e[q].first->J, e[q].first->K) + position(e[q].second->I, e[q].second->J, e[q].second->K));
+      m[q] = 0.5 * (position(e[q].first->I, e[q].first->J, e[q].first->K) +
+                    position(e[q].second->I, e[q].second->J, e[q].second->K));
     const Eigen::Vector3d nrm = (m[1] - m[0]).cross(m[2] - m[0]);
     const bool flip = nrm.dot(inside_c - m[0]) > 0;
     Index v[3];

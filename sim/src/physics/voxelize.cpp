@@ -34,7 +34,8 @@ void voxelize_into(const IndexedMesh& mesh, Grid3<float>& grid, int subsamples) 
     const int j1 = std::min(ny - 1, static_cast<int>(std::floor((y1 - o.y()) / h)));
     for (int j = j0; j <= j1; ++j)
       for (int i = i0; i <= i1; ++i)
-        bins[static_cast<std::size_t>(i) + static_cast<std::size_t>(nx) * static_cast<std::size_t>(j)].push_back(static_cast<int>(t));
+        bins[static_cast<std::size_t>(i) + static_cast<std::size_t>(nx) * static_cast<std::size_t>(j)].push_back(
+            static_cast<int>(t));
   }
   // fixed irrational jitter so sub-sample rays never pass exactly through edges or vertices
   const double jx = 0.6180339887498949e-6 * h, jy = 0.4142135623730950e-6 * h;
@@ -44,7 +45,8 @@ void voxelize_into(const IndexedMesh& mesh, Grid3<float>& grid, int subsamples) 
     std::vector<double> zs, col(static_cast<std::size_t>(nz));
     for (int j = r.begin(); j != r.end(); ++j)
       for (int i = 0; i < nx; ++i) {
-        const auto& bin = bins[static_cast<std::size_t>(i) + static_cast<std::size_t>(nx) * static_cast<std::size_t>(j)];
+        const auto& bin =
+            bins[static_cast<std::size_t>(i) + static_cast<std::size_t>(nx) * static_cast<std::size_t>(j)];
         if (bin.empty()) continue;
         std::fill(col.begin(), col.end(), 0.0);
         for (int sa = 0; sa < S; ++sa)

@@ -148,7 +148,8 @@ TEST(OpenMeshPeer, StaysClosedManifoldAndShrinks) {
 // is valid every cycle on the way.
 TEST(OpenMeshPeer, MeltsAwayCompletely) {
   const IndexedMesh sphere = datasets::icosphere(2);
-  const MeltTotals t = melt_checking_invariants<double>(sphere, relative_params(sphere, 0.05, 0.5), 2000, "icosphere(2)");
+  const MeltTotals t =
+      melt_checking_invariants<double>(sphere, relative_params(sphere, 0.05, 0.5), 2000, "icosphere(2)");
   EXPECT_TRUE(t.empty) << "after " << t.cycles << " cycles";
   EXPECT_EQ(t.glued_triangles, 2) << "the last tetrahedron goes as one collapse plus one glued pair";
 }
@@ -177,7 +178,8 @@ TEST(OpenMeshPeer, VolumeTracksMeltSimulatorOnASphere) {
     simulator_merges += simulator.step().merged_vertices;
     const double gap = std::abs(volume_of(peer.mesh()) - sim::mesh_volume(simulator.mesh())) / V0;
     max_gap = std::max(max_gap, gap);
-    const double tolerance = peer_merges == 0 && simulator_merges == 0 ? kBeforeCollapseTolerance : kCollapseVolumeTolerance;
+    const double tolerance =
+        peer_merges == 0 && simulator_merges == 0 ? kBeforeCollapseTolerance : kCollapseVolumeTolerance;
     ASSERT_LT(gap, tolerance) << "cycle " << c;
   }
   EXPECT_GT(peer_merges, 0) << "the comparison must cover collapses";

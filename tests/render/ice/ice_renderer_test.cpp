@@ -73,7 +73,8 @@ TEST(IceRenderer, DryGroundIsPhongTimesTexture) {
   for (int j = 0; j < 32; j += 5)
     for (int i = 0; i < 32; i += 7) {
       const double x = (i - 15.5) / 10.0, y = -(j - 15.5) / 10.0;
-      const Rgb want = 0.7 * sample_bilinear_rgb(tex, x / 2.0 * 256 - 0.5, y / 2.0 * 256 - 0.5, ImageWrap::kRepeat, ImageWrap::kRepeat);
+      const Rgb want = 0.7 * sample_bilinear_rgb(tex, x / 2.0 * 256 - 0.5, y / 2.0 * 256 - 0.5, ImageWrap::kRepeat,
+                                                 ImageWrap::kRepeat);
       EXPECT_NEAR((pixel(img, i, j) - want).norm(), 0.0, kPixelTol) << i << "," << j;
     }
 }
@@ -142,11 +143,14 @@ TEST(IceRenderer, FilmOffsetShiftsTheTextureAgainstTheViewDirection) {
   for (int j = 9; j < 18; j += 2)  // the lower half of the image looks at the ground
     for (int i = 0; i < 24; i += 3) {
       const Vector3d o = world_from_camera.translation();
-      const Vector3d d = (world_from_camera.linear() * Vector3d((i - cam.cx) / cam.fx, (j - cam.cy) / cam.fy, 1)).normalized();
+      const Vector3d d =
+          (world_from_camera.linear() * Vector3d((i - cam.cx) / cam.fx, (j - cam.cy) / cam.fy, 1)).normalized();
       ASSERT_LT(d.z(), 0);
       const Vector3d q = o + (-o.z() / d.z()) * d;
       const Vector3d V = -d;
-      auto tdiff = [&](double u, double v) { return sample_bilinear_rgb(tex, u * 256 - 0.5, v * 256 - 0.5, ImageWrap::kRepeat, ImageWrap::kRepeat); };
+      auto tdiff = [&](double u, double v) {
+        return sample_bilinear_rgb(tex, u * 256 - 0.5, v * 256 - 0.5, ImageWrap::kRepeat, ImageWrap::kRepeat);
+      };
       const Rgb want = (0.7 * tdiff(q.x() - 0.1 * V.x(), q.y() - 0.1 * V.y())).array().pow(1.6).matrix();
       const Rgb unshifted = (0.7 * tdiff(q.x(), q.y())).array().pow(1.6).matrix();
       EXPECT_NEAR((rgb_at(img, i, j) - want).norm(), 0.0, 1e-4) << i << "," << j;
@@ -195,7 +199,8 @@ TEST(IceRenderer, DryMaskIsSkippedAndGivesTheSameImage) {
   r.set_liquid(&mask);
   const ShadingPlan p = r.plan();
   EXPECT_FALSE(p.liquid);
-  EXPECT_NE(std::find(p.skipped.begin(), p.skipped.end(), "liquid (no texel at or above the threshold)"), p.skipped.end());
+  EXPECT_NE(std::find(p.skipped.begin(), p.skipped.end(), "liquid (no texel at or above the threshold)"),
+            p.skipped.end());
   const RgbImage dry = r.render();
   EXPECT_EQ(none.values(), dry.values());
 }
@@ -341,19 +346,19 @@ TEST(IceRenderer, WhiteFurnaceConservesEnergy) {
   };
   // The filtered lookups (with their footprints) of a constant map are that constant too.
   for (auto filter : {TextureFilter::kBilinear, TextureFilter::kMipmap})
-  for (auto model : {IceModel::kMonograph, IceModel::kPhysical})
-    for (bool dispersion : {false, true})
-      for (auto mode : {FresnelMode::kFull, FresnelMode::kSchlick}) {
-        const RgbImage img = run(model, dispersion, mode, filter);
-        double worst = 0;
-        for (float v : img.values()) worst = std::max(worst, std::abs(static_cast<double>(v) - L));
-        // Monograph: F·L + (1 - F)·L, float storage only. Physical: paths dropped once their
-        // weight is below 1e-4 (measured: ≤ 7e-5 of L).
-        const double tol = model == IceModel::kMonograph ? 1e-6 : 2e-4;
-        EXPECT_LT(worst, tol * L) << (model == IceModel::kPhysical ? "physical" : "monograph") << " dispersion "
-                                         << dispersion << " schlick " << (mode == FresnelMode::kSchlick)
-                                         << " mipmap " << (filter == TextureFilter::kMipmap);
-      }
+    for (auto model : {IceModel::kMonograph, IceModel::kPhysical})
+      for (bool dispersion : {false, true})
+        for (auto mode : {FresnelMode::kFull, FresnelMode::kSchlick}) {
+          const RgbImage img = run(model, dispersion, mode, filter);
+          double worst = 0;
+          for (float v : img.values()) worst = std::max(worst, std::abs(static_cast<double>(v) - L));
+          // Monograph: F·L + (1 - F)·L, float storage only. Physical: paths dropped once their
+          // weight is below 1e-4 (measured: ≤ 7e-5 of L).
+          const double tol = model == IceModel::kMonograph ? 1e-6 : 2e-4;
+          EXPECT_LT(worst, tol * L) << (model == IceModel::kPhysical ? "physical" : "monograph") << " dispersion "
+                                    << dispersion << " schlick " << (mode == FresnelMode::kSchlick) << " mipmap "
+                                    << (filter == TextureFilter::kMipmap);
+        }
 }
 
 TEST(MeshBvh, RefitsWhenOnlyPositionsMoveAndRebuildsOtherwise) {
@@ -377,9 +382,10 @@ TEST(MeshBvh, RefitsWhenOnlyPositionsMoveAndRebuildsOtherwise) {
 }
 
 TEST(RenderScene, ParsesAndRefusesUnknownKeys) {
-  const auto s = parse_render_scene(YAML::Load("{width: 64, height: 48, texture_filter: mipmap, ice: {model: physical, fresnel: schlick, ct: 0},"
-                                               " ground: {a: 0.5}, outputs: {exr: false}}"),
-                                    "scene.yaml");
+  const auto s = parse_render_scene(
+      YAML::Load("{width: 64, height: 48, texture_filter: mipmap, ice: {model: physical, fresnel: schlick, ct: 0},"
+                 " ground: {a: 0.5}, outputs: {exr: false}}"),
+      "scene.yaml");
   EXPECT_EQ(s.width, 64);
   EXPECT_EQ(s.texture_filter, TextureFilter::kMipmap);
   EXPECT_EQ(parse_render_scene(YAML::Load("{}"), "scene.yaml").texture_filter, TextureFilter::kBilinear);
@@ -396,13 +402,16 @@ TEST(RenderScene, ParsesAndRefusesUnknownKeys) {
     }
     return std::string("(no error)");
   };
-  EXPECT_NE(message("{ice: {cx: 1}}").find("scene.yaml:1: ice: unknown key 'cx'"), std::string::npos) << message("{ice: {cx: 1}}");
+  EXPECT_NE(message("{ice: {cx: 1}}").find("scene.yaml:1: ice: unknown key 'cx'"), std::string::npos)
+      << message("{ice: {cx: 1}}");
   EXPECT_NE(message("{ice: {fresnel: exact}}").find("'ice.fresnel' must be one of"), std::string::npos);
   EXPECT_NE(message("{texture_filter: trilinear}").find("'texture_filter' must be one of"), std::string::npos);
   EXPECT_NE(message("{environment: {layout: sphere}}").find("'environment.layout' must be one of"), std::string::npos);
   EXPECT_NE(message("{ground: {a: -1}}").find("'ground.a' must be in"), std::string::npos);
-  EXPECT_EQ(message("width: 64\nice:\n  eta: 1.3\n  ct: 0\n  eta: 1.4\n"), "scene.yaml:5: ice: key 'eta' appears twice");
-  EXPECT_EQ(message("outputs:\n  exr: false\n  png: no\n"), "scene.yaml:2: outputs: at least one of 'exr' and 'png' must be true");
+  EXPECT_EQ(message("width: 64\nice:\n  eta: 1.3\n  ct: 0\n  eta: 1.4\n"),
+            "scene.yaml:5: ice: key 'eta' appears twice");
+  EXPECT_EQ(message("outputs:\n  exr: false\n  png: no\n"),
+            "scene.yaml:2: outputs: at least one of 'exr' and 'png' must be true");
   EXPECT_NE(message("{lights: [{to_light: [0, 0, 0]}]}").find("zero vector"), std::string::npos);
 }
 
@@ -439,7 +448,8 @@ TEST(RenderScene, ImageFilesReplaceTheProceduralAssets) {
   for (int j = 0; j < 32; j += 5)
     for (int i = 0; i < 32; i += 7) {
       const double x = (i - 15.5) / 10.0, y = -(j - 15.5) / 10.0;
-      const Rgb want = 0.7 * sample_bilinear_rgb(back, x / 2.0 * 4 - 0.5, y / 2.0 * 4 - 0.5, ImageWrap::kRepeat, ImageWrap::kRepeat);
+      const Rgb want =
+          0.7 * sample_bilinear_rgb(back, x / 2.0 * 4 - 0.5, y / 2.0 * 4 - 0.5, ImageWrap::kRepeat, ImageWrap::kRepeat);
       EXPECT_NEAR((pixel(img, i, j) - want).norm(), 0.0, kPixelTol) << i << "," << j;
     }
 
@@ -506,9 +516,15 @@ void compare_with_reference(const RgbImage& img, const std::string& name) {
   EXPECT_LE(bad, static_cast<int>(kRefBadPixelFraction * static_cast<double>(now.values().size()))) << name;
 }
 
-TEST(ReferenceImages, MonographMaterialOnWetGround) { compare_with_reference(reference_frame(IceModel::kMonograph, false), "monograph"); }
-TEST(ReferenceImages, NormalMappedIce) { compare_with_reference(reference_frame(IceModel::kMonograph, true), "normal_mapped"); }
-TEST(ReferenceImages, PhysicalReference) { compare_with_reference(reference_frame(IceModel::kPhysical, false), "physical"); }
+TEST(ReferenceImages, MonographMaterialOnWetGround) {
+  compare_with_reference(reference_frame(IceModel::kMonograph, false), "monograph");
+}
+TEST(ReferenceImages, NormalMappedIce) {
+  compare_with_reference(reference_frame(IceModel::kMonograph, true), "normal_mapped");
+}
+TEST(ReferenceImages, PhysicalReference) {
+  compare_with_reference(reference_frame(IceModel::kPhysical, false), "physical");
+}
 
 }  // namespace
 }  // namespace meltlab::render

@@ -144,7 +144,8 @@ TEST(LiquidMask, GrowsMonotonicallyUnderAStandingObject) {
   std::int64_t prev_wet = 0;
   for (int c = 0; c < 60; ++c) {
     mask.step(m, true);
-    for (std::size_t k = 0; k < prev.size(); ++k) ASSERT_GE(mask.values()[k], prev[k]) << "cycle " << c << " texel " << k;
+    for (std::size_t k = 0; k < prev.size(); ++k)
+      ASSERT_GE(mask.values()[k], prev[k]) << "cycle " << c << " texel " << k;
     EXPECT_GE(mask.wet_count(), prev_wet);
     prev = mask.values();
     prev_wet = mask.wet_count();

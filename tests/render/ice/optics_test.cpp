@@ -97,10 +97,10 @@ TEST(Refract, ObeysSnellsLawAndBendsTowardsTheNormal) {
     const auto t = refract(from_angle(theta), n, 1.0 / kIceEta);
     ASSERT_TRUE(t.has_value()) << theta;
     EXPECT_NEAR(t->norm(), 1.0, kTol);
-    EXPECT_LT(t->z(), 0.0);                                  // goes into the ice
+    EXPECT_LT(t->z(), 0.0);  // goes into the ice
     const double sin_t = std::hypot(t->x(), t->y());
     EXPECT_NEAR(1.0 * std::sin(theta), kIceEta * sin_t, 1e-12) << theta;  // Eq. 6.6
-    EXPECT_GE(t->x(), 0.0);                                  // stays in the plane of incidence, same side
+    EXPECT_GE(t->x(), 0.0);                                               // stays in the plane of incidence, same side
   }
 }
 

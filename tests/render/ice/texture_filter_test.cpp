@@ -52,8 +52,10 @@ TEST(FilteredTextures, ZeroFootprintIsTheBilinearLookup) {
   std::uniform_real_distribution<double> u(-1.5, 2.5), g(-1.0, 1.0);
   for (int k = 0; k < 500; ++k) {
     const double s = u(rng), t = u(rng);  // outside [0, 1) too: periodic
-    const Vector3d want = sample_bilinear_rgb(tex, s * tex.width() - 0.5, t * tex.height() - 0.5, ImageWrap::kRepeat, ImageWrap::kRepeat);
-    EXPECT_NEAR((ft.texture(t_id, s, t, Vector2d::Zero(), Vector2d::Zero()) - want).norm(), 0.0, kFloatLookupTol) << s << " " << t;
+    const Vector3d want =
+        sample_bilinear_rgb(tex, s * tex.width() - 0.5, t * tex.height() - 0.5, ImageWrap::kRepeat, ImageWrap::kRepeat);
+    EXPECT_NEAR((ft.texture(t_id, s, t, Vector2d::Zero(), Vector2d::Zero()) - want).norm(), 0.0, kFloatLookupTol)
+        << s << " " << t;
     Vector3d dir(g(rng), g(rng), g(rng));
     if (std::abs(dir.normalized().z()) > 0.95) continue;  // OpenImageIO blends towards the pole's average near it
     const Vector3d got = ft.environment(e_id, dir, Vector3d::Zero(), Vector3d::Zero());
@@ -78,7 +80,8 @@ TEST(FilteredTextures, WideFootprintAveragesAFineCheckerboard) {
     EXPECT_NEAR(aniso.x(), 0.5, 0.05);
     // ...while a point lookup at a texel centre sees the texel.
     const int i = static_cast<int>(s * 64), j = static_cast<int>(t * 64);
-    EXPECT_NEAR(ft.texture(id, (i + 0.5) / 64, (j + 0.5) / 64, Vector2d::Zero(), Vector2d::Zero()).x(), (i + j) % 2, kFloatLookupTol);
+    EXPECT_NEAR(ft.texture(id, (i + 0.5) / 64, (j + 0.5) / 64, Vector2d::Zero(), Vector2d::Zero()).x(), (i + j) % 2,
+                kFloatLookupTol);
   }
 }
 
@@ -187,9 +190,8 @@ RgbImage cube_image(const Layout& l, int F, const std::function<Vector3d(int, co
 class TextureFiles : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("meltlab_texture_files_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = std::filesystem::temp_directory_path() / ("meltlab_texture_files_" + std::to_string(::getpid()) + "_" +
+                                                     ::testing::UnitTest::GetInstance()->current_test_info()->name());
     std::filesystem::create_directories(dir_);
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
@@ -229,12 +231,12 @@ TEST_F(CubeMaps, FacesLandWhereTheFrameSays) {
   const auto file = dir_ / "faces.png";
   write_png(file, cube_image(kLayouts[2], 16, [&](int f, const Vector3d&) { return colour[f]; }));
   const RgbImage env = read_environment(file);
-  EXPECT_NEAR((sample_latlong(env, Vector3d::UnitZ()) - colour[2]).norm(), 0.0, 1e-6);    // py
-  EXPECT_NEAR((sample_latlong(env, -Vector3d::UnitZ()) - colour[3]).norm(), 0.0, 1e-6);   // ny
-  EXPECT_NEAR((sample_latlong(env, Vector3d::UnitX()) - colour[4]).norm(), 0.0, 1e-6);    // pz
-  EXPECT_NEAR((sample_latlong(env, -Vector3d::UnitX()) - colour[5]).norm(), 0.0, 1e-6);   // nz
-  EXPECT_NEAR((sample_latlong(env, Vector3d::UnitY()) - colour[1]).norm(), 0.0, 1e-6);    // nx
-  EXPECT_NEAR((sample_latlong(env, -Vector3d::UnitY()) - colour[0]).norm(), 0.0, 1e-6);   // px
+  EXPECT_NEAR((sample_latlong(env, Vector3d::UnitZ()) - colour[2]).norm(), 0.0, 1e-6);   // py
+  EXPECT_NEAR((sample_latlong(env, -Vector3d::UnitZ()) - colour[3]).norm(), 0.0, 1e-6);  // ny
+  EXPECT_NEAR((sample_latlong(env, Vector3d::UnitX()) - colour[4]).norm(), 0.0, 1e-6);   // pz
+  EXPECT_NEAR((sample_latlong(env, -Vector3d::UnitX()) - colour[5]).norm(), 0.0, 1e-6);  // nz
+  EXPECT_NEAR((sample_latlong(env, Vector3d::UnitY()) - colour[1]).norm(), 0.0, 1e-6);   // nx
+  EXPECT_NEAR((sample_latlong(env, -Vector3d::UnitY()) - colour[0]).norm(), 0.0, 1e-6);  // px
 }
 
 TEST_F(CubeMaps, SizesThatFitNoLayoutAreRefused) {
@@ -248,7 +250,8 @@ TEST_F(CubeMaps, SizesThatFitNoLayoutAreRefused) {
     }
     return std::string("(no error)");
   };
-  EXPECT_NE(message(50, 30, EnvironmentLayout::kAuto).find("neither a 2:1 lat-long map nor a cube map"), std::string::npos);
+  EXPECT_NE(message(50, 30, EnvironmentLayout::kAuto).find("neither a 2:1 lat-long map nor a cube map"),
+            std::string::npos);
   EXPECT_NE(message(50, 30, EnvironmentLayout::kAuto).find("odd_50x30.png"), std::string::npos);
   EXPECT_NE(message(30, 21, EnvironmentLayout::kCube3x2).find("3 x 2 square faces"), std::string::npos);
   EXPECT_EQ(message(30, 20, EnvironmentLayout::kCube3x2), "(no error)");
@@ -300,8 +303,9 @@ TEST_F(IceTexture, FileIsProjectedAlongTheDominantAxis) {
 }
 
 // The ground seen at a grazing angle: a checkerboard (16 squares per 2-unit period) that is
-// resolved near the camera recedes to the horizon, where many squares fall into a pixel. Rendered at 1 sample per pixel with bilinear and with MIP-mapped lookups, and at
-// 8x8 samples per pixel (an 8x larger frame, box-filtered down) as the reference.
+// resolved near the camera recedes to the horizon, where many squares fall into a pixel. Rendered at 1 sample per pixel
+// with bilinear and with MIP-mapped lookups, and at 8x8 samples per pixel (an 8x larger frame, box-filtered down) as
+// the reference.
 RgbImage grazing_ground(TextureFilter filter, int scale, const std::filesystem::path& texture) {
   RenderScene s;
   s.texture_filter = filter;
@@ -334,7 +338,8 @@ RgbImage box_down(const RgbImage& big, int k) {
 
 double rmse(const RgbImage& a, const RgbImage& b) {
   double s = 0;
-  for (std::size_t k = 0; k < a.values().size(); ++k) s += std::pow(static_cast<double>(a.values()[k] - b.values()[k]), 2);
+  for (std::size_t k = 0; k < a.values().size(); ++k)
+    s += std::pow(static_cast<double>(a.values()[k] - b.values()[k]), 2);
   return std::sqrt(s / static_cast<double>(a.values().size()));
 }
 

@@ -204,8 +204,9 @@ TEST(IcePhoto, GroundTextureVisibleThroughThinIceButNotThick) {
                r_thick = mean_diff(ra, rb, 220, 330) / mean_diff(ra0, rb0, 220, 330);
   const cv::Mat a = develop_photo(ra, o), b = develop_photo(rb, o);
   const double bare = mean_diff(a, b, 5, 40), thin = mean_diff(a, b, 55, 85), thick = mean_diff(a, b, 220, 330);
-  std::printf("texture through ice: radiance thin/bare %.3f thick/bare %.5f; photo levels bare %.2f thin %.2f thick %.3f\n",
-              r_thin, r_thick, bare, thin, thick);
+  std::printf(
+      "texture through ice: radiance thin/bare %.3f thick/bare %.5f; photo levels bare %.2f thin %.2f thick %.3f\n",
+      r_thin, r_thick, bare, thin, thick);
   EXPECT_GT(r_thin, 0.65);
   EXPECT_LT(r_thin, 0.80);
   EXPECT_LT(r_thick, 0.01);
@@ -251,7 +252,7 @@ TEST(IcePhoto, DeterministicPerSeedAndSerialEqualsParallel) {
   cv::Mat d;
   cv::absdiff(a, c, d);
   const double mean_abs = cv::mean(d.reshape(1))[0];
-  EXPECT_GT(mean_abs, 1.0);   // E|X - Y| = 2σ/√π ≈ 2.26 for two independent N(0, σ²)
+  EXPECT_GT(mean_abs, 1.0);  // E|X - Y| = 2σ/√π ≈ 2.26 for two independent N(0, σ²)
   EXPECT_LT(mean_abs, 3.5);
   // The radiance (noise-free) does not depend on the sensor seed at all.
   o.seed = 1;
@@ -409,4 +410,3 @@ TEST(IcePhoto, RejectsBadInput) {
 
 }  // namespace
 }  // namespace meltlab::render
-

@@ -45,7 +45,8 @@ TEST(NeumannSolution, RootSatisfiesStefanCondition) {
   // one-phase limit check: with the ice at 0 °C, λ e^{λ²} erf λ = St/√π; λ ≈ sqrt(St/2) for small St
   const auto n1 = neumann_stefan(p, 1.0, 0.0);
   const double St1 = p.c_water_J_kgK * 1.0 / p.latent_heat_J_kg;
-  EXPECT_NEAR(n1.lambda * std::exp(n1.lambda * n1.lambda) * std::erf(n1.lambda), St1 / std::sqrt(std::numbers::pi), 1e-12);
+  EXPECT_NEAR(n1.lambda * std::exp(n1.lambda * n1.lambda) * std::erf(n1.lambda), St1 / std::sqrt(std::numbers::pi),
+              1e-12);
   // the ice's cold content slows the front
   EXPECT_LT(n.lambda, neumann_stefan(p, kWallC, 0.0).lambda);
   // the analytic profile is continuous at 0 °C on the front, wall and far field right
@@ -88,7 +89,8 @@ TEST(Stefan, ConvergenceOrderInGridSpacing) {
   const std::vector<double> hs = {4e-3, 2e-3, 1e-3, 0.5e-3};
   std::vector<StefanRun> runs;
   for (double h : hs) runs.push_back(run_stefan(h));
-  std::printf("%10s %10s %12s %12s %10s %8s %8s\n", "h [mm]", "dt [s]", "X [mm]", "exact [mm]", "error", "order", "time[s]");
+  std::printf("%10s %10s %12s %12s %10s %8s %8s\n", "h [mm]", "dt [s]", "X [mm]", "exact [mm]", "error", "order",
+              "time[s]");
   std::vector<double> orders;
   for (std::size_t q = 0; q < runs.size(); ++q) {
     double order = std::nan("");
@@ -161,13 +163,14 @@ SphereRun run_sphere(double h, double r0) {
 }
 
 TEST(Sphere, ShrinkingSphereRadiusWithinTwoPercentAtHalfMass) {
-  std::printf("%8s %10s %10s %10s %10s %12s %8s\n", "h [mm]", "r0 [mm]", "r [mm]", "exact", "error", "A/4πr²(0)", "time[s]");
+  std::printf("%8s %10s %10s %10s %10s %12s %8s\n", "h [mm]", "r0 [mm]", "r [mm]", "exact", "error", "A/4πr²(0)",
+              "time[s]");
   std::vector<SphereRun> runs;
   for (double h : {2e-3, 1e-3}) {
     runs.push_back(run_sphere(h, 15e-3));
     const auto& r = runs.back();
-    std::printf("%8.2f %10.4f %10.4f %10.4f %10.2e %12.4f %8.2f\n", r.h * 1e3, r.r0 * 1e3, r.r_num * 1e3, r.r_exact * 1e3,
-                r.rel_error, r.area_ratio0, r.seconds);
+    std::printf("%8.2f %10.4f %10.4f %10.4f %10.2e %12.4f %8.2f\n", r.h * 1e3, r.r0 * 1e3, r.r_num * 1e3,
+                r.r_exact * 1e3, r.rel_error, r.area_ratio0, r.seconds);
   }
   // Issue 4 §4: sphere within 2% (radius at the time half the mass has melted), at r0/h = 15.
   EXPECT_LT(runs.back().rel_error, 0.02);
@@ -213,10 +216,11 @@ TEST(EnergyBalance, HeatInEqualsLatentPlusSensibleOverFullMelt) {
   const auto l = solver.ledger();
   const double in = l.heat_in_J();
   const double closure = std::abs(in - (l.latent_J + l.sensible_J())) / in;
-  std::printf("small block %.1f g, all boundary kinds: melted in %.0f s; in: convection %.0f J, radiation %.0f J, lamp %.0f J, "
-              "ground %.0f J = %.0f J; latent %.0f J + sensible %.0f J; closure %.2e\n",
-              m0 * 1e3, solver.time_s(), l.convection_J, l.ambient_radiation_J, l.lamp_J, l.ground_J, in, l.latent_J,
-              l.sensible_J(), closure);
+  std::printf(
+      "small block %.1f g, all boundary kinds: melted in %.0f s; in: convection %.0f J, radiation %.0f J, lamp %.0f J, "
+      "ground %.0f J = %.0f J; latent %.0f J + sensible %.0f J; closure %.2e\n",
+      m0 * 1e3, solver.time_s(), l.convection_J, l.ambient_radiation_J, l.lamp_J, l.ground_J, in, l.latent_J,
+      l.sensible_J(), closure);
   EXPECT_GT(l.convection_J, 0);
   EXPECT_GT(l.ambient_radiation_J, 0);
   EXPECT_GT(l.lamp_J, 0);

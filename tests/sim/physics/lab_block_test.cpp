@@ -28,10 +28,11 @@ TEST(LabBlock, GiraffeBlockWeighs250gAndMeltsInHours) {
   if (solver.advance_until_mass(0.5 * m0, 6 * 3600.0)) t_half = solver.time_s();
   const bool done = solver.advance_until_mass(0.01 * m0, 8 * 3600.0);
   const auto l = solver.ledger();
-  std::printf("giraffe block %.1f g at h = 2.5 mm: half melted at %.0f s, 99%% melted at %.0f s (%s); "
-              "convection %.0f J, radiation %.0f J, ground %.0f J; run %.1f s\n",
-              m0 * 1e3, t_half, solver.time_s(), done ? "done" : "not done", l.convection_J, l.ambient_radiation_J,
-              l.ground_J, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  std::printf(
+      "giraffe block %.1f g at h = 2.5 mm: half melted at %.0f s, 99%% melted at %.0f s (%s); "
+      "convection %.0f J, radiation %.0f J, ground %.0f J; run %.1f s\n",
+      m0 * 1e3, t_half, solver.time_s(), done ? "done" : "not done", l.convection_J, l.ambient_radiation_J, l.ground_J,
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   // The lab melt takes a bit over two hours; the default coefficients should land within a
   // factor ~2 of that (they are to be fitted, not measured).
   EXPECT_TRUE(done);

@@ -115,7 +115,8 @@ TEST(Isosurface, VoxelizedSphereIsClosedManifoldWithRightVolume) {
   EXPECT_EQ(rep.counts.G, 0);
   EXPECT_EQ(rep.counts.chi, 0);
   const double V = volume_of(s), Vm = volume_of(sphere);
-  std::printf("isosurface of a 20 mm sphere at h = 1 mm: %zu triangles, volume error %.2e\n", s.F.size(), (V - Vm) / Vm);
+  std::printf("isosurface of a 20 mm sphere at h = 1 mm: %zu triangles, volume error %.2e\n", s.F.size(),
+              (V - Vm) / Vm);
   EXPECT_GT(V, 0) << "outward orientation gives a positive volume";
   // the 0.5 level of a cell-averaged indicator sits within ~h²/r of the true surface:
   // relative volume error ≲ 3 (h/r)² · few; 1.5% at r/h = 20
@@ -154,7 +155,8 @@ TEST(Isosurface, RandomFieldsGiveClosedOrientedManifolds) {
     g.at(3, 3, 3) = 0.5f;  // a value exactly at the level
     const auto m = isosurface(g);
     const auto rep = check(m);
-    EXPECT_TRUE(rep.valid()) << "trial " << trial << ": " << (rep.problems.empty() ? "" : rep.problems.front().describe());
+    EXPECT_TRUE(rep.valid()) << "trial " << trial << ": "
+                             << (rep.problems.empty() ? "" : rep.problems.front().describe());
     EXPECT_EQ(rep.counts.chi, 0);
     EXPECT_GT(volume_of(m), 0);
   }

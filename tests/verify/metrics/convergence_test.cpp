@@ -40,8 +40,8 @@ double fitted_order(const std::vector<Row>& rows, double Row::*col) {
 }  // namespace
 
 TEST(Convergence, RasterPOfTwoDiscs) {
-  const int kOffsets = 4;   // sub-pixel placements per resolution
-  const int kSuper = 4;     // coverage supersampling (4 x 4 per pixel)
+  const int kOffsets = 4;  // sub-pixel placements per resolution
+  const int kSuper = 4;    // coverage supersampling (4 x 4 per pixel)
   std::vector<Row> rows;
   std::printf("%6s %11s %12s %12s %12s\n", "r[px]", "image", "raster", "coverage4x4", "contour+CGAL");
   for (double r = 10; r <= 640; r *= 2) {

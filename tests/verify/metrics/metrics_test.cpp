@@ -93,7 +93,8 @@ TEST(CompareCoverage, EqualsCompareMasksOnBinaryImages) {
 // the rounding of the closed form itself (1e-12 is generous).
 TEST(CompareRegionsExact, OffsetSquaresClosedForm) {
   const double a = 10.0;
-  for (const auto& [dx, dy] : {std::pair{0.0, 0.0}, {3.25, 1.5}, {-2.125, 7.75}, {0.1, -0.3}, {9.9, 9.9}, {12.0, 0.0}}) {
+  for (const auto& [dx, dy] :
+       {std::pair{0.0, 0.0}, {3.25, 1.5}, {-2.125, 7.75}, {0.1, -0.3}, {9.9, 9.9}, {12.0, 0.0}}) {
     const Region A{Polygon{rect(0, 0, a, a), {}}}, B{Polygon{rect(dx, dy, dx + a, dy + a), {}}};
     const double i = std::max(0.0, a - std::abs(dx)) * std::max(0.0, a - std::abs(dy));
     const AreaComparison c = compare_regions_exact(A, B);

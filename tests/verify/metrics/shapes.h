@@ -52,7 +52,8 @@ inline cv::Mat disc_mask(int w, int h, double cx, double cy, double r) {
     const double dy = y - cy;
     if (std::abs(dy) >= r) continue;
     const double half = std::sqrt(r * r - dy * dy);
-    for (int x = std::max(0, static_cast<int>(std::floor(cx - half))); x <= std::min(w - 1, static_cast<int>(std::ceil(cx + half))); ++x) {
+    for (int x = std::max(0, static_cast<int>(std::floor(cx - half)));
+         x <= std::min(w - 1, static_cast<int>(std::ceil(cx + half))); ++x) {
       const double dx = x - cx;
       if (dx * dx + dy * dy < r * r) row[x] = 255;
     }

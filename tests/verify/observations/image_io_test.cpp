@@ -30,9 +30,15 @@ cv::Mat pattern(int type, int width = 97, int height = 61) {
         const double v = 0.5 + 0.45 * std::sin(0.07 * x * (c + 1) + 0.11 * y - c);
         const double value = v * full;
         switch (img.depth()) {
-          case CV_8U: img.ptr<unsigned char>(y)[x * ch + c] = cv::saturate_cast<unsigned char>(value); break;
-          case CV_16U: img.ptr<unsigned short>(y)[x * ch + c] = cv::saturate_cast<unsigned short>(value); break;
-          default: img.ptr<float>(y)[x * ch + c] = static_cast<float>(value); break;
+          case CV_8U:
+            img.ptr<unsigned char>(y)[x * ch + c] = cv::saturate_cast<unsigned char>(value);
+            break;
+          case CV_16U:
+            img.ptr<unsigned short>(y)[x * ch + c] = cv::saturate_cast<unsigned short>(value);
+            break;
+          default:
+            img.ptr<float>(y)[x * ch + c] = static_cast<float>(value);
+            break;
         }
       }
     }
@@ -64,10 +70,9 @@ struct RoundTrip {
 
 TEST(ImageIo, RoundTrips) {
   const RoundTrip cases[] = {
-      {"grey8.png", CV_8UC1, 0},       {"rgb8.png", CV_8UC3, 0},     {"grey16.png", CV_16UC1, 0},
-      {"rgb16.png", CV_16UC3, 0},      {"rgb8.tif", CV_8UC3, 0},     {"grey16.tiff", CV_16UC1, 0},
-      {"float.tif", CV_32FC1, 0},      {"rgbf.exr", CV_32FC3, 0},    {"greyf.exr", CV_32FC1, 0},
-      {"rgb8.jpg", CV_8UC3, 40},       {"grey8.jpeg", CV_8UC1, 40},
+      {"grey8.png", CV_8UC1, 0},  {"rgb8.png", CV_8UC3, 0},     {"grey16.png", CV_16UC1, 0}, {"rgb16.png", CV_16UC3, 0},
+      {"rgb8.tif", CV_8UC3, 0},   {"grey16.tiff", CV_16UC1, 0}, {"float.tif", CV_32FC1, 0},  {"rgbf.exr", CV_32FC3, 0},
+      {"greyf.exr", CV_32FC1, 0}, {"rgb8.jpg", CV_8UC3, 40},    {"grey8.jpeg", CV_8UC1, 40},
   };
   test::TempDir dir;
   for (const RoundTrip& c : cases) {

@@ -20,26 +20,26 @@ namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
 const char* const kYaml =
-    "meltlab_observations: 1\n"                                 // 1
-    "object: giraffe\n"                                         // 2
-    "frames:\n"                                                 // 3
-    "  - {image: frames/0001.png, time_s: 0}\n"                 // 4
-    "  - {image: frames/0002.png}\n"                            // 5
-    "  - image: frames/0003.png\n"                              // 6
-    "    time_s: 95\n"                                          // 7
-    "interval_s: 40\n"                                          // 8
-    "first_time_s: 10\n"                                        // 9
+    "meltlab_observations: 1\n"                                                                   // 1
+    "object: giraffe\n"                                                                           // 2
+    "frames:\n"                                                                                   // 3
+    "  - {image: frames/0001.png, time_s: 0}\n"                                                   // 4
+    "  - {image: frames/0002.png}\n"                                                              // 5
+    "  - image: frames/0003.png\n"                                                                // 6
+    "    time_s: 95\n"                                                                            // 7
+    "interval_s: 40\n"                                                                            // 8
+    "first_time_s: 10\n"                                                                          // 9
     "camera: {type: orthographic, width: 64, height: 48, pixels_per_mm: 10, centre_m: [0, 0]}\n"  // 10
-    "roi: [4, 6, 50, 30]\n"                                     // 11
-    "segmentation:\n"                                           // 12
-    "  method: background\n"                                    // 13
-    "  background: bg.png\n"                                    // 14
-    "  channel: gray\n"                                         // 15
-    "  blur_sigma_px: 1.5\n"                                    // 16
-    "  object_darker: true\n"                                   // 17
-    "  adaptive_block_px: 51\n"                                 // 18
-    "ground_truth: ../truth/giraffe.json\n"                     // 19
-    "mass_series: mass.csv\n";                                  // 20
+    "roi: [4, 6, 50, 30]\n"                                                                       // 11
+    "segmentation:\n"                                                                             // 12
+    "  method: background\n"                                                                      // 13
+    "  background: bg.png\n"                                                                      // 14
+    "  channel: gray\n"                                                                           // 15
+    "  blur_sigma_px: 1.5\n"                                                                      // 16
+    "  object_darker: true\n"                                                                     // 17
+    "  adaptive_block_px: 51\n"                                                                   // 18
+    "ground_truth: ../truth/giraffe.json\n"                                                       // 19
+    "mass_series: mass.csv\n";                                                                    // 20
 
 // The same in JSON, written the way JSON tools write it (tabs, no space after ':').
 const char* const kJson =
@@ -114,8 +114,7 @@ TEST_F(Manifest, YamlReadsEverything) {
   ASSERT_EQ(s.frames.size(), 3U);
   for (int i = 0; i < 3; ++i) {
     EXPECT_EQ(s.frames[static_cast<std::size_t>(i)].index, i);
-    EXPECT_EQ(s.frames[static_cast<std::size_t>(i)].image,
-              obs_ / "frames" / ("000" + std::to_string(i + 1) + ".png"));
+    EXPECT_EQ(s.frames[static_cast<std::size_t>(i)].image, obs_ / "frames" / ("000" + std::to_string(i + 1) + ".png"));
   }
   ASSERT_TRUE(s.frames[0].time_s && s.frames[1].time_s && s.frames[2].time_s);
   EXPECT_EQ(*s.frames[0].time_s, 0);
@@ -245,30 +244,30 @@ TEST_F(Manifest, EveryMistakeNamesFileLineAndKey) {
     std::string key;
   };
   const std::vector<Case> cases = {
-      {20, "mass_series: mass.csv\ncolour: red\n", 21, "colour"},               // unknown key
-      {8, "interval_s: -5\n", 8, "interval_s"},                                 // negative interval
-      {8, "interval_s: soon\n", 8, "interval_s"},                               // wrong type
-      {9, "first_time_s: [1]\n", 9, "first_time_s"},                            // wrong type
-      {11, "roi: [40, 6, 50, 30]\n", 11, "roi"},                                // outside the 64x48 image
-      {11, "roi: [4, 6, wide, 30]\n", 11, "roi"},                               // wrong type
-      {11, "roi: [4, 6, 50]\n", 11, "roi"},                                     // wrong length
-      {5, "  - {image: frames/0001.png}\n", 5, "twice"},                        // duplicated frame
-      {5, "  - {image: frames/0002.png, time: 3}\n", 5, "time"},               // unknown frame key
-      {5, "  - {time_s: 3}\n", 5, "image"},                                     // frame without image
-      {7, "    time_s: 30\n", 6, "time_s"},                                     // not after frame 1 (50 s)
-      {13, "  method: magic\n", 13, "method"},                                  // unknown method
-      {15, "  channel: hue\n", 15, "channel"},                                  // unknown channel
-      {18, "  adaptive_block_px: 50\n", 18, "adaptive_block_px"},               // even block
-      {16, "  blur_radius: 2\n", 16, "blur_radius"},                            // unknown segmentation key
-      {17, "  object_darker: maybe\n", 17, "object_darker"},                    // not a boolean
-      {14, "  background: nothing.png\n", 14, "background"},                    // missing background
-      {1, "meltlab_observations: 2\n", 1, "meltlab_observations"},              // version
-      {19, "ground_truth: ../truth/zebra.json\n", 19, "ground_truth"},          // missing file
+      {20, "mass_series: mass.csv\ncolour: red\n", 21, "colour"},       // unknown key
+      {8, "interval_s: -5\n", 8, "interval_s"},                         // negative interval
+      {8, "interval_s: soon\n", 8, "interval_s"},                       // wrong type
+      {9, "first_time_s: [1]\n", 9, "first_time_s"},                    // wrong type
+      {11, "roi: [40, 6, 50, 30]\n", 11, "roi"},                        // outside the 64x48 image
+      {11, "roi: [4, 6, wide, 30]\n", 11, "roi"},                       // wrong type
+      {11, "roi: [4, 6, 50]\n", 11, "roi"},                             // wrong length
+      {5, "  - {image: frames/0001.png}\n", 5, "twice"},                // duplicated frame
+      {5, "  - {image: frames/0002.png, time: 3}\n", 5, "time"},        // unknown frame key
+      {5, "  - {time_s: 3}\n", 5, "image"},                             // frame without image
+      {7, "    time_s: 30\n", 6, "time_s"},                             // not after frame 1 (50 s)
+      {13, "  method: magic\n", 13, "method"},                          // unknown method
+      {15, "  channel: hue\n", 15, "channel"},                          // unknown channel
+      {18, "  adaptive_block_px: 50\n", 18, "adaptive_block_px"},       // even block
+      {16, "  blur_radius: 2\n", 16, "blur_radius"},                    // unknown segmentation key
+      {17, "  object_darker: maybe\n", 17, "object_darker"},            // not a boolean
+      {14, "  background: nothing.png\n", 14, "background"},            // missing background
+      {1, "meltlab_observations: 2\n", 1, "meltlab_observations"},      // version
+      {19, "ground_truth: ../truth/zebra.json\n", 19, "ground_truth"},  // missing file
       {10, "camera: {type: orthographic, width: 64, height: 48, pixels_per_mm: 10, zoom: 2}\n", 10, "zoom"},
       {10, "camera: {type: orthographic, width: 65, height: 48, pixels_per_mm: 10}\n", 10, "camera"},  // size
-      {10, "", 1, "camera"},                                                    // missing camera
-      {3, "frames: {glob: \"frames/*.tif\"}\n", 3, "glob"},                     // glob matching nothing
-      {2, "object: {name: giraffe}\n", 2, "object"},                            // wrong type
+      {10, "", 1, "camera"},                                                                           // missing camera
+      {3, "frames: {glob: \"frames/*.tif\"}\n", 3, "glob"},  // glob matching nothing
+      {2, "object: {name: giraffe}\n", 2, "object"},         // wrong type
   };
   for (const Case& c : cases) {
     std::string content = with_line(c.line, c.text);

@@ -77,10 +77,10 @@ cv::Mat texture(int w, int h, double sigma_px, unsigned seed) {
 }
 
 struct SceneOptions {
-  cv::Scalar ice{225, 215, 205};     // BGR, 8-bit scale
+  cv::Scalar ice{225, 215, 205};  // BGR, 8-bit scale
   cv::Scalar ground{38, 42, 50};
-  double ground_texture = 6;         // amplitude of the ground's texture
-  double light_min = 0.75;           // lighting: light_min at x = 0 ... 1 at x = w
+  double ground_texture = 6;  // amplitude of the ground's texture
+  double light_min = 0.75;    // lighting: light_min at x = 0 ... 1 at x = w
   double lens_sigma = 0.8;
   double noise = 4;
   unsigned seed = 1;
@@ -96,7 +96,8 @@ cv::Mat photo(const Inside& inside, int w, int h, const SceneOptions& o) {
     for (int x = 0; x < w; ++x) {
       const double light = o.light_min + (1.0 - o.light_min) * x / w;
       const double c = cov.at<float>(y, x);
-      const double tex = o.ground_texture * (0.8 * static_cast<double>(coarse.at<float>(y, x)) + 0.4 * static_cast<double>(fine.at<float>(y, x)));
+      const double tex = o.ground_texture * (0.8 * static_cast<double>(coarse.at<float>(y, x)) +
+                                             0.4 * static_cast<double>(fine.at<float>(y, x)));
       cv::Vec3f& px = img.at<cv::Vec3f>(y, x);
       for (int k = 0; k < 3; ++k) {
         const double v = c * o.ice[k] + (1 - c) * (o.ground[k] + tex);
@@ -283,7 +284,8 @@ TEST(Segmentation, BackgroundSubtraction) {
   const auto disc = [](double x, double y) { return std::hypot(x - 100.4, y - 80.2) < 40; };
   cv::Mat ground(h, w, CV_8UC3);
   for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) ground.at<cv::Vec3b>(y, x) = ((x / 10) % 2) ? cv::Vec3b(200, 200, 200) : cv::Vec3b(30, 30, 30);
+    for (int x = 0; x < w; ++x)
+      ground.at<cv::Vec3b>(y, x) = ((x / 10) % 2) ? cv::Vec3b(200, 200, 200) : cv::Vec3b(30, 30, 30);
   cv::Mat scene = ground.clone();
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)

@@ -174,7 +174,8 @@ class ConfigSection {
   /// A finite number > 0: "'PATH' must be > 0 (got x)".
   double require_positive(const std::string& key) const;
   /// One of `options` (a scalar): "'PATH' must be one of a, b (got 'c')".
-  std::string get_choice(const std::string& key, const std::string& fallback, const std::vector<std::string>& options) const;
+  std::string get_choice(const std::string& key, const std::string& fallback,
+                         const std::vector<std::string>& options) const;
   Eigen::Vector3d require_vec3(const std::string& key) const { return value(key).as_vec3(); }
   Eigen::Vector3d get_vec3(const std::string& key, const Eigen::Vector3d& fallback) const {
     const auto v = optional_value(key);

@@ -10,9 +10,9 @@ namespace meltlab {
 /// Exit codes of every subcommand.
 enum ExitCode : int {
   kExitOk = 0,
-  kExitInvalid = 1,       ///< the command ran and found the input invalid (mesh-info)
-  kExitBadInput = 2,      ///< unreadable/invalid input or options: one-line error on stderr
-  kExitInternal = 3,      ///< a broken invariant during a run (a bug worth a report)
+  kExitInvalid = 1,   ///< the command ran and found the input invalid (mesh-info)
+  kExitBadInput = 2,  ///< unreadable/invalid input or options: one-line error on stderr
+  kExitInternal = 3,  ///< a broken invariant during a run (a bug worth a report)
   kExitInterrupted = 130,
 };
 

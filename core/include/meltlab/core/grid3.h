@@ -20,24 +20,32 @@ namespace meltlab {
 template <class T>
 struct Grid3 {
   int nx = 0, ny = 0, nz = 0;
-  double h_m = 0;                                 ///< cell edge length, metres
+  double h_m = 0;                                      ///< cell edge length, metres
   Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();  ///< corner of cell (0, 0, 0), metres
   std::vector<T> value;
 
   Grid3() = default;
   Grid3(int nx_, int ny_, int nz_, double h, const Eigen::Vector3d& origin, T fill = T{})
-      : nx(nx_), ny(ny_), nz(nz_), h_m(h), origin_m(origin),
+      : nx(nx_),
+        ny(ny_),
+        nz(nz_),
+        h_m(h),
+        origin_m(origin),
         value(static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_) * static_cast<std::size_t>(nz_), fill) {}
 
   std::size_t size() const { return value.size(); }
   bool empty() const { return value.empty(); }
   std::size_t index(int i, int j, int k) const {
-    return static_cast<std::size_t>(i) + static_cast<std::size_t>(nx) * (static_cast<std::size_t>(j) + static_cast<std::size_t>(ny) * static_cast<std::size_t>(k));
+    return static_cast<std::size_t>(i) +
+           static_cast<std::size_t>(nx) *
+               (static_cast<std::size_t>(j) + static_cast<std::size_t>(ny) * static_cast<std::size_t>(k));
   }
   T& at(int i, int j, int k) { return value[index(i, j, k)]; }
   const T& at(int i, int j, int k) const { return value[index(i, j, k)]; }
   bool inside(int i, int j, int k) const { return i >= 0 && j >= 0 && k >= 0 && i < nx && j < ny && k < nz; }
-  Eigen::Vector3d centre_m(int i, int j, int k) const { return origin_m + h_m * Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5); }
+  Eigen::Vector3d centre_m(int i, int j, int k) const {
+    return origin_m + h_m * Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5);
+  }
   /// World-space box covered by the grid.
   Eigen::Vector3d min_m() const { return origin_m; }
   Eigen::Vector3d max_m() const { return origin_m + h_m * Eigen::Vector3d(nx, ny, nz); }

@@ -26,7 +26,9 @@ class Image {
 
   Image() = default;
   Image(int width, int height, int channels, T fill = T{})
-      : width_(width), height_(height), channels_(channels),
+      : width_(width),
+        height_(height),
+        channels_(channels),
         data_(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * static_cast<std::size_t>(channels),
               fill) {}
 

@@ -21,9 +21,9 @@
 namespace meltlab {
 
 struct HardwareInfo {
-  std::string cpu;                 ///< the model name from /proc/cpuinfo ("" if unknown)
-  unsigned threads = 0;            ///< std::thread::hardware_concurrency()
-  std::string host;                ///< gethostname ("" if unknown)
+  std::string cpu;                                  ///< the model name from /proc/cpuinfo ("" if unknown)
+  unsigned threads = 0;                             ///< std::thread::hardware_concurrency()
+  std::string host;                                 ///< gethostname ("" if unknown)
   nlohmann::json extra = nlohmann::json::object();  ///< facts the caller adds (thread pool sizes)
 };
 

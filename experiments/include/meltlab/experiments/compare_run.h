@@ -27,8 +27,8 @@ struct CompareRunOptions {
   std::filesystem::path observations;  ///< manifest (.yaml/.yml/.json)
   std::filesystem::path out_dir;
   verify::CompareOptions compare;
-  int overlay_every = 1;               ///< write the overlay of every K-th compared frame (0 = none)
-  bool overwrite = false;              ///< allow DIR to hold a previous comparison
+  int overlay_every = 1;                  ///< write the overlay of every K-th compared frame (0 = none)
+  bool overwrite = false;                 ///< allow DIR to hold a previous comparison
   std::vector<std::string> command_line;  ///< argv, recorded in the provenance of the run record
 };
 
@@ -44,13 +44,15 @@ struct CompareRunResult {
 };
 
 /// Runs the comparison and writes DIR. Throws InputError on bad input (before writing).
-CompareRunResult run_compare(const CompareRunOptions& options, const std::function<void(const CompareRunProgress&)>& progress);
+CompareRunResult run_compare(const CompareRunOptions& options,
+                             const std::function<void(const CompareRunProgress&)>& progress);
 
 /// Compares and writes per_frame.csv, overlays/ (every K-th compared frame) and
 /// p_curve.png into `out_dir` (created). `frame_ms` (optional) receives the time per frame.
 verify::CompareResult compare_and_write(const verify::ObservationSequence& observations, sim::MeshSequence& meshes,
                                         const verify::CompareOptions& options, const std::filesystem::path& out_dir,
-                                        int overlay_every, const std::function<void(const CompareRunProgress&)>& progress,
+                                        int overlay_every,
+                                        const std::function<void(const CompareRunProgress&)>& progress,
                                         std::vector<double>* frame_ms = nullptr);
 
 /// Summary statistics of per-frame results (over frames with status ok): count, P of the

@@ -22,17 +22,17 @@
 namespace meltlab::experiments {
 
 struct FitRunOptions {
-  SimulateOptions simulation;            ///< mesh, kE, kr, kl file, precision (kg = initial value)
+  SimulateOptions simulation;  ///< mesh, kE, kr, kl file, precision (kg = initial value)
   std::filesystem::path observations;
   std::filesystem::path out_dir;
   std::vector<std::string> fit = {"kg", "reg"};  ///< names to fit ("reg" = all four reg.*)
-  std::map<std::string, double> fix;     ///< fixed values
-  std::map<std::string, double> initial; ///< starting values
+  std::map<std::string, double> fix;             ///< fixed values
+  std::map<std::string, double> initial;         ///< starting values
   std::map<std::string, std::pair<double, double>> bounds;
   double cycles_per_photo = verify::kDefaultCyclesPerPhoto;  ///< initial / fixed K
   double first_cycle = 0;
-  double holdout = 0;                    ///< fraction of the last frames kept out of the fit
-  double volume_weight = 0;              ///< > 0: fit the manifest's mass/volume series too
+  double holdout = 0;        ///< fraction of the last frames kept out of the fit
+  double volume_weight = 0;  ///< > 0: fit the manifest's mass/volume series too
   verify::FitOptions fit_options;
   int overlay_every = 10;
   bool overwrite = false;

@@ -35,11 +35,11 @@ struct ManufactureOptions {
   double voxel_mm = 2.5;                ///< solver grid spacing
   sim::physics::IceMeltParams physics;  ///< air 30 °C, ice -10 °C, ground contact, ...
   int width = 1024, height = 768;
-  double camera_height_m = 0.8;         ///< camera above the ground, looking down
-  double fill = 0.6;                    ///< fraction of the image the object spans
+  double camera_height_m = 0.8;  ///< camera above the ground, looking down
+  double fill = 0.6;             ///< fraction of the image the object spans
   render::IcePhotoOptions photo;
   int jpeg_quality = 90;
-  int mesh_every = 10;                  ///< write the ice surface every K-th photo (0 = never)
+  int mesh_every = 10;  ///< write the ice surface every K-th photo (0 = never)
   std::uint64_t seed = 1;
   std::filesystem::path out_dir;
   bool overwrite = false;

@@ -39,8 +39,8 @@ namespace meltlab::experiments {
 
 struct ReproduceStep {
   std::string name;
-  std::string kind;               ///< "meltlab" or "python"
-  std::vector<std::string> args;  ///< after variable substitution (python: script first, absolute)
+  std::string kind;                   ///< "meltlab" or "python"
+  std::vector<std::string> args;      ///< after variable substitution (python: script first, absolute)
   std::filesystem::path stdout_file;  ///< empty: ${out}/logs/<name>.out
 };
 
@@ -52,10 +52,10 @@ struct ReproduceExperiment {
   std::filesystem::path out_dir;
   std::vector<std::filesystem::path> hashed_files;  ///< inputs, scripts and file arguments
   std::vector<ReproduceStep> steps;
-  std::string hash;  ///< hex content hash (config, mode, hashed files, meltlab version)
-  bool exclusive = false;  ///< run alone (timing measurements), before the others
+  std::string hash;                                 ///< hex content hash (config, mode, hashed files, meltlab version)
+  bool exclusive = false;                           ///< run alone (timing measurements), before the others
   std::vector<std::string> modes{"quick", "full"};  ///< the modes it runs in
-  bool in_mode = true;     ///< runs in the mode of this invocation
+  bool in_mode = true;                              ///< runs in the mode of this invocation
 };
 
 struct ReproduceOptions {
@@ -67,8 +67,8 @@ struct ReproduceOptions {
   bool quick = false;
   std::vector<std::string> only;  ///< empty: all
   int jobs = 2;
-  bool force = false;   ///< run even if a finished folder with the same hash exists
-  bool report = true;   ///< run report/build_report.py at the end
+  bool force = false;  ///< run even if a finished folder with the same hash exists
+  bool report = true;  ///< run report/build_report.py at the end
 };
 
 /// Loads and validates the configs of `options.config_dirs` (and `only`), substitutes the

@@ -11,13 +11,13 @@
 namespace meltlab::experiments {
 
 struct SequenceManifest {
-  std::string comment;                ///< first line, after "# "
+  std::string comment;  ///< first line, after "# "
   std::string object;
   double interval_s = 40;
   render::Camera camera;
-  std::string ground_truth;           ///< relative path
-  std::string mass_series;            ///< relative path
-  std::vector<std::string> images;    ///< relative paths
+  std::string ground_truth;         ///< relative path
+  std::string mass_series;          ///< relative path
+  std::vector<std::string> images;  ///< relative paths
 };
 
 /// Writes DIR/manifest.yaml atomically (the marker of a complete sequence: write it last).

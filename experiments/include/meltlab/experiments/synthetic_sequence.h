@@ -28,7 +28,7 @@
 namespace meltlab::experiments {
 
 struct SyntheticSequenceOptions {
-  SimulateOptions simulation;            ///< mesh and melt coefficients (out_dir unused)
+  SimulateOptions simulation;  ///< mesh and melt coefficients (out_dir unused)
   int photos = 100;
   double cycles_per_photo = verify::kDefaultCyclesPerPhoto;
   double interval_s = 40.0;              ///< §8.2: a photo every 40 s
@@ -37,9 +37,9 @@ struct SyntheticSequenceOptions {
   double fill = 0.6;                     ///< default camera: fraction of the image the mesh spans
   verify::Similarity2D misalignment;     ///< photo = misalignment(render), e.g. a camera shift
   std::uint64_t seed = 1;
-  double noise_sigma = 3.0;              ///< sensor noise, 8-bit levels
-  double blur_sigma_px = 1.0;            ///< lens blur
-  int jpeg_quality = 92;                 ///< 0 writes PNG instead
+  double noise_sigma = 3.0;    ///< sensor noise, 8-bit levels
+  double blur_sigma_px = 1.0;  ///< lens blur
+  int jpeg_quality = 92;       ///< 0 writes PNG instead
   std::filesystem::path out_dir;
   bool overwrite = false;
   std::vector<std::string> command_line;  ///< argv, recorded in the provenance of truth/truth.json

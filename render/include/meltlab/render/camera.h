@@ -33,9 +33,9 @@ using Vec3d = Eigen::Vector3d;
 ///   u = (x - centre_x) * pixels_per_unit + (width - 1) / 2
 ///   v = -(y - centre_y) * pixels_per_unit + (height - 1) / 2
 struct OrthographicTopDown {
-  int width = 2048, height = 1536;  ///< the monograph's Coolpix 995 resolution
+  int width = 2048, height = 1536;   ///< the monograph's Coolpix 995 resolution
   double pixels_per_unit = 10000.0;  ///< 10 px/mm for meshes in metres
-  Vec2d centre = Vec2d::Zero();     ///< world (x, y) at the image centre, mesh units
+  Vec2d centre = Vec2d::Zero();      ///< world (x, y) at the image centre, mesh units
 
   /// pixels_per_mm with meshes in metres (mesh unit = 1 m): pixels_per_unit = 1000 * px/mm.
   static OrthographicTopDown from_pixels_per_mm(int width, int height, double pixels_per_mm, const Vec2d& centre_m);
@@ -46,7 +46,7 @@ struct OrthographicTopDown {
 struct Pinhole {
   int width = 2048, height = 1536;
   double fx = 2000, fy = 2000, cx = 1023.5, cy = 767.5;  ///< pixels
-  std::array<double, 5> distortion{0, 0, 0, 0, 0};      ///< k1 k2 p1 p2 k3
+  std::array<double, 5> distortion{0, 0, 0, 0, 0};       ///< k1 k2 p1 p2 k3
   Eigen::Isometry3d camera_from_world = Eigen::Isometry3d::Identity();
 
   bool distorted() const;
@@ -82,7 +82,7 @@ double ground_units_per_pixel(const Camera& c);
 struct CameraRay {
   Vec3d origin = Vec3d::Zero();
   Vec3d direction = Vec3d(0, 0, -1);  ///< unit length
-  bool ok = true;  ///< false where a distorted pinhole's undistortion does not converge
+  bool ok = true;                     ///< false where a distorted pinhole's undistortion does not converge
 
   /// The point `distance` (world units) along the ray.
   Vec3d at(double distance) const { return origin + distance * direction; }

@@ -45,40 +45,40 @@ enum class SpecularTerm {
 struct IceMaterial {
   IceModel model = IceModel::kMonograph;
   double ca = 0.08, cd = 0.25, cs = 0.6, n_spec = 60;  ///< ambient, diffuse, specular, exponent
-  double cr = 1.0;                                       ///< environment reflection share (× F)
-  double ct = 1.0;                                       ///< transmission share (× (1 - F))
-  FresnelMode fresnel = FresnelMode::kFull;              ///< `fresnel_mode`
+  double cr = 1.0;                                     ///< environment reflection share (× F)
+  double ct = 1.0;                                     ///< transmission share (× (1 - F))
+  FresnelMode fresnel = FresnelMode::kFull;            ///< `fresnel_mode`
   SpecularTerm specular = SpecularTerm::kRsV;
-  bool dispersion = true;                                ///< three refraction directions (Eq. 6.8)
-  double eta = kIceEta;                                  ///< used when dispersion is off
-  std::array<double, 3> eta_rgb = kIceEtaRgb;            ///< ice indices per channel
-  double texture_scale = 0.0;     ///< milky-ice feature size, mesh units; 0 = 5 % of the object's size
+  bool dispersion = true;                      ///< three refraction directions (Eq. 6.8)
+  double eta = kIceEta;                        ///< used when dispersion is off
+  std::array<double, 3> eta_rgb = kIceEtaRgb;  ///< ice indices per channel
+  double texture_scale = 0.0;                  ///< milky-ice feature size, mesh units; 0 = 5 % of the object's size
   /// Non-empty: tdiff from this image instead of the milky ice, projected along the dominant
   /// axis of the geometric normal (as the normal map) with period `texture_tile`.
   std::filesystem::path texture_file;
-  double texture_tile = 0.0;      ///< ice texture image period, mesh units; 0 = 20 % of the object's size
-  bool normal_map = false;        ///< Eq. 6.12 (replaces the normal; triplanar, see integrator/ice_surface.h)
-  double normal_map_tile = 0.0;   ///< normal-map period, mesh units; 0 = 20 % of the object's size
+  double texture_tile = 0.0;     ///< ice texture image period, mesh units; 0 = 20 % of the object's size
+  bool normal_map = false;       ///< Eq. 6.12 (replaces the normal; triplanar, see integrator/ice_surface.h)
+  double normal_map_tile = 0.0;  ///< normal-map period, mesh units; 0 = 20 % of the object's size
   double normal_map_bump = 1.0;
   std::filesystem::path normal_map_file;  ///< non-empty: the normal map (rgb = N/2 + ½) read from this image
   /// Physical model: Beer absorption per mesh unit, per channel (clear ice absorbs red most).
   std::array<double, 3> absorption{0.6, 0.25, 0.15};
-  int max_internal_bounces = 6;   ///< physical model: internal reflections followed
+  int max_internal_bounces = 6;  ///< physical model: internal reflections followed
 };
 
 struct GroundMaterial {
-  std::optional<double> z;        ///< ground plane height, mesh units (`ground_z`); unset = the mesh's lowest point
-  double tile = 0.0;              ///< ground texture period, mesh units; 0 = 50 % of the object's size
+  std::optional<double> z;  ///< ground plane height, mesh units (`ground_z`); unset = the mesh's lowest point
+  double tile = 0.0;        ///< ground texture period, mesh units; 0 = 50 % of the object's size
   double ca = 0.25, cd = 0.75, cs = 0.3, n_spec = 30;  ///< Phong (Eq. 2.13) of the substrate
-  bool textured = true;           ///< false: tdiff = 1 (a plain substrate)
-  std::filesystem::path texture_file;  ///< non-empty: the diffuse texture tdiff read from this image
+  bool textured = true;                                ///< false: tdiff = 1 (a plain substrate)
+  std::filesystem::path texture_file;                  ///< non-empty: the diffuse texture tdiff read from this image
   // Liquid (Eq. 7.14-7.17); monograph values.
-  double a = 0.6;                 ///< wet darkening exponent factor
-  double cr = 0.2;                ///< water environment reflection
+  double a = 0.6;                     ///< wet darkening exponent factor
+  double cr = 0.2;                    ///< water environment reflection
   double tilt_s = 0.7, tilt_t = 0.7;  ///< rim normal tilt (Eq. 7.3's cs, ct)
-  double d = 0.1;                 ///< film refraction offset, in texture periods (Eq. 7.5)
-  bool rs_uses_n_star = true;     ///< `Rs_uses_N_star`: specular with N* as the text says
-  bool liquid = true;             ///< shade the liquid mask when one is given
+  double d = 0.1;                     ///< film refraction offset, in texture periods (Eq. 7.5)
+  bool rs_uses_n_star = true;         ///< `Rs_uses_N_star`: specular with N* as the text says
+  bool liquid = true;                 ///< shade the liquid mask when one is given
 };
 
 struct RenderOutputs {
@@ -93,8 +93,8 @@ enum class TextureFilter {
 };
 
 struct RenderScene {
-  std::optional<Camera> camera;   ///< unset: framed automatically on the mesh (auto_camera)
-  int width = 640, height = 480;  ///< for the automatic camera
+  std::optional<Camera> camera;                             ///< unset: framed automatically on the mesh (auto_camera)
+  int width = 640, height = 480;                            ///< for the automatic camera
   TextureFilter texture_filter = TextureFilter::kBilinear;  ///< `texture_filter: bilinear|mipmap`
   std::vector<DirectionalLight> lights{DirectionalLight{}};
   IceMaterial ice;

@@ -35,13 +35,13 @@ enum class DepositBlend {
 };
 
 struct LiquidMaskParams {
-  int width = 256, height = 256;          ///< texels (`mask_resolution`)
+  int width = 256, height = 256;                     ///< texels (`mask_resolution`)
   Eigen::Vector2d origin = Eigen::Vector2d::Zero();  ///< world (x, y) of texel (0, 0)'s lower-left corner
-  double texel_size = 1.0;                ///< h, mesh units per texel (square texels)
-  double far_fraction = 0.10;             ///< `deposit_far_fraction`: slab height / object thickness
-  float deposit_value = 1.0f;             ///< `deposit_value`
-  DepositBlend blend = DepositBlend::kOverwrite;  ///< `deposit_blend`
-  float threshold = 0.5f;                 ///< p (Eq. 7.7) when no threshold texture is set (`p_threshold`)
+  double texel_size = 1.0;                           ///< h, mesh units per texel (square texels)
+  double far_fraction = 0.10;                        ///< `deposit_far_fraction`: slab height / object thickness
+  float deposit_value = 1.0f;                        ///< `deposit_value`
+  DepositBlend blend = DepositBlend::kOverwrite;     ///< `deposit_blend`
+  float threshold = 0.5f;                            ///< p (Eq. 7.7) when no threshold texture is set (`p_threshold`)
 
   /// Throws InputError naming the field on a bad value.
   void validate() const;

@@ -59,10 +59,10 @@ enum class MergeMode {
 enum class Execution { kSerial, kParallel };
 
 struct MeltParams {
-  double kg = 1.0;   ///< global rate coefficient, in [0, 1] (ambient temperature)
-  double kE = 0.0;   ///< weight of M_E, mesh units per cycle (M_E is a mean of unit vectors)
-  double kN = 0.0;   ///< weight of M_N, mesh units per cycle; the monograph uses kE ≈ 100 kN
-  double kr = 0.0;   ///< minimum edge length, mesh units (Eq. 3.7)
+  double kg = 1.0;  ///< global rate coefficient, in [0, 1] (ambient temperature)
+  double kE = 0.0;  ///< weight of M_E, mesh units per cycle (M_E is a mean of unit vectors)
+  double kN = 0.0;  ///< weight of M_N, mesh units per cycle; the monograph uses kE ≈ 100 kN
+  double kr = 0.0;  ///< minimum edge length, mesh units (Eq. 3.7)
   DeformMode deform = DeformMode::kCombined;
   TieRule tie = TieRule::kLessEqual;
   EdgeSumMode edge_sum = EdgeSumMode::kMean;
@@ -90,22 +90,23 @@ MeltParams relative_melt_params(const IndexedMesh& mesh, double ke_rel = 0.05, d
 
 /// What one cycle did.
 struct CycleReport {
-  std::int64_t merged_vertices = 0;       ///< Alg. 2: vertices merged into another
-  std::int64_t degenerate_triangles = 0;  ///< Alg. 2: triangles deleted for a repeated index
-  std::int64_t glued_triangles = 0;       ///< Alg. 3: triangles on a vertex with count 2
-  std::int64_t glued_vertices = 0;        ///< Alg. 3: vertices with count 2
-  std::int64_t orphan_vertices = 0;       ///< vertices left without triangles, deleted
-  std::int64_t repair_glued_pairs = 0;    ///< repair: glued pairs Alg. 3's count test missed
-  std::int64_t repair_edge_collapses = 0; ///< repair: non-manifold edges collapsed
-  std::int64_t repair_vertex_splits = 0;  ///< repair: extra vertices created by splitting pinches
+  std::int64_t merged_vertices = 0;         ///< Alg. 2: vertices merged into another
+  std::int64_t degenerate_triangles = 0;    ///< Alg. 2: triangles deleted for a repeated index
+  std::int64_t glued_triangles = 0;         ///< Alg. 3: triangles on a vertex with count 2
+  std::int64_t glued_vertices = 0;          ///< Alg. 3: vertices with count 2
+  std::int64_t orphan_vertices = 0;         ///< vertices left without triangles, deleted
+  std::int64_t repair_glued_pairs = 0;      ///< repair: glued pairs Alg. 3's count test missed
+  std::int64_t repair_edge_collapses = 0;   ///< repair: non-manifold edges collapsed
+  std::int64_t repair_vertex_splits = 0;    ///< repair: extra vertices created by splitting pinches
   std::int64_t inverted_parts_removed = 0;  ///< parts with volume <= 0 deleted (remnant check)
-  std::int64_t live_vertices = 0;         ///< after the cycle
-  std::int64_t live_triangles = 0;        ///< after the cycle
+  std::int64_t live_vertices = 0;           ///< after the cycle
+  std::int64_t live_triangles = 0;          ///< after the cycle
   /// Wall time of each pass, milliseconds: Alg. 1, Alg. 2, Alg. 3, repair.
   double deform_ms = 0, collapse_ms = 0, glued_ms = 0, repair_ms = 0;
   bool compacted = false;  ///< the arrays were compacted at the end of this cycle
   bool topology_changed() const {
-    return repair_vertex_splits > 0 || repair_edge_collapses > 0 || repair_glued_pairs > 0 || inverted_parts_removed > 0;
+    return repair_vertex_splits > 0 || repair_edge_collapses > 0 || repair_glued_pairs > 0 ||
+           inverted_parts_removed > 0;
   }
 };
 

@@ -32,12 +32,12 @@ struct LoadReport {
   std::size_t welded_vertices = 0;
   std::size_t unreferenced_vertices = 0;
   std::size_t degenerate_faces = 0;
-  EulerCounts file_counts;               ///< Eq. 2.3 counts of the welded polygon mesh
-  std::vector<std::string> repairs;      ///< what --repair changed (empty if nothing)
+  EulerCounts file_counts;           ///< Eq. 2.3 counts of the welded polygon mesh
+  std::vector<std::string> repairs;  ///< what --repair changed (empty if nothing)
 };
 
 struct LoadedMesh {
-  IndexedMesh mesh;     ///< triangulated, welded, validated (closed, manifold, oriented) unless !validate
+  IndexedMesh mesh;      ///< triangulated, welded, validated (closed, manifold, oriented) unless !validate
   PolygonMesh polygons;  ///< welded polygons as in the file (for Tab. 2.3-style counts)
   LoadReport report;
 };

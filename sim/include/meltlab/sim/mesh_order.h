@@ -17,7 +17,7 @@ namespace meltlab::sim {
 
 struct Reordered {
   IndexedMesh mesh;
-  std::vector<Index> new_from_old_vertex;  ///< new index of every input vertex
+  std::vector<Index> new_from_old_vertex;    ///< new index of every input vertex
   std::vector<Index> old_from_new_triangle;  ///< input index of every output triangle
 };
 

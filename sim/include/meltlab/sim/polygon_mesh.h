@@ -27,8 +27,8 @@ struct PolygonMesh {
 /// Result of welding: the mesh with duplicate vertices merged and the count merged.
 struct WeldResult {
   PolygonMesh mesh;
-  std::size_t merged_vertices = 0;      ///< vertices removed as duplicates
-  std::size_t unreferenced_removed = 0;  ///< vertices used by no face, dropped
+  std::size_t merged_vertices = 0;           ///< vertices removed as duplicates
+  std::size_t unreferenced_removed = 0;      ///< vertices used by no face, dropped
   std::size_t degenerate_faces_removed = 0;  ///< faces left with < 3 distinct corners
 };
 

@@ -22,13 +22,13 @@ double triangle_twist_deg(const Vec3<double>& a, const Vec3<double>& b, const Ve
 double triangle_quality(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c);
 
 struct QualityReport {
-  double Qs = 0;            ///< mean twist, degrees (Eq. 2.6)
-  double Qd = 0;            ///< mean dihedral measure, degrees (Eq. 2.7)
-  double Qq = 0;            ///< mean triangle quality (Eq. 2.8)
-  double max_d = 0;         ///< largest dihedral measure, degrees
-  double min_q = 0;         ///< worst triangle quality
-  double volume = 0;        ///< enclosed volume (divergence theorem), mesh units³
-  double area = 0;          ///< surface area, mesh units²
+  double Qs = 0;      ///< mean twist, degrees (Eq. 2.6)
+  double Qd = 0;      ///< mean dihedral measure, degrees (Eq. 2.7)
+  double Qq = 0;      ///< mean triangle quality (Eq. 2.8)
+  double max_d = 0;   ///< largest dihedral measure, degrees
+  double min_q = 0;   ///< worst triangle quality
+  double volume = 0;  ///< enclosed volume (divergence theorem), mesh units³
+  double area = 0;    ///< surface area, mesh units²
   Vec3<double> bbox_min = Vec3<double>::Zero();
   Vec3<double> bbox_max = Vec3<double>::Zero();
   double mean_edge_length = 0;  ///< over undirected edges, mesh units

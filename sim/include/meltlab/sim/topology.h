@@ -19,33 +19,33 @@ namespace meltlab::sim {
 
 struct EulerCounts {
   std::int64_t V = 0, E = 0, F = 0, H = 0, S = 0, G = 0;
-  std::int64_t chi = 0;        ///< Eq. 2.3 with the derived G (0 when the counts are consistent)
-  bool genus_valid = true;     ///< false if (V - E + F - H) is odd or G < 0 in some component
+  std::int64_t chi = 0;     ///< Eq. 2.3 with the derived G (0 when the counts are consistent)
+  bool genus_valid = true;  ///< false if (V - E + F - H) is odd or G < 0 in some component
 };
 
 /// One problem found by the manifold check, named by mesh indices.
 struct TopologyProblem {
   enum class Kind {
-    kBoundaryEdge,         ///< edge used by one face only (open mesh)
-    kNonManifoldEdge,      ///< edge used by more than two faces
+    kBoundaryEdge,             ///< edge used by one face only (open mesh)
+    kNonManifoldEdge,          ///< edge used by more than two faces
     kInconsistentOrientation,  ///< edge used twice in the same direction
-    kNonManifoldVertex,    ///< vertex whose faces form more than one fan
-    kLowValence,           ///< vertex on fewer than 3 faces
-    kDegenerateFace,       ///< face with a repeated vertex
-    kOrphanVertex,         ///< live vertex that no live face uses (TriMesh only)
-    kDeadVertexReference,  ///< live face using a deleted vertex (TriMesh only)
+    kNonManifoldVertex,        ///< vertex whose faces form more than one fan
+    kLowValence,               ///< vertex on fewer than 3 faces
+    kDegenerateFace,           ///< face with a repeated vertex
+    kOrphanVertex,             ///< live vertex that no live face uses (TriMesh only)
+    kDeadVertexReference,      ///< live face using a deleted vertex (TriMesh only)
   };
   Kind kind;
-  Index a = -1, b = -1;   ///< the vertex (a) or edge (a, b)
-  int count = 0;          ///< faces on the edge / fans at the vertex / faces at the vertex
+  Index a = -1, b = -1;          ///< the vertex (a) or edge (a, b)
+  int count = 0;                 ///< faces on the edge / fans at the vertex / faces at the vertex
   std::string describe() const;  ///< e.g. "non-manifold edge (v12, v40) shared by 3 faces"
 };
 
 struct TopologyReport {
   EulerCounts counts;
-  bool closed = true;      ///< no boundary edges
-  bool manifold = true;    ///< every edge has 2 faces, every vertex one fan
-  bool oriented = true;    ///< every edge used once in each direction
+  bool closed = true;    ///< no boundary edges
+  bool manifold = true;  ///< every edge has 2 faces, every vertex one fan
+  bool oriented = true;  ///< every edge used once in each direction
   std::int64_t boundary_edges = 0;
   std::int64_t nonmanifold_edges = 0;
   std::int64_t nonmanifold_vertices = 0;

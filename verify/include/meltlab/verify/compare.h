@@ -49,23 +49,23 @@ struct CompareOptions {
   RegistrationMode registration = RegistrationMode::kFirstFrame;
   RegistrationOptions registration_options;
   Similarity2D given_registration;
-  int supersample = 4;   ///< of the rendered silhouette used for the exact (polygon) P
-  bool exact = true;     ///< also compute P from sub-pixel polygons with CGAL
+  int supersample = 4;           ///< of the rendered silhouette used for the exact (polygon) P
+  bool exact = true;             ///< also compute P from sub-pixel polygons with CGAL
   std::int64_t last_cycle = -1;  ///< frames mapped beyond this cycle are skipped (-1: no limit)
 };
 
 struct FrameResult {
-  int frame = 0;             ///< 0-based index in the sequence
-  std::string image;         ///< file name
+  int frame = 0;      ///< 0-based index in the sequence
+  std::string image;  ///< file name
   std::optional<double> time_s;
   std::int64_t cycle = 0;
-  std::string status = "ok"; ///< ok | missing | unreadable | empty_photo | beyond_run
-  std::string note;          ///< why a frame was skipped
-  AreaComparison pixels;     ///< S_A, S_B, S_I, P, IoU, Dice on pixel counts
+  std::string status = "ok";  ///< ok | missing | unreadable | empty_photo | beyond_run
+  std::string note;           ///< why a frame was skipped
+  AreaComparison pixels;      ///< S_A, S_B, S_I, P, IoU, Dice on pixel counts
   std::optional<double> P_exact;
   ContourDistances distances_px;
-  double mm_per_px = 0;      ///< at the ground plane (0 if unknown)
-  Similarity2D registration; ///< render -> photo transform used
+  double mm_per_px = 0;       ///< at the ground plane (0 if unknown)
+  Similarity2D registration;  ///< render -> photo transform used
   double render_area_px = 0;
   double photo_area_px = 0;
 };
@@ -85,7 +85,8 @@ struct FrameImages {
 
 /// Runs the comparison. `on_frame` (optional) is called after every frame with its result
 /// and masks (e.g. to write overlays and show progress).
-CompareResult compare_sequence(const ObservationSequence& observations, sim::MeshSequence& meshes, const CompareOptions& options,
+CompareResult compare_sequence(const ObservationSequence& observations, sim::MeshSequence& meshes,
+                               const CompareOptions& options,
                                const std::function<void(const FrameResult&, const FrameImages&)>& on_frame = {});
 
 /// The overlay of the monograph's Fig. 8.12: photo only dark grey, render only black,

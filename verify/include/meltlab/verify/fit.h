@@ -49,7 +49,7 @@ struct FitParameter {
   double initial = 0;
   double lower = -std::numeric_limits<double>::infinity();
   double upper = std::numeric_limits<double>::infinity();
-  double scale = 1;    ///< characteristic size: the solver works in units of `scale`
+  double scale = 1;  ///< characteristic size: the solver works in units of `scale`
   bool fixed = false;
 };
 
@@ -64,18 +64,18 @@ class FitModel {
 };
 
 struct FitOptions {
-  int photo_samples = 48;          ///< N_p points per photo contour
-  int render_samples = 48;         ///< N_r points per rendered contour
-  int supersample = 4;             ///< k of the rendered coverage
-  double step_fraction = 0.25;     ///< central-difference step = step_fraction * scale
-  double huber_px = 2.0;           ///< per-photo robust loss: RMS residual above which a photo is down-weighted
-  double margin_px = 40;           ///< rendered window around the photo's object
+  int photo_samples = 48;       ///< N_p points per photo contour
+  int render_samples = 48;      ///< N_r points per rendered contour
+  int supersample = 4;          ///< k of the rendered coverage
+  double step_fraction = 0.25;  ///< central-difference step = step_fraction * scale
+  double huber_px = 2.0;        ///< per-photo robust loss: RMS residual above which a photo is down-weighted
+  double margin_px = 40;        ///< rendered window around the photo's object
   int max_iterations = 40;
   double first_cycle = 0;
-  std::vector<double> kg_scan;     ///< factors of kg's initial value tried first (empty = no scan)
-  double volume_weight = 0;        ///< weight of the volume residuals (0 = not used)
-  std::vector<int> frames;         ///< frames (0-based) to fit; empty = all readable
-  bool initial_registration = true;  ///< start free reg.* parameters from register_masks on the first photo
+  std::vector<double> kg_scan;                  ///< factors of kg's initial value tried first (empty = no scan)
+  double volume_weight = 0;                     ///< weight of the volume residuals (0 = not used)
+  std::vector<int> frames;                      ///< frames (0-based) to fit; empty = all readable
+  bool initial_registration = true;             ///< start free reg.* parameters from register_masks on the first photo
   std::function<void(const std::string&)> log;  ///< one line per event (scan, iteration)
 };
 
@@ -94,16 +94,16 @@ struct FitResult {
   std::vector<std::vector<double>> correlation;  ///< free x free, empty if not computable
   double initial_cost = 0, final_cost = 0;
   int iterations = 0;
-  int simulations = 0;            ///< model evaluations (each a full simulation + renders)
+  int simulations = 0;  ///< model evaluations (each a full simulation + renders)
   double time_s = 0;
   bool converged = false;
-  std::string message;            ///< Ceres' termination message
+  std::string message;                             ///< Ceres' termination message
   std::vector<std::pair<double, double>> kg_scan;  ///< (kg, cost) of the coarse scan
   std::vector<int> frames_used;
-  std::vector<std::string> frames_refused;         ///< "frame N: reason"
-  std::vector<double> frame_rms_px;                ///< residual RMS per used frame at the optimum
-  double residual_sigma_px = 0;   ///< sqrt(2 cost / (m - n)): scales the covariance
-  Vec2d pivot_px = Vec2d::Zero(); ///< centre of the registration's rotation and scale
+  std::vector<std::string> frames_refused;  ///< "frame N: reason"
+  std::vector<double> frame_rms_px;         ///< residual RMS per used frame at the optimum
+  double residual_sigma_px = 0;             ///< sqrt(2 cost / (m - n)): scales the covariance
+  Vec2d pivot_px = Vec2d::Zero();           ///< centre of the registration's rotation and scale
 
   double value(const std::string& name) const;
   Similarity2D registration() const;
@@ -118,8 +118,9 @@ struct VolumeSeries {
 
 /// Fits. Throws InputError for bad parameters (unknown name, initial outside bounds) or
 /// observations without a usable photo.
-FitResult fit_sequence(const ObservationSequence& observations, FitModel& model, const std::vector<FitParameter>& parameters,
-                       const FitOptions& options, const std::optional<VolumeSeries>& volume = std::nullopt);
+FitResult fit_sequence(const ObservationSequence& observations, FitModel& model,
+                       const std::vector<FitParameter>& parameters, const FitOptions& options,
+                       const std::optional<VolumeSeries>& volume = std::nullopt);
 
 /// The registration of a parameter list (reg.* values; identity for missing ones).
 Similarity2D registration_of(const std::map<std::string, double>& values, const Vec2d& pivot_px);

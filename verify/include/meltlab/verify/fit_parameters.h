@@ -22,10 +22,10 @@ enum class FitParameterRole {
 
 /// What the table needs from the run to size the parameters whose range depends on it.
 struct FitParameterContext {
-  double kg_initial = 0.5;                          ///< the run's starting kg
-  double kE = 1.0;                                  ///< the run's edge coefficient (bounds kn)
-  double kn_initial = 0.01;                         ///< the run's kN (default kE / 100)
-  double cycles_per_photo = kDefaultCyclesPerPhoto; ///< the run's starting K
+  double kg_initial = 0.5;                           ///< the run's starting kg
+  double kE = 1.0;                                   ///< the run's edge coefficient (bounds kn)
+  double kn_initial = 0.01;                          ///< the run's kN (default kE / 100)
+  double cycles_per_photo = kDefaultCyclesPerPhoto;  ///< the run's starting K
 };
 
 /// One registered parameter with its default (starting value), bounds and scale: the size of

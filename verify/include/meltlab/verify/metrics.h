@@ -16,12 +16,12 @@
 namespace meltlab::verify {
 
 struct AreaComparison {
-  double S_A = 0;  ///< photo only (pixels, or px² for exact areas)
-  double S_B = 0;  ///< render only
-  double S_I = 0;  ///< common
-  double P = 0;    ///< Eq. 8.1; defined as 0 when both are empty
-  double IoU = 0;  ///< S_I / (S_A + S_I + S_B) = 1 - P
-  double Dice = 0; ///< 2 S_I / (2 S_I + S_A + S_B)
+  double S_A = 0;   ///< photo only (pixels, or px² for exact areas)
+  double S_B = 0;   ///< render only
+  double S_I = 0;   ///< common
+  double P = 0;     ///< Eq. 8.1; defined as 0 when both are empty
+  double IoU = 0;   ///< S_I / (S_A + S_I + S_B) = 1 - P
+  double Dice = 0;  ///< 2 S_I / (2 S_I + S_A + S_B)
 };
 
 /// Pixel counts of two binary masks of the same size (nonzero = inside). Throws
@@ -36,8 +36,8 @@ AreaComparison compare_coverage(const cv::Mat& photo, const cv::Mat& render);
 AreaComparison compare_regions_exact(const Region& photo, const Region& render);
 
 struct ContourDistances {
-  double hausdorff = 0;       ///< symmetric Hausdorff distance between the boundaries
-  double mean = 0;            ///< mean of the two directed mean distances
+  double hausdorff = 0;  ///< symmetric Hausdorff distance between the boundaries
+  double mean = 0;       ///< mean of the two directed mean distances
   double photo_to_render_max = 0, render_to_photo_max = 0;
   double photo_to_render_mean = 0, render_to_photo_mean = 0;
 };

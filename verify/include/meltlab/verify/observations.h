@@ -38,18 +38,18 @@ struct SegmentationSettings {
   /// Channel to threshold: gray | value (HSV V) | lightness (Lab L) | max (max of R,G,B) |
   /// red | green | blue.
   std::string channel = "value";
-  double threshold = 128;           ///< kGlobal: 0..255 (8-bit scale; float images are scaled)
-  int adaptive_block_px = 101;      ///< kAdaptive: odd neighbourhood size
-  double adaptive_offset = -5;      ///< kAdaptive: C of cv::adaptiveThreshold
-  std::filesystem::path background; ///< kBackground: image of the empty scene
+  double threshold = 128;             ///< kGlobal: 0..255 (8-bit scale; float images are scaled)
+  int adaptive_block_px = 101;        ///< kAdaptive: odd neighbourhood size
+  double adaptive_offset = -5;        ///< kAdaptive: C of cv::adaptiveThreshold
+  std::filesystem::path background;   ///< kBackground: image of the empty scene
   double background_difference = 30;  ///< kBackground: |image - background| > this is object
-  bool object_darker = false;       ///< invert: the object is darker than the ground
-  double blur_sigma_px = 1.0;       ///< Gaussian pre-blur (0 = none)
-  int open_radius_px = 2;           ///< morphological opening (removes specks), 0 = none
-  int close_radius_px = 2;          ///< morphological closing (fills cracks), 0 = none
-  bool largest_component = true;    ///< keep only the largest connected component
-  double min_component_px = 50;     ///< with largest_component = false: drop smaller ones
-  bool fill_holes = false;          ///< false keeps holes (the monograph's contours may have them)
+  bool object_darker = false;         ///< invert: the object is darker than the ground
+  double blur_sigma_px = 1.0;         ///< Gaussian pre-blur (0 = none)
+  int open_radius_px = 2;             ///< morphological opening (removes specks), 0 = none
+  int close_radius_px = 2;            ///< morphological closing (fills cracks), 0 = none
+  bool largest_component = true;      ///< keep only the largest connected component
+  double min_component_px = 50;       ///< with largest_component = false: drop smaller ones
+  bool fill_holes = false;            ///< false keeps holes (the monograph's contours may have them)
   /// The object must stand out: if the mean channel value (|difference| for kBackground) of
   /// the segmented pixels exceeds that of the rest of the ROI by less than this (8-bit
   /// levels), the photo shows no object and the mask is empty. Otsu always splits an image
@@ -59,9 +59,9 @@ struct SegmentationSettings {
 };
 
 struct Frame {
-  int index = 0;                    ///< 0-based position in the sequence
-  std::filesystem::path image;      ///< absolute path
-  std::optional<double> time_s;     ///< seconds since the first frame's reference
+  int index = 0;                 ///< 0-based position in the sequence
+  std::filesystem::path image;   ///< absolute path
+  std::optional<double> time_s;  ///< seconds since the first frame's reference
 };
 
 struct ObservationSequence {
@@ -100,10 +100,10 @@ cv::Mat read_image(const std::filesystem::path& file);
 void write_image(const std::filesystem::path& file, const cv::Mat& image);
 
 struct Segmentation {
-  cv::Mat mask;          ///< CV_8UC1, 0/255, full image size (outside the ROI = 0)
-  cv::Mat probability;   ///< CV_32FC1 in [0, 1]: smoothed foreground indicator for sub-pixel contours
-  Region region;         ///< sub-pixel polygons (with holes) in pixel coordinates
-  double area_px = 0;    ///< pixel count of mask
+  cv::Mat mask;               ///< CV_8UC1, 0/255, full image size (outside the ROI = 0)
+  cv::Mat probability;        ///< CV_32FC1 in [0, 1]: smoothed foreground indicator for sub-pixel contours
+  Region region;              ///< sub-pixel polygons (with holes) in pixel coordinates
+  double area_px = 0;         ///< pixel count of mask
   double threshold_used = 0;  ///< the threshold actually applied (e.g. Otsu's), 8-bit scale
   double contrast = 0;        ///< mean inside minus mean outside (see min_contrast), 8-bit scale
 };
@@ -119,7 +119,7 @@ Segmentation segment_image(const cv::Mat& image, const SegmentationSettings& set
 /// quantity is taken from the header). Rows must have increasing time; NaN/inf, missing
 /// cells and non-numbers are errors naming file and line.
 struct TimeSeries {
-  std::string quantity;   ///< "mass_kg", "mass_g", "volume_m3" or "volume_cm3"
+  std::string quantity;  ///< "mass_kg", "mass_g", "volume_m3" or "volume_cm3"
   std::vector<double> time_s;
   std::vector<double> value;
 };

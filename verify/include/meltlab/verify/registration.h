@@ -35,7 +35,7 @@ struct RegistrationOptions {
   bool allow_scale = true;
   bool allow_rotation = true;
   int max_iterations = 60;
-  double tolerance_px = 1e-3;   ///< ICP stops when the transform moves points less than this
+  double tolerance_px = 1e-3;  ///< ICP stops when the transform moves points less than this
   double ecc_blur_sigma_px = 3.0;
 };
 
@@ -45,7 +45,7 @@ struct RegistrationResult {
   double P_after = 1.0;   ///< P after warping the render with the result
   int iterations = 0;
   bool converged = false;
-  std::string method;     ///< "moments", "moments+icp", "moments+ecc"
+  std::string method;  ///< "moments", "moments+icp", "moments+ecc"
 };
 
 /// Registers `render` onto `photo` (binary CV_8UC1 masks of the same size, nonzero = inside).

@@ -22,10 +22,10 @@
 namespace meltlab::render {
 
 struct MeshHit {
-  double t = 0;             ///< ray parameter (distance for a unit direction), mesh units
-  std::uint32_t prim = 0;   ///< index into the BVH's triangle list
-  double u = 0, v = 0;      ///< barycentrics of vertices 1 and 2
-  Eigen::Vector3d ng;       ///< unit geometric normal, outward (CCW from outside)
+  double t = 0;            ///< ray parameter (distance for a unit direction), mesh units
+  std::uint32_t prim = 0;  ///< index into the BVH's triangle list
+  double u = 0, v = 0;     ///< barycentrics of vertices 1 and 2
+  Eigen::Vector3d ng;      ///< unit geometric normal, outward (CCW from outside)
 };
 
 enum class BvhUpdate { kNone, kRefit, kRebuild };
@@ -64,7 +64,7 @@ class MeshBvh {
   BvhUpdate load(std::vector<float> positions, std::vector<std::uint32_t> index);
   Eigen::Vector3d corner_position(std::uint32_t prim, int k) const;  ///< vertex k (0..2) of triangle prim
   Eigen::Vector3d corner_normal(std::uint32_t prim, int k) const;
-  Eigen::Vector3d interpolated_normal(const MeshHit& hit) const;     ///< not normalised
+  Eigen::Vector3d interpolated_normal(const MeshHit& hit) const;  ///< not normalised
 
   struct Embree;
   std::unique_ptr<Embree> rtc_;

@@ -53,34 +53,34 @@ namespace meltlab::render {
 
 struct IcePhotoOptions {
   // --- ice ---
-  double extinction_per_m = 150.0;  ///< σ at solid fraction 1 (bubbly ice: 5 mm → e^-0.75)
-  double albedo = 0.99;             ///< single-scattering albedo a
+  double extinction_per_m = 150.0;                      ///< σ at solid fraction 1 (bubbly ice: 5 mm → e^-0.75)
+  double albedo = 0.99;                                 ///< single-scattering albedo a
   std::array<double, 3> ice_tint_rgb{0.96, 0.98, 1.0};  ///< multiplies a per channel
-  double hg_g = 0.2;                ///< Henyey–Greenstein asymmetry, in (-1, 1)
+  double hg_g = 0.2;                                    ///< Henyey–Greenstein asymmetry, in (-1, 1)
   // --- light ---
   Vec3d to_lamp = Vec3d(0.35, 0.25, 0.9);  ///< direction towards the (directional) lamp; z > 0; normalised
-  double lamp_irradiance = 1.0;    ///< L: irradiance normal to the beam (relative units)
-  double sky_radiance = 0.25;      ///< uniform ambient radiance (sky, room)
+  double lamp_irradiance = 1.0;            ///< L: irradiance normal to the beam (relative units)
+  double sky_radiance = 0.25;              ///< uniform ambient radiance (sky, room)
   // --- ground ---
   double ground_z_m = 0.0;
-  double ground_albedo = 0.05;     ///< dark absorbent cloth
+  double ground_albedo = 0.05;  ///< dark absorbent cloth
   std::array<double, 3> ground_tint_rgb{1.0, 0.95, 0.9};
-  double ground_texture_contrast = 0.5;  ///< ρ = albedo · (1 + contrast · n(x, y)), n ∈ [-1, 1]
-  double ground_texture_scale_m = 0.003; ///< feature size of the texture (fBm value noise)
+  double ground_texture_contrast = 0.5;   ///< ρ = albedo · (1 + contrast · n(x, y)), n ∈ [-1, 1]
+  double ground_texture_scale_m = 0.003;  ///< feature size of the texture (fBm value noise)
   std::uint64_t ground_seed = 1;
   // --- camera / sensor ---
-  double exposure = 3.0;           ///< linear radiance → [0, 1] sensor scale
-  double gamma = 2.2;              ///< encoding gamma
-  double lens_blur_sigma_px = 0.7; ///< 0 = none
-  double noise_sigma = 2.0;        ///< 8-bit levels, 0 = none
-  std::uint64_t seed = 1;          ///< sensor noise seed
-  int supersample = 1;             ///< k x k stratified samples per pixel
+  double exposure = 3.0;            ///< linear radiance → [0, 1] sensor scale
+  double gamma = 2.2;               ///< encoding gamma
+  double lens_blur_sigma_px = 0.7;  ///< 0 = none
+  double noise_sigma = 2.0;         ///< 8-bit levels, 0 = none
+  std::uint64_t seed = 1;           ///< sensor noise seed
+  int supersample = 1;              ///< k x k stratified samples per pixel
   // --- integrator ---
-  double step_m = 0.0;             ///< primary (and shadow) step; 0 = h/2
+  double step_m = 0.0;  ///< primary (and shadow) step; 0 = h/2
   enum class Shadow { kGrid, kMarch, kNone };
-  Shadow shadow = Shadow::kGrid;   ///< kNone: T_lamp = T_zenith = 1 everywhere
-  double min_transmittance = 1e-5; ///< a ray stops once its transmittance falls below this
-  bool parallel = true;            ///< rows in parallel (TBB); the result is identical either way
+  Shadow shadow = Shadow::kGrid;    ///< kNone: T_lamp = T_zenith = 1 everywhere
+  double min_transmittance = 1e-5;  ///< a ray stops once its transmittance falls below this
+  bool parallel = true;             ///< rows in parallel (TBB); the result is identical either way
   /// Skip blocks of the grid where the ice fraction is 0 (and its trilinear interpolant too) a
   /// block at a time; the samples taken and their values are unchanged, so is the result.
   bool skip_empty_space = true;

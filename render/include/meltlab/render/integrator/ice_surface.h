@@ -12,11 +12,10 @@
 //   cos Θi = N·V, air → ice (1 → η_G, or η without dispersion). The ambient ca is white and added
 //   once; Izr is each light's colour; `specular: RsL` uses the printed (Rs·L)^n. tdiff = milky_ice(p) (solid
 //   procedural texture), or the image `ice.texture_file` projected along the dominant axis of
-//   the geometric normal with period `ice.texture_tile`. The refracted ray is NOT traced: as in the monograph it only looks
-//   the environment up (one refraction at front faces).
-//   Normal map (Eq. 6.12): N = 2(rgb - ½) in a tangent frame; the map is projected along the
-//   dominant axis of the geometric normal (triplanar, `normal_map_space` = tangent, projected
-//   per axis), and its N replaces the surface normal for reflection, refraction and lighting.
+//   the geometric normal with period `ice.texture_tile`. The refracted ray is NOT traced: as in the monograph it only
+//   looks the environment up (one refraction at front faces). Normal map (Eq. 6.12): N = 2(rgb - ½) in a tangent frame;
+//   the map is projected along the dominant axis of the geometric normal (triplanar, `normal_map_space` = tangent,
+//   projected per axis), and its N replaces the surface normal for reflection, refraction and lighting.
 // Ice, physical reference: at the entry, reflection F·(traced reflected ray) and transmission
 // (1 - F) per channel (η per channel if dispersion, else η): the ray is refracted in, traced
 // to the exit through the ice, attenuated by exp(-σ_c·d) (Beer), refracted out with the
@@ -111,7 +110,7 @@ class IceRenderer {
   MeshBvh bvh_;
   const sim::LiquidMask* mask_ = nullptr;
   RgbImage env_, ground_tex_, normal_tex_, ice_tex_;  ///< ice_tex_: empty = the procedural milky ice
-  std::unique_ptr<FilteredTextures> filtered_;  ///< texture_filter: mipmap
+  std::unique_ptr<FilteredTextures> filtered_;        ///< texture_filter: mipmap
   int env_id_ = -1, ground_id_ = -1, normal_id_ = -1, ice_id_ = -1;
   bool sized_ = false;
   double object_size_ = 1.0;

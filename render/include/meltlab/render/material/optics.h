@@ -49,13 +49,13 @@ std::optional<Eigen::Vector3d> refract(const Eigen::Vector3d& incident, const Ei
 /// Ray differentials (the footprints of filtered texture lookups): the first-order change of
 /// reflect(V, N) when V and N change by dV and dN,
 ///   dRe = 2 dN (N·V) + 2N (dN·V + N·dV) - dV.
-Eigen::Vector3d reflect_differential(const Eigen::Vector3d& to_eye, const Eigen::Vector3d& d_to_eye, const Eigen::Vector3d& n,
-                                     const Eigen::Vector3d& dn);
+Eigen::Vector3d reflect_differential(const Eigen::Vector3d& to_eye, const Eigen::Vector3d& d_to_eye,
+                                     const Eigen::Vector3d& n, const Eigen::Vector3d& dn);
 /// ... and of refract(I, N, eta) (not at total internal reflection), with c = N·I,
 /// k = 1 - η²(1 - c²), dc = dN·I + N·dI:
 ///   dT = η dI - (η + η² c / √k) dc N - (η c + √k) dN.
-Eigen::Vector3d refract_differential(const Eigen::Vector3d& incident, const Eigen::Vector3d& d_incident, const Eigen::Vector3d& n,
-                                     const Eigen::Vector3d& dn, double eta);
+Eigen::Vector3d refract_differential(const Eigen::Vector3d& incident, const Eigen::Vector3d& d_incident,
+                                     const Eigen::Vector3d& n, const Eigen::Vector3d& dn, double eta);
 
 /// Chromatic dispersion (Eq. 6.8): the three refracted directions for eta_rgb[c] (each
 /// eta_i/eta_t as in refract); a channel may be nullopt (total internal reflection).

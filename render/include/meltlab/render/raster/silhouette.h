@@ -36,9 +36,9 @@
 namespace meltlab::render {
 
 struct SilhouetteOptions {
-  int supersample = 1;       ///< k: k x k samples per pixel (1 = binary mask from pixel centres)
+  int supersample = 1;         ///< k: k x k samples per pixel (1 = binary mask from pixel centres)
   bool cull_backfaces = true;  ///< closed, outward meshes only; false renders every triangle
-  bool parallel = true;      ///< row bands in parallel (TBB); the result is identical either way
+  bool parallel = true;        ///< row bands in parallel (TBB); the result is identical either way
 };
 
 /// Binary mask of the live triangles of `mesh` seen by `camera` (options.supersample is ignored:

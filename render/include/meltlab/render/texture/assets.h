@@ -52,11 +52,11 @@ enum class EnvironmentLayout { kAuto, kLatLong, kCube3x2, kCube1x6, kCrossHorizo
 struct EnvironmentOptions {
   int width = 512, height = 256;
   Eigen::Vector3d to_sun = Eigen::Vector3d(0.5, -0.4, 0.75);  ///< normalised on use
-  double sun_radiance = 30.0;            ///< the sun disc (≈ 1.5° radius)
+  double sun_radiance = 30.0;                                 ///< the sun disc (≈ 1.5° radius)
   Eigen::Vector3d zenith{0.25, 0.45, 0.95}, horizon{0.85, 0.9, 1.0}, floor{0.18, 0.16, 0.14};
-  double floor_checker = 0.4;            ///< dark squares are floor·(1 - floor_checker)
-  double constant = -1.0;                ///< >= 0: a uniform map of this radiance (a "white furnace")
-  std::filesystem::path file;            ///< non-empty: a lat-long or cube map read from this image instead
+  double floor_checker = 0.4;  ///< dark squares are floor·(1 - floor_checker)
+  double constant = -1.0;      ///< >= 0: a uniform map of this radiance (a "white furnace")
+  std::filesystem::path file;  ///< non-empty: a lat-long or cube map read from this image instead
   EnvironmentLayout layout = EnvironmentLayout::kAuto;  ///< how `file` stores the directions
 };
 /// Lat-long environment: sky gradient, sun disc, bright vertical "windows" just above the

@@ -43,7 +43,8 @@ class FilteredTextures {
   int add(const RgbImage& image, Kind kind, const std::string& name);
 
   /// Filtered lookup of a 2D texture at (s, t) with footprint derivatives (periods per pixel).
-  Eigen::Vector3d texture(int id, double s, double t, const Eigen::Vector2d& dst_dx, const Eigen::Vector2d& dst_dy) const;
+  Eigen::Vector3d texture(int id, double s, double t, const Eigen::Vector2d& dst_dx,
+                          const Eigen::Vector2d& dst_dy) const;
   /// Filtered lookup of a lat-long environment in direction `dir` (any length > 0).
   Eigen::Vector3d environment(int id, const Eigen::Vector3d& dir, const Eigen::Vector3d& ddir_dx,
                               const Eigen::Vector3d& ddir_dy) const;

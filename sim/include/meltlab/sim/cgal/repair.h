@@ -11,7 +11,7 @@
 namespace meltlab::sim {
 
 struct RepairResult {
-  IndexedMesh mesh;                  ///< closed, manifold, consistently oriented (outward)
+  IndexedMesh mesh;  ///< closed, manifold, consistently oriented (outward)
   /// One line per kind of change, in pipeline order, e.g. "merged 16 duplicate points",
   /// "removed 1 duplicate polygon", "cut 1 non-manifold edge", "split 1 non-manifold
   /// vertex", "stitched 3 border edges", "removed 1 part enclosing no volume (1 polygon of

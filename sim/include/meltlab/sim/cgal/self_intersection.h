@@ -13,7 +13,7 @@ namespace meltlab::sim {
 
 struct SelfIntersectionReport {
   bool intersects = false;
-  std::size_t pairs = 0;                        ///< intersecting triangle pairs found (up to the cap)
+  std::size_t pairs = 0;  ///< intersecting triangle pairs found (up to the cap)
   /// The pairs found (all `pairs` of them, so at most max(max_pairs, 1)), as triangle SLOT
   /// indices (i, j) with i <= j, sorted. (t, t) marks a degenerate triangle t (its three
   /// corners are collinear, so it has no plane to test; counted as self-intersecting, as

@@ -94,13 +94,13 @@
 namespace meltlab::sim::physics {
 
 namespace constants {
-inline constexpr double kIceDensity = 917.0;            ///< kg/m³ at 0 °C
-inline constexpr double kLatentHeat = 333.55e3;         ///< J/kg
-inline constexpr double kIceConductivity = 2.22;        ///< W/m/K at 0 °C
-inline constexpr double kIceHeatCapacity = 2.05e3;      ///< J/kg/K
-inline constexpr double kWaterHeatCapacity = 4.18e3;    ///< J/kg/K
-inline constexpr double kWaterConductivity = 0.56;      ///< W/m/K
-inline constexpr double kIceEmissivity = 0.97;          ///< thermal infrared
+inline constexpr double kIceDensity = 917.0;                ///< kg/m³ at 0 °C
+inline constexpr double kLatentHeat = 333.55e3;             ///< J/kg
+inline constexpr double kIceConductivity = 2.22;            ///< W/m/K at 0 °C
+inline constexpr double kIceHeatCapacity = 2.05e3;          ///< J/kg/K
+inline constexpr double kWaterHeatCapacity = 4.18e3;        ///< J/kg/K
+inline constexpr double kWaterConductivity = 0.56;          ///< W/m/K
+inline constexpr double kIceEmissivity = 0.97;              ///< thermal infrared
 inline constexpr double kStefanBoltzmann = 5.670374419e-8;  ///< W/m²/K⁴
 inline constexpr double kZeroCelsiusK = 273.15;
 }  // namespace constants
@@ -201,8 +201,8 @@ class EnthalpySolver {
   double temperature_of(double H, double s) const;
 
   IceMeltParams p_;
-  Grid3<double> H_;   ///< J/m³ of cell
-  Grid3<double> s_;   ///< content fraction
+  Grid3<double> H_;  ///< J/m³ of cell
+  Grid3<double> s_;  ///< content fraction
   // derived, refreshed each step
   std::vector<double> T_, k_, b_;
   std::vector<double> gx_, gy_, gz_;

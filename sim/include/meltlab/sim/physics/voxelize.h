@@ -17,12 +17,12 @@
 namespace meltlab::sim::physics {
 
 struct VoxelizeOptions {
-  double h_m = 2e-3;        ///< cell edge, same units as the mesh (metres for molds)
-  int margin_cells = 2;     ///< empty cells around the mesh's bounding box
+  double h_m = 2e-3;     ///< cell edge, same units as the mesh (metres for molds)
+  int margin_cells = 2;  ///< empty cells around the mesh's bounding box
   /// Put the grid floor exactly at the mesh's lowest z (no margin below): the body then
   /// rests on the solver's ground (layer k = 0). Else the margin applies below too.
   bool floor_at_mesh_bottom = true;
-  int subsamples = 4;       ///< S: rays per cell edge (S² per column cell)
+  int subsamples = 4;  ///< S: rays per cell edge (S² per column cell)
 };
 
 /// Builds a grid around `mesh` and fills it with the volume fraction of each cell.
