@@ -511,8 +511,7 @@ void read_ply_element(PlyBody& body, const PlyElement& e, std::int64_t vertex_co
               fmt::format("{}: truncated or corrupt PLY: element '{}' {} list '{}' ends after {} of {} values", name,
                           e.name, i, prop.name, j, n));
         if (!is_corners) continue;
-        if (!(value >= 0) || (vertex_count >= 0 && value >= static_cast<double>(vertex_count)) ||
-            value != std::floor(value))
+        if (!(value >= 0) || value >= static_cast<double>(vertex_count) || value != std::floor(value))
           throw InputError(
               fmt::format("{}: PLY face {} corner {} is not a vertex index in [0, {})", name, i, value, vertex_count));
         face.outer.push_back(static_cast<Index>(value));
@@ -535,7 +534,9 @@ PolygonMesh read_ply_file(const fs::path& file, std::int64_t file_size) {
   PlyBody body(header.format, std::move(bytes), header.body_start);
 
   PolygonMesh mesh;
-  std::int64_t vertex_count = -1;
+  // No 'vertex' element: no vertex, so every face corner is out of range (and a corner is
+  // never converted to an index before it is checked against the count).
+  std::int64_t vertex_count = 0;
   for (const auto& e : header.elements)
     if (e.name == "vertex") vertex_count = e.count;
   for (const auto& e : header.elements) read_ply_element(body, e, vertex_count, name, mesh);
