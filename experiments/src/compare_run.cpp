@@ -1,6 +1,7 @@
 #include <meltlab/core/run_folder.h>
 #include <meltlab/core/hash.h>
 #include <meltlab/experiments/compare_run.h>
+#include <meltlab/experiments/render_json.h>
 #include <meltlab/experiments/run_replay.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
@@ -173,7 +174,7 @@ CompareRunResult run_compare(const CompareRunOptions& o,
                        {"manifest_hash", file_hash(obs.manifest)},
                        {"object", obs.object},
                        {"frames", obs.frames.size()},
-                       {"camera", json::parse(render::describe_camera_json(obs.camera))}};
+                       {"camera", camera_json(obs.camera)}};
   json mapping;
   if (m.seconds_per_cycle)
     mapping["seconds_per_cycle"] = *m.seconds_per_cycle;

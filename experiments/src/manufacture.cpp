@@ -1,6 +1,7 @@
 #include <meltlab/core/run_folder.h>
 #include <meltlab/core/hash.h>
 #include <meltlab/experiments/manufacture.h>
+#include <meltlab/experiments/render_json.h>
 #include <meltlab/experiments/sequence_manifest.h>
 #include <meltlab/experiments/simulate_run.h>
 #include <meltlab/core/atomic_file.h>
@@ -182,7 +183,7 @@ void manufacture_sequence(const ManufactureOptions& o,
                       {"time_step_s", solver.time_step_s()}};
   truth["energy"] = {
       {"heat_in_J", ledger.heat_in_J()}, {"latent_J", ledger.latent_J}, {"sensible_J", ledger.sensible_J()}};
-  truth["camera"] = json::parse(render::describe_camera_json(camera));
+  truth["camera"] = camera_json(camera);
   truth["photo"] = {{"extinction_per_m", o.photo.extinction_per_m},
                     {"albedo", o.photo.albedo},
                     {"noise_sigma", o.photo.noise_sigma},

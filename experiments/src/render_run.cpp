@@ -2,6 +2,7 @@
 
 #include <meltlab/core/run_folder.h>
 #include <meltlab/experiments/render_run.h>
+#include <meltlab/experiments/render_json.h>
 #include <meltlab/render/integrator/ice_surface.h>
 #include <meltlab/render/texture/assets.h>
 #include <meltlab/core/atomic_file.h>
@@ -215,8 +216,8 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   if (figure) {
     j["liquid_figure_cycles"] = o.figure_cycles;
   } else {
-    j["scene"] = json::parse(render::describe_render_scene_json(renderer->scene()));
-    j["camera"] = json::parse(render::describe_camera_json(renderer->camera()));
+    j["scene"] = render_scene_json(renderer->scene());
+    j["camera"] = camera_json(renderer->camera());
     j["skipped"] = renderer->plan().skipped;
     j["frames"] = result.frames;
     j["median_trace_ms"] = result.median_trace_ms;

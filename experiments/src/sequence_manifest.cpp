@@ -1,4 +1,5 @@
 #include <meltlab/experiments/sequence_manifest.h>
+#include <meltlab/experiments/render_json.h>
 #include <meltlab/core/atomic_file.h>
 
 #include <fmt/format.h>
@@ -15,7 +16,7 @@ void write_sequence_manifest(const std::filesystem::path& dir, const SequenceMan
       << "meltlab_observations: 1\n"
       << "object: " << json(m.object).dump() << "\n"
       << "interval_s: " << fmt::format("{}", m.interval_s) << "\n"
-      << "camera: " << json::parse(render::describe_camera_json(m.camera)).dump() << "\n";
+      << "camera: " << camera_json(m.camera).dump() << "\n";
   if (!m.ground_truth.empty()) out << "ground_truth: " << json(m.ground_truth).dump() << "\n";
   if (!m.mass_series.empty()) out << "mass_series: " << json(m.mass_series).dump() << "\n";
   out << "frames:\n";

@@ -255,23 +255,13 @@ Camera parse_camera(const YAML::Node& node, const std::string& source) {
   return camera;
 }
 
-std::string describe_camera_json(const Camera& c) {
-  // fmt's "{}" prints the shortest decimal that reads back to the same double, so the text
-  // round-trips exactly through parse_camera.
-  if (const auto* o = std::get_if<OrthographicTopDown>(&c)) {
-    return fmt::format(
-        R"({{"type": "orthographic", "width": {}, "height": {}, "pixels_per_unit": {}, "centre": [{}, {}]}})", o->width,
-        o->height, o->pixels_per_unit, o->centre.x(), o->centre.y());
-  }
-  const auto& p = std::get<Pinhole>(c);
-  const Eigen::Matrix4d M = p.camera_from_world.matrix();
-  std::string rows;
-  for (int r = 0; r < 4; ++r)
-    rows += fmt::format("{}[{}, {}, {}, {}]", r ? ", " : "", M(r, 0), M(r, 1), M(r, 2), M(r, 3));
-  return fmt::format(R"({{"type": "pinhole", "width": {}, "height": {}, "fx": {}, "fy": {}, "cx": {}, "cy": {}, )"
-                     R"("distortion": [{}, {}, {}, {}, {}], "camera_from_world": [{}]}})",
-                     p.width, p.height, p.fx, p.fy, p.cx, p.cy, p.distortion[0], p.distortion[1], p.distortion[2],
-                     p.distortion[3], p.distortion[4], rows);
+bool operator==(const OrthographicTopDown& a, const OrthographicTopDown& b) {
+  return a.width == b.width && a.height == b.height && a.pixels_per_unit == b.pixels_per_unit && a.centre == b.centre;
+}
+
+bool operator==(const Pinhole& a, const Pinhole& b) {
+  return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy &&
+         a.distortion == b.distortion && a.camera_from_world.matrix() == b.camera_from_world.matrix();
 }
 
 bool undistort_normalized(const std::array<double, 5>& d, double xd, double yd, double& x_out, double& y_out) {

@@ -203,7 +203,7 @@ TEST(Crop, TheCroppedCameraIsTheFullCameraShiftedByTheWindowCorner) {
 TEST(Crop, AWindowOfTheWholeImageIsTheSameCamera) {
   for (const Camera& c : cameras_of_every_kind()) {
     const Camera same = crop(c, PixelWindow{0, 0, camera_width(c), camera_height(c)});
-    EXPECT_EQ(describe_camera_json(same), describe_camera_json(c));
+    EXPECT_TRUE(same == c);
   }
 }
 
@@ -254,38 +254,6 @@ TEST(CameraYaml, ParsesBothForms) {
   EXPECT_DOUBLE_EQ(p.cy, 239.5);  // defaults to the image centre
   EXPECT_DOUBLE_EQ(p.distortion[0], -0.1);
   EXPECT_DOUBLE_EQ(p.distortion[4], 0.0);
-}
-
-TEST(CameraYaml, DescribeRoundTripsExactly) {
-  Pinhole p = Pinhole::look_at(1600, 1200, 1234.5678, Vec3d(0.31, -0.47, 1.93), Vec3d(0.01, 0.02, 0.0));
-  p.fy = 1240.125;
-  p.cx = 801.3;
-  p.cy = 597.1;
-  p.distortion = {-0.2, 0.07, 1e-3, -2e-4, 0.01};
-  const std::vector<Camera> cams = {OrthographicTopDown::from_pixels_per_mm(2048, 1536, 7.3, Vec2d(0.0123, -0.0456)), p,
-                                    Pinhole{}};
-  for (const Camera& c : cams) {
-    const std::string text = describe_camera_json(c);
-    const Camera back = parse_camera(YAML::Load(text), "round-trip");
-    ASSERT_EQ(back.index(), c.index()) << text;
-    EXPECT_EQ(describe_camera_json(back), text);
-    if (const auto* o = std::get_if<OrthographicTopDown>(&c)) {
-      const auto& q = std::get<OrthographicTopDown>(back);
-      EXPECT_EQ(q.pixels_per_unit, o->pixels_per_unit);  // bitwise: shortest round-trip decimals
-      EXPECT_EQ(q.centre, o->centre);
-      EXPECT_EQ(q.width, o->width);
-      EXPECT_EQ(q.height, o->height);
-    } else {
-      const auto& a = std::get<Pinhole>(c);
-      const auto& q = std::get<Pinhole>(back);
-      EXPECT_EQ(q.fx, a.fx);
-      EXPECT_EQ(q.fy, a.fy);
-      EXPECT_EQ(q.cx, a.cx);
-      EXPECT_EQ(q.cy, a.cy);
-      EXPECT_EQ(q.distortion, a.distortion);
-      EXPECT_EQ(q.camera_from_world.matrix(), a.camera_from_world.matrix());
-    }
-  }
 }
 
 TEST(CameraYaml, ErrorsNameTheSourceAndTheKey) {

@@ -55,6 +55,10 @@ struct Pinhole {
                          const Vec3d& up = Vec3d(0, 1, 0));
 };
 
+/// Equal cameras map every point to the same pixel: every field equal, bit for bit.
+bool operator==(const OrthographicTopDown& a, const OrthographicTopDown& b);
+bool operator==(const Pinhole& a, const Pinhole& b);
+
 using Camera = std::variant<OrthographicTopDown, Pinhole>;
 
 int camera_width(const Camera& c);
@@ -136,7 +140,5 @@ bool undistort_normalized(const std::array<double, 5>& distortion, double xd, do
 Camera parse_camera(const ConfigSection& section);
 /// The same from a YAML node of the file `source`, refusing unknown keys.
 Camera parse_camera(const YAML::Node& node, const std::string& source);
-/// The camera as YAML/JSON text (round-trips through parse_camera).
-std::string describe_camera_json(const Camera& c);
 
 }  // namespace meltlab::render

@@ -115,7 +115,4 @@ RenderScene load_render_scene(const std::string& yaml_file);
 /// from -y), with the whole box in view.
 Pinhole auto_camera(const Vec3d& lower, const Vec3d& upper, int width, int height);
 
-/// The resolved scene as JSON text (every parameter, for run.json).
-std::string describe_render_scene_json(const RenderScene& scene);
-
 }  // namespace meltlab::render
