@@ -19,6 +19,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using test::message_of;
+using test::png_header;
 using test::TempFolder;
 using test::write_file;
 using ::testing::HasSubstr;
@@ -152,21 +153,6 @@ TEST(ImageFiles, AlphaAsStoredOrAssociated) {
 }
 
 // ---- reader errors ----
-
-/// A PNG signature and an IHDR chunk declaring width x height (CRC not checked by the pre-check).
-std::string png_header(std::uint32_t width, std::uint32_t height) {
-  std::string s = "\x89PNG\r\n\x1a\n";
-  auto be32 = [&](std::uint32_t v) {
-    for (int shift = 24; shift >= 0; shift -= 8) s += static_cast<char>((v >> shift) & 0xff);
-  };
-  be32(13);
-  s += "IHDR";
-  be32(width);
-  be32(height);
-  s += std::string("\x08\x02\x00\x00\x00", 5);
-  be32(0);
-  return s;
-}
 
 TEST(ImageFiles, ReaderErrorsAreOneLineNamingTheFile) {
   const TempFolder dir;

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -85,6 +86,22 @@ inline void write_file(const std::filesystem::path& file, const std::string& tex
 inline std::string read_file(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+/// The first bytes of a PNG file: the signature and an IHDR chunk declaring width x height
+/// (CRC not checked by the header pre-check of core/image_header.h).
+inline std::string png_header(std::uint32_t width, std::uint32_t height) {
+  std::string s = "\x89PNG\r\n\x1a\n";
+  auto be32 = [&](std::uint32_t v) {
+    for (int shift = 24; shift >= 0; shift -= 8) s += static_cast<char>((v >> shift) & 0xff);
+  };
+  be32(13);
+  s += "IHDR";
+  be32(width);
+  be32(height);
+  s += std::string("\x08\x02\x00\x00\x00", 5);
+  be32(0);
+  return s;
 }
 
 }  // namespace meltlab::test
