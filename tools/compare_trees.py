@@ -36,7 +36,8 @@ TIMING_COLUMN = re.compile(r"(^ms$|_ms$|_seconds$|^seconds$)")
 
 def strip(value, roots):
     if isinstance(value, dict):
-        return {k: strip(v, roots) for k, v in value.items() if k not in RUN_KEYS and not HASH_KEY.search(k)}
+        return {k: strip(v, roots) for k, v in value.items()
+                if k not in RUN_KEYS and not HASH_KEY.search(k) and not TIMING_COLUMN.search(k)}
     if isinstance(value, list):
         return [strip(v, roots) for v in value]
     if isinstance(value, str):
