@@ -131,12 +131,19 @@ TEST(InputFile, RefusesTextLargerThanTheLimit) {
 
 TEST(ImageHeader, ReadsPngSizeAndRefusesAHugeDeclaredImage) {
   const TempFolder dir;
-  write_file(dir.path() / "small.png", png_header(640, 480));
+  // 640 x 480 RGB at 8 bits: 921600 bytes of samples, which deflate packs into >= 450 bytes.
+  write_file(dir.path() / "small.png", png_header(640, 480) + std::string(450, '\0'));
   const auto size = declared_image_size(dir.path() / "small.png");
   ASSERT_TRUE(size.has_value());
   EXPECT_EQ(size->width, 640);
   EXPECT_EQ(size->height, 480);
+  EXPECT_EQ(size->sample_bytes, 640 * 480 * 3);
   EXPECT_NO_THROW(check_declared_image_size(dir.path() / "small.png"));
+  // The same header alone: 33 bytes cannot hold the samples at any compression (2048:1 at most).
+  write_file(dir.path() / "truncated.png", png_header(640, 480));
+  const std::string truncated = message_of([&] { check_declared_image_size(dir.path() / "truncated.png"); });
+  EXPECT_THAT(truncated, HasSubstr("truncated.png"));
+  EXPECT_THAT(truncated, HasSubstr("at any compression"));
   write_file(dir.path() / "huge.png", png_header(30000, 30000));
   const std::string what = message_of([&] { check_declared_image_size(dir.path() / "huge.png"); });
   EXPECT_THAT(what, HasSubstr("huge.png"));

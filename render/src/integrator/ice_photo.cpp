@@ -556,11 +556,6 @@ double top_of_scene(const IceFraction& ice, double ground_z) { return std::max(i
 
 }  // namespace
 
-double henyey_greenstein(double cos_theta, double g) {
-  const double denom = 1.0 + g * g - 2.0 * g * cos_theta;
-  return (1.0 - g * g) / (4.0 * std::numbers::pi * denom * std::sqrt(denom));
-}
-
 double ground_texture(double x_m, double y_m, double scale_m, std::uint64_t seed) {
   TextureCache cache;
   return ground_texture_impl(x_m, y_m, scale_m, seed, cache);

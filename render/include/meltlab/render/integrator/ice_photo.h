@@ -41,6 +41,7 @@
 // the options; images are BGR (OpenCV order).
 
 #include <meltlab/render/camera.h>
+#include <meltlab/render/integrator/volume_integrator.h>
 #include <meltlab/sim/physics/ice_fraction.h>
 
 #include <opencv2/core.hpp>
@@ -92,9 +93,6 @@ struct IcePhotoOptions {
   /// ~1 cell outside the true one (P ≈ 0.2 at 4 mm voxels).
   double interface_width = 0.1;
 };
-
-/// Normalised Henyey–Greenstein phase function [4.14]: (1/4π)(1 - g²)/(1 + g² - 2g cosθ)^{3/2}.
-double henyey_greenstein(double cos_theta, double g);
 
 /// Relative ground albedo modulation n(x, y) ∈ [-1, 1] (deterministic fBm value noise).
 double ground_texture(double x_m, double y_m, double scale_m, std::uint64_t seed);

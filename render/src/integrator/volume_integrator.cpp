@@ -1,0 +1,858 @@
+// The volume integrator (see integrator/volume_integrator.h).
+
+#include <meltlab/render/integrator/volume_integrator.h>
+
+#include <meltlab/core/error.h>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/blocked_range2d.h>
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace meltlab::render {
+
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+double ms_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+}
+
+std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+bool has_extinction(OpticalModel m) { return m != OpticalModel::kEmission; }
+bool has_source(OpticalModel m) { return m != OpticalModel::kAbsorption; }
+bool has_scatter(OpticalModel m) { return m == OpticalModel::kHG || m == OpticalModel::kHGAttenuated; }
+
+void validate(const Volume& volume, const VolumeRenderSettings& s) {
+  if (volume.empty()) throw InputError("volume render: the volume is empty");
+  auto bad = [](const std::string& what) { throw InputError("volume render: " + what); };
+  if (s.samples < 1) bad(fmt::format("vlr.sampling.n must be >= 1 (got {})", s.samples));
+  if (s.step_rule == StepRule::kFitSegment && !(s.step > 0 && std::isfinite(s.step)))
+    bad("the fit_segment step rule needs sampling.step > 0");
+  if (!(s.kappa >= 0 && std::isfinite(s.kappa))) bad(fmt::format("kappa must be finite and >= 0 (got {})", s.kappa));
+  if (!(s.gamma > 0 && std::isfinite(s.gamma))) bad(fmt::format("gamma must be finite and > 0 (got {})", s.gamma));
+  if (!(s.hg_c > -1 && s.hg_c < 1)) bad(fmt::format("vlr.hg.c must be in (-1, 1) (got {})", s.hg_c));
+  if (!(s.albedo >= 0 && std::isfinite(s.albedo))) bad("vlr.albedo must be finite and >= 0");
+  if (!(s.shadow_step >= 0 && std::isfinite(s.shadow_step))) bad("vlr.shadow.step must be finite and >= 0");
+  if (!(s.shadow_start_offset >= 0 && s.shadow_start_offset <= 1))
+    bad("vlr.shadow.start_offset must be in [0, 1] (a fraction of the shadow step)");
+  if (!(s.shadow_cache_scale > 0 && s.shadow_cache_scale <= 8)) bad("the shadow cache scale must be in (0, 8]");
+  if (!(s.ert_transmittance >= 0 && s.ert_transmittance < 1)) bad("the ERT transmittance must be in [0, 1)");
+  if (s.quadrature == Quadrature::kExponential && !s.emission_scale_by_ds)
+    bad("vlr.emission.scale_by_ds = false needs the inclusive or exclusive quadrature (the exponential rule "
+        "integrates each step)");
+  if (!s.emission.allFinite() || !s.emission_rim.allFinite() || !s.background.allFinite())
+    bad("colours must be finite");
+  for (const auto& l : s.lights) {
+    if (!l.intensity.allFinite() || (l.intensity.array() < 0).any()) bad("light intensities must be finite and >= 0");
+    if (l.type == LightType::kDirectional && !(l.to_light.allFinite() && l.to_light.norm() > 0))
+      bad("a directional light needs a non-zero direction");
+    if (l.type == LightType::kPoint && !l.position.allFinite()) bad("a point light needs a finite position");
+  }
+}
+
+/// Macrocells of kB³ samples for empty-space skipping: a macrocell is live when some sample that
+/// a trilinear stencil located in it may read — the kB + 1 samples from its first, widened by one
+/// sample each side to absorb rounding in locating points — has a value > 0 (values <= 0 count as
+/// empty: e = 0). A point whose stencil's lower corner lies in a dead macrocell has f <= 0 exactly.
+struct Macrocells {
+  static constexpr int kB = 4;
+  int bx = 0, by = 0, bz = 0;
+  std::vector<std::uint8_t> live;  // empty: skipping disabled
+
+  bool enabled() const { return !live.empty(); }
+  bool is_live(int cx, int cy, int cz) const {
+    return live[std::size_t(cx) + std::size_t(bx) * (std::size_t(cy) + std::size_t(by) * std::size_t(cz))] != 0;
+  }
+};
+
+int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+Macrocells build_macrocells(const Volume& v) {
+  Macrocells m;
+  constexpr int B = Macrocells::kB;
+  m.bx = (v.nx() + B - 1) / B;
+  m.by = (v.ny() + B - 1) / B;
+  m.bz = (v.nz() + B - 1) / B;
+  m.live.assign(std::size_t(m.bx) * std::size_t(m.by) * std::size_t(m.bz), 0);
+  auto range = [](int i, int nb, int& lo, int& hi) {
+    lo = std::max(0, floor_div(i - 1 - B, B));
+    hi = std::min(nb - 1, floor_div(i + 1, B));
+  };
+  visit_samples(v, [&](const auto& s) {
+    for (int k = 0; k < v.nz(); ++k)
+      for (int j = 0; j < v.ny(); ++j)
+        for (int i = 0; i < v.nx(); ++i) {
+          if (!(s.at(i, j, k) > 0.0f)) continue;
+          int i0, i1, j0, j1, k0, k1;
+          range(i, m.bx, i0, i1);
+          range(j, m.by, j0, j1);
+          range(k, m.bz, k0, k1);
+          for (int c = k0; c <= k1; ++c)
+            for (int b = j0; b <= j1; ++b)
+              for (int a = i0; a <= i1; ++a)
+                m.live[std::size_t(a) + std::size_t(m.bx) * (std::size_t(b) + std::size_t(m.by) * std::size_t(c))] = 1;
+        }
+    return 0;
+  });
+  return m;
+}
+
+/// One light as the kernel sees it.
+struct LightTerm {
+  LightType type = LightType::kPoint;
+  Vec3 position = Vec3::Zero(), to_light = Vec3::UnitZ();
+  Rgb intensity = Rgb::Ones();
+  bool inverse_square = false;
+  const VolumeSamples<float>* cache = nullptr;  // shadow cache (HGAttenuated, kCache)
+  Vec3 cache_origin = Vec3::Zero(), cache_inv_spacing = Vec3::Ones();
+  bool cache_same_grid = false;
+};
+
+/// The samples of a march along o + t d (unit d), t = t0 + (i + φ) h for i < n (the equal-step
+/// grid of a shadow march or a kFitSegment ray) or t0 + φ h + i h while < t1 (the primary grid of
+/// kDiagonalOverN), with empty macrocells skipped on the same grid.
+template <class T>
+class Sampler {
+ public:
+  Sampler(const VolumeSamples<T>& s, const Volume& v, const Macrocells& m, VolumeAddress address)
+      : s_(s), m_(m), wrap_(address == VolumeAddress::kWrap) {
+    origin_ = v.origin();
+    inv_spacing_ = v.spacing().cwiseInverse();
+    n_[0] = v.nx();
+    n_[1] = v.ny();
+    n_[2] = v.nz();
+  }
+
+  /// The trilinear value at index coordinates g.
+  float value(double gx, double gy, double gz) const {
+    return wrap_ ? s_.trilinear_wrapped(float(gx), float(gy), float(gz))
+                 : s_.trilinear_clamped(float(gx), float(gy), float(gz));
+  }
+
+  /// Calls fn(i, g, f) for the samples i = i_begin .. i_end-1 at t_i = a + i h (a the first
+  /// sample's t) that are not known to be empty: g the index coordinates, f the value (> 0 or
+  /// not: callers test). fn returns false to stop. Returns the number of samples skipped.
+  template <class Fn>
+  std::int64_t march(const Vec3& o, const Vec3& d, double a, double h, std::int64_t i_end, const Fn& fn) const {
+    const Vec3 go = (o - origin_).cwiseProduct(inv_spacing_);
+    const Vec3 gd = d.cwiseProduct(inv_spacing_);
+    const bool skip = m_.enabled() && !wrap_;
+    std::int64_t skipped = 0;
+    constexpr int B = Macrocells::kB;
+    for (std::int64_t i = 0; i < i_end;) {
+      const double t = a + double(i) * h;
+      const double gx = go.x() + t * gd.x(), gy = go.y() + t * gd.y(), gz = go.z() + t * gd.z();
+      if (skip) {
+        const int cx = std::clamp(int(std::floor(gx)), 0, n_[0] - 1) / B;
+        const int cy = std::clamp(int(std::floor(gy)), 0, n_[1] - 1) / B;
+        const int cz = std::clamp(int(std::floor(gz)), 0, n_[2] - 1) / B;
+        if (!m_.is_live(cx, cy, cz)) {
+          // Leave the macrocell: the first sample at or beyond its exit (a dead macrocell is
+          // empty one sample beyond its faces, so the rounding of t_exit does not matter).
+          const int c[3] = {cx, cy, cz}, nb[3] = {m_.bx, m_.by, m_.bz};
+          const double g0[3] = {go.x(), go.y(), go.z()}, gv[3] = {gd.x(), gd.y(), gd.z()};
+          double t_exit = kInf;
+          for (int ax = 0; ax < 3; ++ax) {
+            if (gv[ax] > 0.0) {
+              if (c[ax] + 1 < nb[ax]) t_exit = std::min(t_exit, ((c[ax] + 1) * B - g0[ax]) / gv[ax]);
+            } else if (gv[ax] < 0.0) {
+              if (c[ax] > 0) t_exit = std::min(t_exit, (c[ax] * B - g0[ax]) / gv[ax]);
+            }
+          }
+          const double q = std::ceil((t_exit - a) / h);
+          const std::int64_t next =
+              q >= double(i_end) ? i_end : std::max(i + 1, static_cast<std::int64_t>(std::max(q, 0.0)));
+          skipped += next - i;
+          i = next;
+          continue;
+        }
+      }
+      if (!fn(i, gx, gy, gz, value(gx, gy, gz))) return skipped;
+      ++i;
+    }
+    return skipped;
+  }
+
+ private:
+  VolumeSamples<T> s_;
+  const Macrocells& m_;
+  bool wrap_;
+  Vec3 origin_, inv_spacing_;
+  int n_[3];
+};
+
+/// Everything a render needs that does not change from pixel to pixel.
+template <class S>
+struct Kernel {
+  const Volume& volume;
+  const VolumeRenderSettings& s;
+  Box3 box;
+  double ds = 0;        // primary step (kDiagonalOverN) or the largest step (kFitSegment)
+  double shadow_h = 0;  // shadow step
+  Macrocells macro;
+  Sampler<S> sampler;
+  std::vector<LightTerm> lights;
+  std::vector<VolumeSamples<float>> cache_samples;
+  Vec3 centre;
+  double rim_radius = 1;
+
+  Kernel(const Volume& v, const VolumeRenderSettings& settings, const VolumeSamples<S>& samples, Macrocells m)
+      : volume(v), s(settings), box(v.domain()), macro(std::move(m)), sampler(samples, v, macro, settings.address) {
+    ds = primary_step(v, settings);
+    shadow_h = settings.shadow_step > 0 ? settings.shadow_step : ds;
+    centre = box.centre();
+    rim_radius = 0.5 * box.size().minCoeff();
+  }
+
+  double extinction_weight(float f) const {
+    return s.gamma == 1.0 ? double(f) : std::pow(double(f), s.gamma);
+  }
+
+  /// κ ∫ f^γ from x towards light l (to the box exit, or the light if nearer), midpoint-rule
+  /// sub-steps of equal length <= the shadow step starting at the start offset.
+  double shadow_optical_depth(const Vec3& x, const LightTerm& l, std::int64_t& samples) const {
+    Vec3 dir;
+    double end = kInf;
+    if (l.type == LightType::kDirectional) {
+      dir = l.to_light;
+    } else {
+      dir = l.position - x;
+      end = dir.norm();
+      if (!(end > 0)) return 0.0;
+      dir /= end;
+    }
+    const auto hit = intersect_box(box, x, dir);
+    if (!hit) return 0.0;
+    end = std::min(end, hit->t1);
+    const double start = std::max(0.0, hit->t0);
+    if (!(end > start)) return 0.0;
+    const std::int64_t m = std::max<std::int64_t>(1, std::int64_t(std::ceil((end - start) / shadow_h)));
+    const double h = (end - start) / double(m);
+    double sum = 0;
+    std::int64_t taken = 0;
+    sampler.march(x, dir, start + s.shadow_start_offset * h, h, m, [&](std::int64_t, double, double, double, float f) {
+      ++taken;
+      if (f > 0.0f) sum += extinction_weight(f);
+      return true;
+    });
+    samples += taken;
+    return s.kappa * h * sum;
+  }
+
+  Rgb emission_colour(const Vec3& x) const {
+    if (s.emission_field == EmissionField::kConstant) return s.emission;
+    const double r = std::clamp((x - centre).norm() / rim_radius, 0.0, 1.0);
+    return s.emission * (1.0 - r) + s.emission_rim * r;
+  }
+
+  /// One ray o + t v (unit v), its samples on [t0, t1]. Adds the radiance to I and returns T.
+  double trace(const Vec3& o, const Vec3& v, double t0, double t1, std::uint64_t pixel_id, Rgb& I,
+               VolumeRenderStats& st) const {
+    const OpticalModel model = s.model;
+    const bool extinct = has_extinction(model), source = has_source(model), scatter = has_scatter(model);
+    const bool attenuated = model == OpticalModel::kHGAttenuated;
+    double h = ds;
+    std::int64_t n_max;
+    double offset_fraction = 0;
+    switch (s.first_offset) {
+      case FirstOffset::kZero: offset_fraction = 0; break;
+      case FirstOffset::kHalf: offset_fraction = 0.5; break;
+      case FirstOffset::kJitter:
+        offset_fraction = double(splitmix64(s.jitter_seed ^ splitmix64(pixel_id)) >> 11) * (1.0 / 9007199254740992.0);
+        break;
+    }
+    const double length = t1 - t0;
+    if (s.step_rule == StepRule::kFitSegment) {
+      n_max = std::max<std::int64_t>(1, std::int64_t(std::ceil(length / ds)));
+      h = length / double(n_max);
+    } else {
+      // Samples t0 + (φ + i) h < t1.
+      const double q = (length / h) - offset_fraction;
+      n_max = q > 0 ? std::int64_t(std::ceil(q)) : 0;
+    }
+    const double a = t0 + offset_fraction * h;
+    const double kappa_h = s.kappa * h;
+    const double source_step = s.emission_scale_by_ds ? h : 1.0;
+    const double emission_k = s.kappa_in_source ? s.kappa : 1.0;
+    const double scatter_k = s.albedo * (s.kappa_in_brdf ? s.kappa : 1.0);
+    // Directional lights: the phase and the intensity are the same along the ray.
+    std::array<double, 16> phase_const{};
+    for (std::size_t l = 0; l < lights.size() && l < phase_const.size(); ++l)
+      if (lights[l].type == LightType::kDirectional) phase_const[l] = henyey_greenstein(lights[l].to_light.dot(v), s.hg_c);
+
+    double T = 1.0, ext = 0.0;
+    std::int64_t taken = 0;
+    bool terminated = false;
+    st.skipped += sampler.march(o, v, a, h, n_max, [&](std::int64_t i, double gx, double gy, double gz, float f) {
+      ++taken;
+      if (!(f > 0.0f)) return true;  // e = 0: nothing added, T unchanged (bit for bit)
+      const double e = extinction_weight(f);
+      // The step this sample stands for: h, or the part of the last step before t1.
+      double w = h;
+      if (s.include_last_partial && i + 1 == n_max && s.step_rule == StepRule::kDiagonalOverN)
+        w = std::min(h, t1 - (a + double(i) * h));
+      Rgb g = Rgb::Zero();
+      if (source) {
+        const Vec3 x = volume.world_from_index(Vec3(gx, gy, gz));
+        if (model != OpticalModel::kAbsorption) g = emission_colour(x) * (emission_k * e);
+        if (scatter) {
+          for (std::size_t l = 0; l < lights.size(); ++l) {
+            const LightTerm& L = lights[l];
+            double p, falloff = 1.0;
+            if (L.type == LightType::kDirectional) {
+              p = phase_const[l];
+            } else {
+              Vec3 prop = x - L.position;  // the light's propagation direction at x
+              const double d2 = prop.squaredNorm();
+              prop /= std::sqrt(d2);
+              p = henyey_greenstein(-prop.dot(v), s.hg_c);  // cos θ = prop · (to the eye = -v)
+              if (L.inverse_square) falloff = 1.0 / d2;
+            }
+            double Ts = 1.0;
+            if (attenuated) {
+              if (L.cache) {
+                if (L.cache_same_grid) {
+                  Ts = L.cache->trilinear_clamped(float(gx), float(gy), float(gz));
+                } else {
+                  const Vec3 gc = (x - L.cache_origin).cwiseProduct(L.cache_inv_spacing);
+                  Ts = L.cache->trilinear_clamped(float(gc.x()), float(gc.y()), float(gc.z()));
+                }
+              } else {
+                Ts = std::exp(-shadow_optical_depth(x, L, st.shadow_samples));
+              }
+            }
+            g += L.intensity * (scatter_k * e * p * falloff * Ts);
+          }
+        }
+      }
+      // The source's sum of g (no Δs, vlr.emission.scale_by_ds = false) counts a partial step in proportion.
+      const double g_step = w == h ? source_step : source_step * (w / h);
+      if (!extinct) {
+        I += g * (s.quadrature == Quadrature::kExponential ? w : g_step);
+        return true;
+      }
+      switch (s.quadrature) {
+        case Quadrature::kInclusive:
+          ext += w == h ? e : e * (w / h);
+          T = std::exp(-kappa_h * ext);
+          I += g * (T * g_step);
+          break;
+        case Quadrature::kExclusive:
+          I += g * (T * g_step);
+          T *= std::exp(-s.kappa * e * w);
+          break;
+        case Quadrature::kExponential: {
+          const double sigma = s.kappa * e;
+          const double att = std::exp(-sigma * w);
+          I += g * (T * (sigma > 0 ? (1.0 - att) / sigma : w));
+          T *= att;
+          break;
+        }
+      }
+      if (T < s.ert_transmittance) {
+        terminated = true;
+        return false;
+      }
+      return true;
+    });
+    st.samples += taken;
+    if (terminated) ++st.terminated;
+    return extinct ? T : 1.0;
+  }
+};
+
+template <class Fn>
+void for_tiles(int width, int height, bool parallel, const Fn& fn) {
+  constexpr int kTile = 16;
+  if (parallel) {
+    tbb::parallel_for(tbb::blocked_range2d<int>(0, height, kTile, 0, width, kTile),
+                      [&](const tbb::blocked_range2d<int>& r) {
+                        fn(r.rows().begin(), r.rows().end(), r.cols().begin(), r.cols().end());
+                      });
+  } else {
+    fn(0, height, 0, width);
+  }
+}
+
+void add_stats(VolumeRenderStats& a, const VolumeRenderStats& b) {
+  a.rays += b.rays;
+  a.samples += b.samples;
+  a.skipped += b.skipped;
+  a.shadow_samples += b.shadow_samples;
+  a.terminated += b.terminated;
+  a.silhouette_mismatch += b.silhouette_mismatch;
+}
+
+std::vector<LightTerm> light_terms(const Volume& v, const VolumeRenderSettings& s) {
+  std::vector<LightTerm> out;
+  for (const auto& l : effective_lights(v, s)) {
+    LightTerm t;
+    t.type = l.type;
+    t.position = l.position;
+    t.to_light = l.to_light.normalized();
+    t.intensity = l.intensity;
+    t.inverse_square = l.type == LightType::kPoint && l.falloff == LightFalloff::kInverseSquare;
+    out.push_back(t);
+  }
+  if (out.size() > 16) throw InputError("volume render: at most 16 lights");
+  return out;
+}
+
+/// The cache's grid: the volume's grid, or `scale` times as many samples per axis over the same
+/// domain.
+Volume cache_grid(const Volume& v, double scale) {
+  if (scale == 1.0) {
+    Volume c = Volume::allocate(v.nx(), v.ny(), v.nz(), SampleType::kFloat32, "shadow cache");
+    c.set_placement(v.placement());
+    c.set_origin(v.origin());
+    c.set_spacing(v.spacing());
+    c.set_value_scale(1.0);
+    return c;
+  }
+  auto dim = [&](int n) { return std::max(v.placement() == SamplePlacement::kNodes ? 2 : 1, int(std::lround(n * scale))); };
+  Volume c = Volume::allocate(dim(v.nx()), dim(v.ny()), dim(v.nz()), SampleType::kFloat32, "shadow cache");
+  c.set_placement(v.placement());
+  c.fit_to_box(v.domain());
+  c.set_value_scale(1.0);
+  return c;
+}
+
+template <class S>
+void build_cache_march(const Kernel<S>& k, const LightTerm& l, Volume& cache, VolumeRenderStats& st, bool parallel) {
+  auto* out = static_cast<float*>(cache.mutable_data());
+  tbb::combinable<std::int64_t> samples([] { return std::int64_t{0}; });
+  auto slab = [&](int k0, int k1) {
+    std::int64_t& n = samples.local();
+    for (int kk = k0; kk < k1; ++kk)
+      for (int j = 0; j < cache.ny(); ++j)
+        for (int i = 0; i < cache.nx(); ++i) {
+          const Vec3 x = cache.world_from_index(Vec3(i, j, kk));
+          out[std::size_t(i) + std::size_t(cache.nx()) * (std::size_t(j) + std::size_t(cache.ny()) * std::size_t(kk))] =
+              float(std::exp(-k.shadow_optical_depth(x, l, n)));
+        }
+  };
+  if (parallel)
+    tbb::parallel_for(tbb::blocked_range<int>(0, cache.nz()),
+                      [&](const tbb::blocked_range<int>& r) { slab(r.begin(), r.end()); });
+  else
+    slab(0, cache.nz());
+  st.shadow_samples += samples.combine(std::plus<>());
+}
+
+/// The sweep: the cache's samples are visited layer by layer along the axis `ax` on which the
+/// light lies beyond the box (for a directional light, its dominant axis), starting with the layer
+/// nearest the light. A sample x of layer q looks up T at the point where its ray to the light
+/// crosses layer q - 1 (bilinearly in that layer, whose values are final) and multiplies by the
+/// transmittance of the segment between (Simpson's rule on f^γ at x, the midpoint and the crossing,
+/// the crossing's f bilinear in the layer). Samples whose crossing falls outside the layer, and the
+/// first layer, are marched exactly. O(samples) instead of O(samples · m).
+template <class S>
+bool build_cache_sweep(const Kernel<S>& k, const LightTerm& l, Volume& cache, VolumeRenderStats& st, bool parallel) {
+  const Box3 box = k.box;
+  int ax = -1;
+  double sign = 0;
+  if (l.type == LightType::kDirectional) {
+    l.to_light.cwiseAbs().maxCoeff(&ax);
+    sign = l.to_light[ax] > 0 ? 1.0 : -1.0;
+  } else {
+    // The axis on which the light is farthest beyond the box, relative to the box's size.
+    double best = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double beyond_hi = (l.position[a] - box.hi[a]) / box.size()[a];
+      const double beyond_lo = (box.lo[a] - l.position[a]) / box.size()[a];
+      if (beyond_hi > best) best = beyond_hi, ax = a, sign = 1.0;
+      if (beyond_lo > best) best = beyond_lo, ax = a, sign = -1.0;
+    }
+    if (ax < 0) return false;  // the light is within the box's slab on every axis: march
+  }
+  const int n[3] = {cache.nx(), cache.ny(), cache.nz()};
+  const int u = (ax + 1) % 3, w = (ax + 2) % 3;  // the layer's axes
+  const Vec3 spacing = cache.spacing();
+  auto* out = static_cast<float*>(cache.mutable_data());
+  const std::int64_t stride[3] = {1, n[0], std::int64_t(n[0]) * n[1]};
+  // Field value f^γ at cache sample (i, j, k) through the volume's sampler (the cache may be finer).
+  tbb::combinable<std::int64_t> marched([] { return std::int64_t{0}; });
+  auto e_at = [&](const Vec3& x) {
+    const Vec3 g = k.volume.index_from_world(x);
+    const float f = k.sampler.value(g.x(), g.y(), g.z());
+    return f > 0 ? k.extinction_weight(f) : 0.0;
+  };
+  const int first = sign > 0 ? n[ax] - 1 : 0, step = sign > 0 ? -1 : 1;
+  for (int q = first; q >= 0 && q < n[ax]; q += step) {
+    auto row = [&](int b0, int b1) {
+      std::int64_t& counter = marched.local();
+      for (int b = b0; b < b1; ++b)
+        for (int a = 0; a < n[u]; ++a) {
+          int idx[3];
+          idx[ax] = q;
+          idx[u] = a;
+          idx[w] = b;
+          const Vec3 x = cache.world_from_index(Vec3(idx[0], idx[1], idx[2]));
+          const std::int64_t o = idx[0] * stride[0] + idx[1] * stride[1] + idx[2] * stride[2];
+          Vec3 dir = l.type == LightType::kDirectional ? l.to_light : (l.position - x).normalized();
+          bool done = false;
+          if (q != first && dir[ax] * sign > 0) {
+            const double len = spacing[ax] / std::abs(dir[ax]);
+            const Vec3 y = x + len * dir;  // on layer q - step
+            const Vec3 gy = cache.index_from_world(y);
+            const double gu = gy[u], gw = gy[w];
+            if (gu >= 0 && gw >= 0 && gu <= n[u] - 1 && gw <= n[w] - 1) {
+              const int u0 = std::min(int(gu), n[u] - 1), w0 = std::min(int(gw), n[w] - 1);
+              const int u1 = std::min(u0 + 1, n[u] - 1), w1 = std::min(w0 + 1, n[w] - 1);
+              const double tu = gu - u0, tw = gw - w0;
+              auto Tc = [&](int aa, int bb) {
+                int id[3];
+                id[ax] = q - step;
+                id[u] = aa;
+                id[w] = bb;
+                return double(out[id[0] * stride[0] + id[1] * stride[1] + id[2] * stride[2]]);
+              };
+              const double Ty = (Tc(u0, w0) * (1 - tu) + Tc(u1, w0) * tu) * (1 - tw) +
+                                (Tc(u0, w1) * (1 - tu) + Tc(u1, w1) * tu) * tw;
+              const double tau = k.s.kappa * len * (e_at(x) + 4.0 * e_at(x + 0.5 * len * dir) + e_at(y)) / 6.0;
+              out[o] = float(Ty * std::exp(-tau));
+              done = true;
+            }
+          }
+          if (!done) out[o] = float(std::exp(-k.shadow_optical_depth(x, l, counter)));
+        }
+    };
+    if (parallel)
+      tbb::parallel_for(tbb::blocked_range<int>(0, n[w]), [&](const tbb::blocked_range<int>& r) { row(r.begin(), r.end()); });
+    else
+      row(0, n[w]);
+  }
+  st.shadow_samples += marched.combine(std::plus<>());
+  return true;
+}
+
+template <class S>
+ShadowCache build_cache_impl(const Kernel<S>& k, const LightTerm& l, const VolumeRenderSettings& s,
+                             VolumeRenderStats& st) {
+  ShadowCache c;
+  c.transmittance = cache_grid(k.volume, s.shadow_cache_scale);
+  if (s.shadow_cache_build == ShadowCacheBuild::kSweep && build_cache_sweep(k, l, c.transmittance, st, s.parallel))
+    return c;
+  build_cache_march(k, l, c.transmittance, st, s.parallel);
+  return c;
+}
+
+template <class S>
+VolumeFrame render_typed(const Volume& volume, const VolumeSamples<S>& samples, const Camera& camera,
+                         const VolumeRenderSettings& s, const std::vector<ShadowCache>* given_caches) {
+  const auto t_start = std::chrono::steady_clock::now();
+  Macrocells macro;
+  if (s.skip_empty && s.address == VolumeAddress::kClamp) macro = build_macrocells(volume);
+  Kernel<S> k(volume, s, samples, std::move(macro));
+  k.lights = light_terms(volume, s);
+  VolumeFrame frame;
+  // Shadow caches.
+  std::vector<ShadowCache> own_caches;
+  const std::vector<ShadowCache>* caches = given_caches;
+  if (s.model == OpticalModel::kHGAttenuated && s.shadow == ShadowMethod::kCache) {
+    if (!caches || caches->size() != k.lights.size()) {
+      const auto t = std::chrono::steady_clock::now();
+      for (const auto& l : k.lights) own_caches.push_back(build_cache_impl(k, l, s, frame.stats));
+      frame.stats.shadow_cache_ms = ms_since(t);
+      caches = &own_caches;
+    }
+    k.cache_samples.reserve(caches->size());
+    for (std::size_t i = 0; i < caches->size(); ++i) {
+      const Volume& c = (*caches)[i].transmittance;
+      if (c.type() != SampleType::kFloat32) throw InputError("volume render: a shadow cache must be float32");
+      k.cache_samples.push_back(c.samples<float>());
+    }
+    for (std::size_t i = 0; i < k.lights.size(); ++i) {
+      const Volume& c = (*caches)[i].transmittance;
+      k.lights[i].cache = &k.cache_samples[i];
+      k.lights[i].cache_origin = c.origin();
+      k.lights[i].cache_inv_spacing = c.spacing().cwiseInverse();
+      k.lights[i].cache_same_grid = c.dims() == volume.dims() && c.origin() == volume.origin() &&
+                                    c.spacing() == volume.spacing();
+    }
+  }
+  const int W = camera_width(camera), H = camera_height(camera);
+  frame.radiance = ImageF(W, H, 3, 0.0f);
+  frame.transmittance = ImageF(W, H, 1, 1.0f);
+  const RayGenerator gen(camera);
+  const Box3& box = k.box;
+  TwoPassRays two_pass;
+  if (s.ray_generation == RayGeneration::kTwoPass) two_pass = two_pass_rays(box, camera);
+  // The eye inside the box.
+  if (const auto* pin = std::get_if<Pinhole>(&camera)) {
+    const Vec3 eye = pin->camera_from_world.inverse().translation();
+    if (box.contains(eye) && s.camera_inside == CameraInside::kReject)
+      throw InputError(
+          "volume render: the camera is inside the volume's box (vlr.camera.inside: reject); move it out or set "
+          "camera_inside: start_at_eye");
+  }
+  const auto t_render = std::chrono::steady_clock::now();
+  tbb::combinable<VolumeRenderStats> stats;
+  for_tiles(W, H, s.parallel, [&](int y0, int y1, int x0, int x1) {
+    VolumeRenderStats& st = stats.local();
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        Vec3 o, v;
+        double t0 = 0, t1 = 0;
+        const std::size_t p = std::size_t(y) * std::size_t(W) + std::size_t(x);
+        if (s.ray_generation == RayGeneration::kTwoPass) {
+          if (two_pass.front[p] != two_pass.back[p]) ++st.silhouette_mismatch;
+          if (!two_pass.front[p] || !two_pass.back[p]) continue;
+          o = two_pass.entry[p];
+          const Vec3 span = two_pass.exit[p] - two_pass.entry[p];
+          t1 = span.norm();
+          if (!(t1 > 0)) continue;
+          v = span / t1;
+        } else {
+          const CameraRay ray = gen.generate_ray(x, y);
+          if (!ray.ok) continue;
+          const auto hit = intersect_box(box, ray.origin, ray.direction);
+          if (!hit) continue;
+          o = ray.origin;
+          v = ray.direction;
+          t0 = std::max(hit->t0, 0.0);
+          t1 = hit->t1;
+        }
+        ++st.rays;
+        Rgb I = Rgb::Zero();
+        const double T = k.trace(o, v, t0, t1, p, I, st);
+        float* rad = frame.radiance.row(y) + 3 * x;
+        rad[0] = float(I[0]);
+        rad[1] = float(I[1]);
+        rad[2] = float(I[2]);
+        frame.transmittance.at(x, y) = float(T);
+      }
+  });
+  stats.combine_each([&](const VolumeRenderStats& st) { add_stats(frame.stats, st); });
+  frame.stats.render_ms = ms_since(t_render);
+  (void)t_start;
+  return frame;
+}
+
+}  // namespace
+
+double henyey_greenstein(double cos_theta, double c) {
+  const double denom = 1.0 + c * c - 2.0 * c * cos_theta;
+  return (1.0 - c * c) / (4.0 * std::numbers::pi * denom * std::sqrt(denom));
+}
+
+VolumeLight default_light(const Box3& box) {
+  VolumeLight l;
+  l.type = LightType::kPoint;
+  l.position = box.centre() + 2.0 * box.size();
+  return l;
+}
+
+std::optional<RayInterval> intersect_box(const Box3& box, const Vec3& o, const Vec3& v) {
+  double t0 = -kInf, t1 = kInf;
+  for (int a = 0; a < 3; ++a) {
+    if (v[a] == 0.0) {
+      if (o[a] < box.lo[a] || o[a] > box.hi[a]) return std::nullopt;
+      continue;
+    }
+    double tn = (box.lo[a] - o[a]) / v[a], tf = (box.hi[a] - o[a]) / v[a];
+    if (tn > tf) std::swap(tn, tf);  // vlr.slab.swap
+    t0 = std::max(t0, tn);
+    t1 = std::min(t1, tf);
+  }
+  if (t0 > t1 || t1 < 0) return std::nullopt;
+  return RayInterval{t0, t1};
+}
+
+double primary_step(const Volume& volume, const VolumeRenderSettings& s) {
+  if (s.step_rule == StepRule::kFitSegment) return s.step;
+  return volume.domain().diagonal() / s.samples;
+}
+
+std::vector<VolumeLight> effective_lights(const Volume& volume, const VolumeRenderSettings& s) {
+  if (!s.lights.empty()) return s.lights;
+  return {default_light(volume.domain())};
+}
+
+VolumeFrame render_volume(const Volume& volume, const Camera& camera, const VolumeRenderSettings& settings) {
+  validate(volume, settings);
+  return visit_samples(volume, [&](const auto& samples) {
+    return render_typed(volume, samples, camera, settings, nullptr);
+  });
+}
+
+VolumeFrame render_volume(const Volume& volume, const Camera& camera, const VolumeRenderSettings& settings,
+                          const std::vector<ShadowCache>& caches) {
+  validate(volume, settings);
+  return visit_samples(volume, [&](const auto& samples) {
+    return render_typed(volume, samples, camera, settings, &caches);
+  });
+}
+
+ShadowCache build_shadow_cache(const Volume& volume, const VolumeRenderSettings& settings, int light_index,
+                               VolumeRenderStats* stats) {
+  validate(volume, settings);
+  return visit_samples(volume, [&](const auto& samples) {
+    Macrocells macro;
+    if (settings.skip_empty && settings.address == VolumeAddress::kClamp) macro = build_macrocells(volume);
+    Kernel k(volume, settings, samples, std::move(macro));
+    const auto lights = light_terms(volume, settings);
+    if (light_index < 0 || light_index >= int(lights.size()))
+      throw InputError(fmt::format("volume render: no light {}", light_index));
+    VolumeRenderStats st;
+    auto c = build_cache_impl(k, lights[std::size_t(light_index)], settings, st);
+    if (stats) add_stats(*stats, st);
+    return c;
+  });
+}
+
+double shadow_transmittance(const Volume& volume, const VolumeRenderSettings& settings, int light_index,
+                            const Vec3& x) {
+  validate(volume, settings);
+  return visit_samples(volume, [&](const auto& samples) {
+    Macrocells macro;
+    if (settings.skip_empty && settings.address == VolumeAddress::kClamp) macro = build_macrocells(volume);
+    Kernel k(volume, settings, samples, std::move(macro));
+    const auto lights = light_terms(volume, settings);
+    if (light_index < 0 || light_index >= int(lights.size()))
+      throw InputError(fmt::format("volume render: no light {}", light_index));
+    std::int64_t n = 0;
+    return std::exp(-k.shadow_optical_depth(x, lights[std::size_t(light_index)], n));
+  });
+}
+
+ImageF composite_over(const VolumeFrame& frame, const Rgb& background) {
+  ImageF out(frame.radiance.width(), frame.radiance.height(), 3);
+  for (int y = 0; y < out.height(); ++y)
+    for (int x = 0; x < out.width(); ++x) {
+      const float T = frame.transmittance.at(x, y);
+      for (int c = 0; c < 3; ++c) out.at(x, y, c) = frame.radiance.at(x, y, c) + T * float(background[c]);
+    }
+  return out;
+}
+
+ImageF composite_over(const VolumeFrame& frame, const ImageF& background) {
+  if (background.width() != frame.radiance.width() || background.height() != frame.radiance.height() ||
+      background.channels() < 3)
+    throw InputError(fmt::format("volume render: the background image must be {}x{} with 3 channels",
+                                 frame.radiance.width(), frame.radiance.height()));
+  ImageF out(frame.radiance.width(), frame.radiance.height(), 3);
+  for (int y = 0; y < out.height(); ++y)
+    for (int x = 0; x < out.width(); ++x) {
+      const float T = frame.transmittance.at(x, y);
+      for (int c = 0; c < 3; ++c) out.at(x, y, c) = frame.radiance.at(x, y, c) + T * background.at(x, y, c);
+    }
+  return out;
+}
+
+std::string optical_model_name(OpticalModel m) {
+  switch (m) {
+    case OpticalModel::kAbsorption: return "absorption";
+    case OpticalModel::kEmission: return "emission";
+    case OpticalModel::kEmissionAbsorption: return "emission_absorption";
+    case OpticalModel::kHG: return "hg";
+    case OpticalModel::kHGAttenuated: return "hg_attenuated";
+  }
+  return "emission_absorption";
+}
+
+std::string quadrature_name(Quadrature q) {
+  switch (q) {
+    case Quadrature::kInclusive: return "inclusive";
+    case Quadrature::kExclusive: return "exclusive";
+    case Quadrature::kExponential: return "exponential";
+  }
+  return "inclusive";
+}
+
+// ---- the two-pass method ------------------------------------------------------------------------
+
+TwoPassRays two_pass_rays(const Box3& box, const Camera& camera) {
+  TwoPassRays r;
+  r.width = camera_width(camera);
+  r.height = camera_height(camera);
+  const std::size_t n = std::size_t(r.width) * std::size_t(r.height);
+  r.entry.assign(n, Vec3::Zero());
+  r.exit.assign(n, Vec3::Zero());
+  r.front.assign(n, 0);
+  r.back.assign(n, 0);
+  std::vector<double> depth_front(n, kInf), depth_back(n, -kInf);
+  const RayGenerator gen(camera);
+  // The 8 corners and 12 triangles (two per face, counter-clockwise seen from outside).
+  std::array<Vec3, 8> c;
+  for (int i = 0; i < 8; ++i)
+    c[std::size_t(i)] = Vec3(i & 1 ? box.hi.x() : box.lo.x(), i & 2 ? box.hi.y() : box.lo.y(), i & 4 ? box.hi.z() : box.lo.z());
+  struct Face {
+    int a, b, cc, d;  // corners, counter-clockwise from outside
+    Vec3 normal;
+  };
+  const Face faces[6] = {{0, 4, 6, 2, -Vec3::UnitX()}, {1, 3, 7, 5, Vec3::UnitX()}, {0, 1, 5, 4, -Vec3::UnitY()},
+                         {2, 6, 7, 3, Vec3::UnitY()},  {0, 2, 3, 1, -Vec3::UnitZ()}, {4, 5, 7, 6, Vec3::UnitZ()}};
+  for (const Face& f : faces) {
+    const int tris[2][3] = {{f.a, f.b, f.cc}, {f.a, f.cc, f.d}};
+    const Vec3& on_plane = c[std::size_t(f.a)];
+    for (const auto& tri : tris) {
+      std::array<Projection, 3> pr;
+      bool behind = false;
+      for (int i = 0; i < 3; ++i) {
+        pr[std::size_t(i)] = gen.project(c[std::size_t(tri[i])]);
+        if (!pr[std::size_t(i)].in_front || !pr[std::size_t(i)].pixel.allFinite()) behind = true;
+      }
+      if (behind) continue;  // the source's proxy is in front of the camera; a clipped face is not drawn
+      const Vec2d p0 = pr[0].pixel, p1 = pr[1].pixel, p2 = pr[2].pixel;
+      const double area = (p1.x() - p0.x()) * (p2.y() - p0.y()) - (p1.y() - p0.y()) * (p2.x() - p0.x());
+      if (area == 0.0) continue;
+      // Facing from the eye: front when the outward normal points to the camera.
+      const CameraRay centre_ray = gen.generate_ray(0.5 * (r.width - 1), 0.5 * (r.height - 1));
+      const Vec3 eye = centre_ray.origin;
+      const bool front = f.normal.dot(on_plane - eye) < 0;
+      // Edge functions, oriented so that the inside is positive; the top-left rule decides pixels
+      // exactly on an edge (the same rule for every triangle, as a GPU rasteriser).
+      const double sgn = area > 0 ? 1.0 : -1.0;
+      auto edge = [&](const Vec2d& a, const Vec2d& b, double x, double y) {
+        return sgn * ((b.x() - a.x()) * (y - a.y()) - (b.y() - a.y()) * (x - a.x()));
+      };
+      auto top_left = [&](const Vec2d& a, const Vec2d& b) {
+        const Vec2d e = sgn > 0 ? b - a : a - b;
+        return (e.y() == 0 && e.x() < 0) || e.y() > 0;  // image y grows downwards
+      };
+      const bool tl0 = top_left(p1, p2), tl1 = top_left(p2, p0), tl2 = top_left(p0, p1);
+      const int xmin = std::max(0, int(std::ceil(std::min({p0.x(), p1.x(), p2.x()}))));
+      const int xmax = std::min(r.width - 1, int(std::floor(std::max({p0.x(), p1.x(), p2.x()}))));
+      const int ymin = std::max(0, int(std::ceil(std::min({p0.y(), p1.y(), p2.y()}))));
+      const int ymax = std::min(r.height - 1, int(std::floor(std::max({p0.y(), p1.y(), p2.y()}))));
+      for (int y = ymin; y <= ymax; ++y)
+        for (int x = xmin; x <= xmax; ++x) {
+          const double w0 = edge(p1, p2, x, y), w1 = edge(p2, p0, x, y), w2 = edge(p0, p1, x, y);
+          if (w0 < 0 || w1 < 0 || w2 < 0) continue;
+          if ((w0 == 0 && !tl0) || (w1 == 0 && !tl1) || (w2 == 0 && !tl2)) continue;
+          const CameraRay ray = gen.generate_ray(x, y);
+          const double denom = f.normal.dot(ray.direction);
+          if (denom == 0.0) continue;
+          const double t = f.normal.dot(on_plane - ray.origin) / denom;
+          const Vec3 hit = ray.at(t);
+          const std::size_t p = std::size_t(y) * std::size_t(r.width) + std::size_t(x);
+          if (front) {
+            if (t < depth_front[p]) depth_front[p] = t, r.entry[p] = hit, r.front[p] = 1;
+          } else {
+            if (t > depth_back[p]) depth_back[p] = t, r.exit[p] = hit, r.back[p] = 1;
+          }
+        }
+    }
+  }
+  return r;
+}
+
+}  // namespace meltlab::render
