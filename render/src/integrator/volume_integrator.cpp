@@ -23,6 +23,7 @@ namespace {
 
 using Vec3 = Eigen::Vector3d;
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr std::size_t kMaxLights = 16;
 
 double ms_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
@@ -36,7 +37,6 @@ std::uint64_t splitmix64(std::uint64_t x) {
 }
 
 bool has_extinction(OpticalModel m) { return m != OpticalModel::kEmission; }
-bool has_source(OpticalModel m) { return m != OpticalModel::kAbsorption; }
 bool has_scatter(OpticalModel m) { return m == OpticalModel::kHG || m == OpticalModel::kHGAttenuated; }
 
 void validate(const Volume& volume, const VolumeRenderSettings& s) {
@@ -82,8 +82,6 @@ struct Macrocells {
   }
 };
 
-int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
-
 Macrocells build_macrocells(const Volume& v) {
   Macrocells m;
   constexpr int B = Macrocells::kB;
@@ -91,24 +89,27 @@ Macrocells build_macrocells(const Volume& v) {
   m.by = (v.ny() + B - 1) / B;
   m.bz = (v.nz() + B - 1) / B;
   m.live.assign(std::size_t(m.bx) * std::size_t(m.by) * std::size_t(m.bz), 0);
-  auto range = [](int i, int nb, int& lo, int& hi) {
-    lo = std::max(0, floor_div(i - 1 - B, B));
-    hi = std::min(nb - 1, floor_div(i + 1, B));
-  };
   visit_samples(v, [&](const auto& s) {
-    for (int k = 0; k < v.nz(); ++k)
-      for (int j = 0; j < v.ny(); ++j)
-        for (int i = 0; i < v.nx(); ++i) {
-          if (!(s.at(i, j, k) > 0.0f)) continue;
-          int i0, i1, j0, j1, k0, k1;
-          range(i, m.bx, i0, i1);
-          range(j, m.by, j0, j1);
-          range(k, m.bz, k0, k1);
-          for (int c = k0; c <= k1; ++c)
-            for (int b = j0; b <= j1; ++b)
-              for (int a = i0; a <= i1; ++a)
-                m.live[std::size_t(a) + std::size_t(m.bx) * (std::size_t(b) + std::size_t(m.by) * std::size_t(c))] = 1;
-        }
+    // Per macrocell, the samples [cB - 1, (c + 1)B + 1] per axis (clamped), until one is > 0.
+    tbb::parallel_for(tbb::blocked_range<int>(0, m.bz), [&](const tbb::blocked_range<int>& r) {
+      for (int cz = r.begin(); cz < r.end(); ++cz)
+        for (int cy = 0; cy < m.by; ++cy)
+          for (int cx = 0; cx < m.bx; ++cx) {
+            const int i0 = std::max(0, cx * B - 1), i1 = std::min(v.nx() - 1, (cx + 1) * B + 1);
+            const int j0 = std::max(0, cy * B - 1), j1 = std::min(v.ny() - 1, (cy + 1) * B + 1);
+            const int k0 = std::max(0, cz * B - 1), k1 = std::min(v.nz() - 1, (cz + 1) * B + 1);
+            bool live = false;
+            for (int k = k0; k <= k1 && !live; ++k)
+              for (int j = j0; j <= j1 && !live; ++j)
+                for (int i = i0; i <= i1; ++i)
+                  if (s.at(i, j, k) > 0.0f) {
+                    live = true;
+                    break;
+                  }
+            m.live[std::size_t(cx) + std::size_t(m.bx) * (std::size_t(cy) + std::size_t(m.by) * std::size_t(cz))] =
+                live ? 1 : 0;
+          }
+    });
     return 0;
   });
   return m;
@@ -159,10 +160,12 @@ class Sampler {
     for (std::int64_t i = 0; i < i_end;) {
       const double t = a + double(i) * h;
       const double gx = go.x() + t * gd.x(), gy = go.y() + t * gd.y(), gz = go.z() + t * gd.z();
+      const double fx = std::floor(gx), fy = std::floor(gy), fz = std::floor(gz);
+      const int ix = int(fx), iy = int(fy), iz = int(fz);
       if (skip) {
-        const int cx = std::clamp(int(std::floor(gx)), 0, n_[0] - 1) / B;
-        const int cy = std::clamp(int(std::floor(gy)), 0, n_[1] - 1) / B;
-        const int cz = std::clamp(int(std::floor(gz)), 0, n_[2] - 1) / B;
+        const int cx = std::clamp(ix, 0, n_[0] - 1) / B;
+        const int cy = std::clamp(iy, 0, n_[1] - 1) / B;
+        const int cz = std::clamp(iz, 0, n_[2] - 1) / B;
         if (!m_.is_live(cx, cy, cz)) {
           // Leave the macrocell: the first sample at or beyond its exit (a dead macrocell is
           // empty one sample beyond its faces, so the rounding of t_exit does not matter).
@@ -184,7 +187,9 @@ class Sampler {
           continue;
         }
       }
-      if (!fn(i, gx, gy, gz, value(gx, gy, gz))) return skipped;
+      const float f = wrap_ ? s_.trilinear_wrapped(float(gx), float(gy), float(gz))
+                            : s_.trilinear_cell(ix, iy, iz, float(gx - fx), float(gy - fy), float(gz - fz));
+      if (!fn(i, gx, gy, gz, f)) return skipped;
       ++i;
     }
     return skipped;
@@ -212,6 +217,7 @@ struct Kernel {
   std::vector<VolumeSamples<float>> cache_samples;
   Vec3 centre;
   double rim_radius = 1;
+  bool all_cached_same_grid = false;  // every light's shadow comes from a cache on the volume's grid
 
   Kernel(const Volume& v, const VolumeRenderSettings& settings, const VolumeSamples<S>& samples, Macrocells m)
       : volume(v), s(settings), box(v.domain()), macro(std::move(m)), sampler(samples, v, macro, settings.address) {
@@ -221,9 +227,7 @@ struct Kernel {
     rim_radius = 0.5 * box.size().minCoeff();
   }
 
-  double extinction_weight(float f) const {
-    return s.gamma == 1.0 ? double(f) : std::pow(double(f), s.gamma);
-  }
+  double extinction_weight(float f) const { return s.gamma == 1.0 ? double(f) : std::pow(double(f), s.gamma); }
 
   /// κ ∫ f^γ from x towards light l (to the box exit, or the light if nearer), midpoint-rule
   /// sub-steps of equal length <= the shadow step starting at the start offset.
@@ -266,14 +270,19 @@ struct Kernel {
   double trace(const Vec3& o, const Vec3& v, double t0, double t1, std::uint64_t pixel_id, Rgb& I,
                VolumeRenderStats& st) const {
     const OpticalModel model = s.model;
-    const bool extinct = has_extinction(model), source = has_source(model), scatter = has_scatter(model);
+    const bool extinct = has_extinction(model), scatter = has_scatter(model);
+    const bool emits = model != OpticalModel::kAbsorption;
     const bool attenuated = model == OpticalModel::kHGAttenuated;
     double h = ds;
     std::int64_t n_max;
     double offset_fraction = 0;
     switch (s.first_offset) {
-      case FirstOffset::kZero: offset_fraction = 0; break;
-      case FirstOffset::kHalf: offset_fraction = 0.5; break;
+      case FirstOffset::kZero:
+        offset_fraction = 0;
+        break;
+      case FirstOffset::kHalf:
+        offset_fraction = 0.5;
+        break;
       case FirstOffset::kJitter:
         offset_fraction = double(splitmix64(s.jitter_seed ^ splitmix64(pixel_id)) >> 11) * (1.0 / 9007199254740992.0);
         break;
@@ -292,10 +301,40 @@ struct Kernel {
     const double source_step = s.emission_scale_by_ds ? h : 1.0;
     const double emission_k = s.kappa_in_source ? s.kappa : 1.0;
     const double scatter_k = s.albedo * (s.kappa_in_brdf ? s.kappa : 1.0);
-    // Directional lights: the phase and the intensity are the same along the ray.
-    std::array<double, 16> phase_const{};
-    for (std::size_t l = 0; l < lights.size() && l < phase_const.size(); ++l)
-      if (lights[l].type == LightType::kDirectional) phase_const[l] = henyey_greenstein(lights[l].to_light.dot(v), s.hg_c);
+    const bool need_x = s.emission_field != EmissionField::kConstant || (attenuated && !all_cached_same_grid);
+    // Per light and ray: a directional light's phase is constant along the ray; a point light's
+    // depends on t only: with r² = |x - L|² = qa + 2 qb t + t² and (x - L)·v = qb + t, cos θ =
+    // (x - L)/r · (-v) = -(qb + t)/r. Its phase (and falloff) is evaluated for blocks of
+    // kChunk consecutive samples at once (a loop the compiler vectorises), when first needed.
+    constexpr int kChunk = 16;
+    const std::size_t nl = scatter ? lights.size() : 0;
+    std::array<double, kMaxLights> phase_const{}, qa{}, qb{};
+    std::array<std::array<double, kChunk>, kMaxLights> phase{};
+    std::int64_t chunk = -1;
+    const double c = s.hg_c, hg_k = (1 - c * c) / (4 * std::numbers::pi), hg_1c2 = 1 + c * c;
+    for (std::size_t l = 0; l < nl; ++l) {
+      if (lights[l].type == LightType::kDirectional) {
+        phase_const[l] = henyey_greenstein(lights[l].to_light.dot(v), c);
+      } else {
+        const Vec3 d = o - lights[l].position;
+        qa[l] = d.squaredNorm();
+        qb[l] = d.dot(v);
+      }
+    }
+    auto fill_chunk = [&](std::int64_t first) {
+      for (std::size_t l = 0; l < nl; ++l) {
+        if (lights[l].type == LightType::kDirectional) continue;
+        const bool inv2 = lights[l].inverse_square;
+        for (int j = 0; j < kChunk; ++j) {
+          const double t = a + double(first + j) * h;
+          const double r2 = qa[l] + t * (2 * qb[l] + t);
+          const double r = std::sqrt(r2);
+          const double cos_theta = -(qb[l] + t) / r;
+          const double D = hg_1c2 - 2 * c * cos_theta;
+          phase[l][std::size_t(j)] = hg_k / (D * std::sqrt(D)) * (inv2 ? 1.0 / r2 : 1.0);
+        }
+      }
+    };
 
     double T = 1.0, ext = 0.0;
     std::int64_t taken = 0;
@@ -309,36 +348,30 @@ struct Kernel {
       if (s.include_last_partial && i + 1 == n_max && s.step_rule == StepRule::kDiagonalOverN)
         w = std::min(h, t1 - (a + double(i) * h));
       Rgb g = Rgb::Zero();
-      if (source) {
-        const Vec3 x = volume.world_from_index(Vec3(gx, gy, gz));
-        if (model != OpticalModel::kAbsorption) g = emission_colour(x) * (emission_k * e);
-        if (scatter) {
-          for (std::size_t l = 0; l < lights.size(); ++l) {
+      if (emits) {
+        Vec3 x = Vec3::Zero();
+        if (need_x) x = volume.world_from_index(Vec3(gx, gy, gz));
+        g = (s.emission_field == EmissionField::kConstant ? s.emission : emission_colour(x)) * (emission_k * e);
+        if (nl > 0) {
+          if (i < chunk || i >= chunk + kChunk) {
+            chunk = i;
+            fill_chunk(chunk);
+          }
+          for (std::size_t l = 0; l < nl; ++l) {
             const LightTerm& L = lights[l];
-            double p, falloff = 1.0;
-            if (L.type == LightType::kDirectional) {
-              p = phase_const[l];
-            } else {
-              Vec3 prop = x - L.position;  // the light's propagation direction at x
-              const double d2 = prop.squaredNorm();
-              prop /= std::sqrt(d2);
-              p = henyey_greenstein(-prop.dot(v), s.hg_c);  // cos θ = prop · (to the eye = -v)
-              if (L.inverse_square) falloff = 1.0 / d2;
-            }
+            const double p = L.type == LightType::kDirectional ? phase_const[l] : phase[l][std::size_t(i - chunk)];
             double Ts = 1.0;
             if (attenuated) {
-              if (L.cache) {
-                if (L.cache_same_grid) {
-                  Ts = L.cache->trilinear_clamped(float(gx), float(gy), float(gz));
-                } else {
-                  const Vec3 gc = (x - L.cache_origin).cwiseProduct(L.cache_inv_spacing);
-                  Ts = L.cache->trilinear_clamped(float(gc.x()), float(gc.y()), float(gc.z()));
-                }
+              if (L.cache && L.cache_same_grid) {
+                Ts = L.cache->trilinear_clamped(float(gx), float(gy), float(gz));
+              } else if (L.cache) {
+                const Vec3 gc = (x - L.cache_origin).cwiseProduct(L.cache_inv_spacing);
+                Ts = L.cache->trilinear_clamped(float(gc.x()), float(gc.y()), float(gc.z()));
               } else {
                 Ts = std::exp(-shadow_optical_depth(x, L, st.shadow_samples));
               }
             }
-            g += L.intensity * (scatter_k * e * p * falloff * Ts);
+            g += L.intensity * (scatter_k * e * p * Ts);
           }
         }
       }
@@ -411,7 +444,7 @@ std::vector<LightTerm> light_terms(const Volume& v, const VolumeRenderSettings& 
     t.inverse_square = l.type == LightType::kPoint && l.falloff == LightFalloff::kInverseSquare;
     out.push_back(t);
   }
-  if (out.size() > 16) throw InputError("volume render: at most 16 lights");
+  if (out.size() > kMaxLights) throw InputError(fmt::format("volume render: at most {} lights", kMaxLights));
   return out;
 }
 
@@ -426,7 +459,9 @@ Volume cache_grid(const Volume& v, double scale) {
     c.set_value_scale(1.0);
     return c;
   }
-  auto dim = [&](int n) { return std::max(v.placement() == SamplePlacement::kNodes ? 2 : 1, int(std::lround(n * scale))); };
+  auto dim = [&](int n) {
+    return std::max(v.placement() == SamplePlacement::kNodes ? 2 : 1, int(std::lround(n * scale)));
+  };
   Volume c = Volume::allocate(dim(v.nx()), dim(v.ny()), dim(v.nz()), SampleType::kFloat32, "shadow cache");
   c.set_placement(v.placement());
   c.fit_to_box(v.domain());
@@ -524,8 +559,8 @@ bool build_cache_sweep(const Kernel<S>& k, const LightTerm& l, Volume& cache, Vo
                 id[w] = bb;
                 return double(out[id[0] * stride[0] + id[1] * stride[1] + id[2] * stride[2]]);
               };
-              const double Ty = (Tc(u0, w0) * (1 - tu) + Tc(u1, w0) * tu) * (1 - tw) +
-                                (Tc(u0, w1) * (1 - tu) + Tc(u1, w1) * tu) * tw;
+              const double Ty =
+                  (Tc(u0, w0) * (1 - tu) + Tc(u1, w0) * tu) * (1 - tw) + (Tc(u0, w1) * (1 - tu) + Tc(u1, w1) * tu) * tw;
               const double tau = k.s.kappa * len * (e_at(x) + 4.0 * e_at(x + 0.5 * len * dir) + e_at(y)) / 6.0;
               out[o] = float(Ty * std::exp(-tau));
               done = true;
@@ -535,7 +570,8 @@ bool build_cache_sweep(const Kernel<S>& k, const LightTerm& l, Volume& cache, Vo
         }
     };
     if (parallel)
-      tbb::parallel_for(tbb::blocked_range<int>(0, n[w]), [&](const tbb::blocked_range<int>& r) { row(r.begin(), r.end()); });
+      tbb::parallel_for(tbb::blocked_range<int>(0, n[w]),
+                        [&](const tbb::blocked_range<int>& r) { row(r.begin(), r.end()); });
     else
       row(0, n[w]);
   }
@@ -584,9 +620,11 @@ VolumeFrame render_typed(const Volume& volume, const VolumeSamples<S>& samples, 
       k.lights[i].cache = &k.cache_samples[i];
       k.lights[i].cache_origin = c.origin();
       k.lights[i].cache_inv_spacing = c.spacing().cwiseInverse();
-      k.lights[i].cache_same_grid = c.dims() == volume.dims() && c.origin() == volume.origin() &&
-                                    c.spacing() == volume.spacing();
+      k.lights[i].cache_same_grid =
+          c.dims() == volume.dims() && c.origin() == volume.origin() && c.spacing() == volume.spacing();
     }
+    k.all_cached_same_grid =
+        std::all_of(k.lights.begin(), k.lights.end(), [](const LightTerm& l) { return l.cache_same_grid; });
   }
   const int W = camera_width(camera), H = camera_height(camera);
   frame.radiance = ImageF(W, H, 3, 0.0f);
@@ -688,17 +726,15 @@ std::vector<VolumeLight> effective_lights(const Volume& volume, const VolumeRend
 
 VolumeFrame render_volume(const Volume& volume, const Camera& camera, const VolumeRenderSettings& settings) {
   validate(volume, settings);
-  return visit_samples(volume, [&](const auto& samples) {
-    return render_typed(volume, samples, camera, settings, nullptr);
-  });
+  return visit_samples(volume,
+                       [&](const auto& samples) { return render_typed(volume, samples, camera, settings, nullptr); });
 }
 
 VolumeFrame render_volume(const Volume& volume, const Camera& camera, const VolumeRenderSettings& settings,
                           const std::vector<ShadowCache>& caches) {
   validate(volume, settings);
-  return visit_samples(volume, [&](const auto& samples) {
-    return render_typed(volume, samples, camera, settings, &caches);
-  });
+  return visit_samples(volume,
+                       [&](const auto& samples) { return render_typed(volume, samples, camera, settings, &caches); });
 }
 
 ShadowCache build_shadow_cache(const Volume& volume, const VolumeRenderSettings& settings, int light_index,
@@ -759,20 +795,28 @@ ImageF composite_over(const VolumeFrame& frame, const ImageF& background) {
 
 std::string optical_model_name(OpticalModel m) {
   switch (m) {
-    case OpticalModel::kAbsorption: return "absorption";
-    case OpticalModel::kEmission: return "emission";
-    case OpticalModel::kEmissionAbsorption: return "emission_absorption";
-    case OpticalModel::kHG: return "hg";
-    case OpticalModel::kHGAttenuated: return "hg_attenuated";
+    case OpticalModel::kAbsorption:
+      return "absorption";
+    case OpticalModel::kEmission:
+      return "emission";
+    case OpticalModel::kEmissionAbsorption:
+      return "emission_absorption";
+    case OpticalModel::kHG:
+      return "hg";
+    case OpticalModel::kHGAttenuated:
+      return "hg_attenuated";
   }
   return "emission_absorption";
 }
 
 std::string quadrature_name(Quadrature q) {
   switch (q) {
-    case Quadrature::kInclusive: return "inclusive";
-    case Quadrature::kExclusive: return "exclusive";
-    case Quadrature::kExponential: return "exponential";
+    case Quadrature::kInclusive:
+      return "inclusive";
+    case Quadrature::kExclusive:
+      return "exclusive";
+    case Quadrature::kExponential:
+      return "exponential";
   }
   return "inclusive";
 }
@@ -793,12 +837,13 @@ TwoPassRays two_pass_rays(const Box3& box, const Camera& camera) {
   // The 8 corners and 12 triangles (two per face, counter-clockwise seen from outside).
   std::array<Vec3, 8> c;
   for (int i = 0; i < 8; ++i)
-    c[std::size_t(i)] = Vec3(i & 1 ? box.hi.x() : box.lo.x(), i & 2 ? box.hi.y() : box.lo.y(), i & 4 ? box.hi.z() : box.lo.z());
+    c[std::size_t(i)] =
+        Vec3(i & 1 ? box.hi.x() : box.lo.x(), i & 2 ? box.hi.y() : box.lo.y(), i & 4 ? box.hi.z() : box.lo.z());
   struct Face {
     int a, b, cc, d;  // corners, counter-clockwise from outside
     Vec3 normal;
   };
-  const Face faces[6] = {{0, 4, 6, 2, -Vec3::UnitX()}, {1, 3, 7, 5, Vec3::UnitX()}, {0, 1, 5, 4, -Vec3::UnitY()},
+  const Face faces[6] = {{0, 4, 6, 2, -Vec3::UnitX()}, {1, 3, 7, 5, Vec3::UnitX()},  {0, 1, 5, 4, -Vec3::UnitY()},
                          {2, 6, 7, 3, Vec3::UnitY()},  {0, 2, 3, 1, -Vec3::UnitZ()}, {4, 5, 7, 6, Vec3::UnitZ()}};
   for (const Face& f : faces) {
     const int tris[2][3] = {{f.a, f.b, f.cc}, {f.a, f.cc, f.d}};

@@ -123,19 +123,24 @@ Volume generate_volume(const VolumeGenerateOptions& o) {
           if (o.kind == VolumeKind::kConstant) {
             w = o.constant;
           } else {
-            const double rho = std::sqrt((px - 0.5) * (px - 0.5) + (py - 0.5) * (py - 0.5) + (pz - 0.5) * (pz - 0.5)) / R;
+            const double rho =
+                std::sqrt((px - 0.5) * (px - 0.5) + (py - 0.5) * (py - 0.5) + (pz - 0.5) * (pz - 0.5)) / R;
             const bool in_sphere = rho < 1.0;
             switch (o.kind) {
-              case VolumeKind::kTurbulenceBox: w = turbulence(px, py, pz, o.noise); break;
+              case VolumeKind::kTurbulenceBox:
+                w = turbulence(px, py, pz, o.noise);
+                break;
               case VolumeKind::kTurbulenceSphere:
                 if (in_sphere)
                   w = turbulence(px, py, pz, o.noise) * (o.falloff == SphereFalloff::kLinear ? 1.0 - rho : 1.0);
                 break;
               case VolumeKind::kFireball:
                 // Low density in the core, smoke thickening towards the rim, gone outside.
-                if (in_sphere) w = turbulence(px, py, pz, o.noise) * (0.15 + 0.85 * rho) * std::min(1.0, 8.0 * (1.0 - rho));
+                if (in_sphere)
+                  w = turbulence(px, py, pz, o.noise) * (0.15 + 0.85 * rho) * std::min(1.0, 8.0 * (1.0 - rho));
                 break;
-              case VolumeKind::kConstant: break;
+              case VolumeKind::kConstant:
+                break;
             }
           }
           v.set_value(i, j, k, w);
@@ -146,20 +151,24 @@ Volume generate_volume(const VolumeGenerateOptions& o) {
 
 std::string volume_kind_name(VolumeKind kind) {
   switch (kind) {
-    case VolumeKind::kTurbulenceBox: return "turbulence_box";
-    case VolumeKind::kTurbulenceSphere: return "turbulence_sphere";
-    case VolumeKind::kFireball: return "fireball";
-    case VolumeKind::kConstant: return "constant";
+    case VolumeKind::kTurbulenceBox:
+      return "turbulence_box";
+    case VolumeKind::kTurbulenceSphere:
+      return "turbulence_sphere";
+    case VolumeKind::kFireball:
+      return "fireball";
+    case VolumeKind::kConstant:
+      return "constant";
   }
   return "turbulence_box";
 }
 
 VolumeKind parse_volume_kind(const std::string& name, const std::string& what) {
-  for (VolumeKind k : {VolumeKind::kTurbulenceBox, VolumeKind::kTurbulenceSphere, VolumeKind::kFireball,
-                       VolumeKind::kConstant})
+  for (VolumeKind k :
+       {VolumeKind::kTurbulenceBox, VolumeKind::kTurbulenceSphere, VolumeKind::kFireball, VolumeKind::kConstant})
     if (volume_kind_name(k) == name) return k;
-  throw InputError(fmt::format(
-      "{}: unknown volume kind '{}' (turbulence_box, turbulence_sphere, fireball, constant)", what, name));
+  throw InputError(
+      fmt::format("{}: unknown volume kind '{}' (turbulence_box, turbulence_sphere, fireball, constant)", what, name));
 }
 
 std::string volume_content_hash(const Volume& v) {

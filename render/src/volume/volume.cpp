@@ -14,18 +14,24 @@ namespace meltlab::render {
 
 int sample_bytes(SampleType type) {
   switch (type) {
-    case SampleType::kUint8: return 1;
-    case SampleType::kUint16: return 2;
-    case SampleType::kFloat32: break;
+    case SampleType::kUint8:
+      return 1;
+    case SampleType::kUint16:
+      return 2;
+    case SampleType::kFloat32:
+      break;
   }
   return 4;
 }
 
 std::string sample_type_name(SampleType type) {
   switch (type) {
-    case SampleType::kUint8: return "uint8";
-    case SampleType::kUint16: return "uint16";
-    case SampleType::kFloat32: break;
+    case SampleType::kUint8:
+      return "uint8";
+    case SampleType::kUint16:
+      return "uint16";
+    case SampleType::kFloat32:
+      break;
   }
   return "float32";
 }
@@ -34,9 +40,12 @@ namespace {
 
 double max_stored(SampleType type) {
   switch (type) {
-    case SampleType::kUint8: return 255.0;
-    case SampleType::kUint16: return 65535.0;
-    case SampleType::kFloat32: break;
+    case SampleType::kUint8:
+      return 255.0;
+    case SampleType::kUint16:
+      return 65535.0;
+    case SampleType::kFloat32:
+      break;
   }
   return 1.0;
 }
@@ -59,9 +68,15 @@ Volume Volume::allocate(int nx, int ny, int nz, SampleType type, const std::stri
   Volume v;
   void* data = nullptr;
   switch (type) {
-    case SampleType::kUint8: v.owner_ = make_storage<std::uint8_t>(n, data); break;
-    case SampleType::kUint16: v.owner_ = make_storage<std::uint16_t>(n, data); break;
-    case SampleType::kFloat32: v.owner_ = make_storage<float>(n, data); break;
+    case SampleType::kUint8:
+      v.owner_ = make_storage<std::uint8_t>(n, data);
+      break;
+    case SampleType::kUint16:
+      v.owner_ = make_storage<std::uint16_t>(n, data);
+      break;
+    case SampleType::kFloat32:
+      v.owner_ = make_storage<float>(n, data);
+      break;
   }
   v.data_ = data;
   v.mutable_ = data;
@@ -100,8 +115,8 @@ bool Volume::x_fastest_packed() const {
 void Volume::fit_to_box(const Box3& box) {
   const Eigen::Vector3d size = box.size();
   if (!(size.minCoeff() > 0.0) || !size.allFinite())
-    throw InputError(fmt::format("volume box must have positive, finite sides (got {} x {} x {})", size.x(), size.y(),
-                                 size.z()));
+    throw InputError(
+        fmt::format("volume box must have positive, finite sides (got {} x {} x {})", size.x(), size.y(), size.z()));
   for (int a = 0; a < 3; ++a) {
     if (placement_ == SamplePlacement::kCellCentred) {
       spacing_[a] = size[a] / n_[a];
@@ -135,7 +150,9 @@ void Volume::set_value(int i, int j, int k, double value) {
   if (!mutable_) throw InvariantError("Volume::set_value on a volume that does not own its samples");
   const std::int64_t o = i * stride_[0] + j * stride_[1] + k * stride_[2];
   switch (type_) {
-    case SampleType::kFloat32: static_cast<float*>(mutable_)[o] = static_cast<float>(value); break;
+    case SampleType::kFloat32:
+      static_cast<float*>(mutable_)[o] = static_cast<float>(value);
+      break;
     case SampleType::kUint8:
       static_cast<std::uint8_t*>(mutable_)[o] =
           static_cast<std::uint8_t>(std::lround(std::clamp(value / scale_, 0.0, 255.0)));
@@ -152,9 +169,8 @@ float Volume::sample(const Eigen::Vector3d& p, VolumeAddress address, float outs
   if (!d.contains(p)) return outside;
   const Eigen::Vector3d g = index_from_world(p);
   return visit_samples(*this, [&](const auto& s) {
-    return address == VolumeAddress::kWrap
-               ? s.trilinear_wrapped(float(g.x()), float(g.y()), float(g.z()))
-               : s.trilinear_clamped(float(g.x()), float(g.y()), float(g.z()));
+    return address == VolumeAddress::kWrap ? s.trilinear_wrapped(float(g.x()), float(g.y()), float(g.z()))
+                                           : s.trilinear_clamped(float(g.x()), float(g.y()), float(g.z()));
   });
 }
 

@@ -128,10 +128,10 @@ TEST(VolumeIntegrator, SlabIntersectionMatchesABruteForceInsideTest) {
 
 TEST(VolumeIntegrator, SlabIntersectionRefusesBoxesBehindAndParallelMisses) {
   const Box3 box{Vec3(-1, -1, -1), Vec3(1, 1, 1)};
-  EXPECT_FALSE(intersect_box(box, Vec3(0, 0, 5), Vec3(0, 0, 1)));        // behind
-  EXPECT_FALSE(intersect_box(box, Vec3(0, 2, 5), Vec3(0, 0, -1)));       // parallel, outside the y slab
+  EXPECT_FALSE(intersect_box(box, Vec3(0, 0, 5), Vec3(0, 0, 1)));   // behind
+  EXPECT_FALSE(intersect_box(box, Vec3(0, 2, 5), Vec3(0, 0, -1)));  // parallel, outside the y slab
   EXPECT_FALSE(intersect_box(box, Vec3(5, 5, 0), Vec3(1, -1, 0).normalized()));
-  const auto in = intersect_box(box, Vec3(0, 0, 0), Vec3(1, 0, 0));      // from inside
+  const auto in = intersect_box(box, Vec3(0, 0, 0), Vec3(1, 0, 0));  // from inside
   ASSERT_TRUE(in);
   EXPECT_EQ(in->t0, -1.0);
   EXPECT_EQ(in->t1, 1.0);
@@ -169,8 +169,7 @@ TEST(VolumeIntegrator, AbsorptionSlabErrorIsBelowOneStepOtherwise) {
     EXPECT_GT(T, exact * std::exp(-kappa * f0 * ds)) << n;
     // Weighting the last sample by the part of its step inside the box makes it exact again.
     s.include_last_partial = true;
-    EXPECT_NEAR(centre_T(render_volume(v, one_ray(Vec3(-10, 0, 0), Vec3(0, 0, 0)), s)), exact,
-                kFloatTolerance * exact)
+    EXPECT_NEAR(centre_T(render_volume(v, one_ray(Vec3(-10, 0, 0), Vec3(0, 0, 0)), s)), exact, kFloatTolerance * exact)
         << n;
   }
 }
@@ -183,7 +182,7 @@ TEST(VolumeIntegrator, EmissionSlabWithAndWithoutTheStep) {
   s.gamma = gamma;
   const VolumeFrame f = render_volume(v, one_ray(Vec3(-10, 0, 0), Vec3(0, 0, 0)), s);
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(centre_value(f, c), s.emission[c] * f0 * 2.0, kFloatTolerance);
-  EXPECT_EQ(centre_T(f), 1.0);  // nothing is attenuated
+  EXPECT_EQ(centre_T(f), 1.0);     // nothing is attenuated
   s.emission_scale_by_ds = false;  // the source's listing: no Δs, I0 + N_s C f0^γ
   const VolumeFrame g = render_volume(v, one_ray(Vec3(-10, 0, 0), Vec3(0, 0, 0)), s);
   EXPECT_EQ(g.stats.samples, 16);
@@ -202,8 +201,7 @@ TEST(VolumeIntegrator, EmissionAbsorptionSlabMatchesTheDiscreteFormAndConvergesT
     const VolumeFrame f = render_volume(v, one_ray(Vec3(-10, 0, 0), Vec3(0, 0, 0)), s);
     const double h = std::ldexp(1.0, -m);
     const int N = 2 << m;
-    const double discrete =
-        g * h * std::exp(-sigma * h) * (1 - std::exp(-sigma * N * h)) / (1 - std::exp(-sigma * h));
+    const double discrete = g * h * std::exp(-sigma * h) * (1 - std::exp(-sigma * N * h)) / (1 - std::exp(-sigma * h));
     EXPECT_NEAR(centre_value(f), discrete, kFloatTolerance * discrete) << m;
     EXPECT_NEAR(centre_T(f), std::exp(-sigma * ell), kFloatTolerance) << m;
     const double continuous = g / sigma * (1 - std::exp(-sigma * ell));

@@ -55,8 +55,8 @@ TEST(Volume, TrilinearIsExactOnLinearFieldsAndClampsOrWraps) {
   Volume c = linear_field();
   c.fit_to_box(Box3{Vec3(0, 0, 0), Vec3(5, 6, 7)});  // cell-centred, unit cells
   EXPECT_NEAR(c.sample(Vec3(4.9, 0.5, 0.5)), c.value(4, 0, 0), 1e-7);
-  EXPECT_NEAR(c.sample(Vec3(4.9, 0.5, 0.5), VolumeAddress::kWrap), 0.6 * double(c.value(4, 0, 0)) + 0.4 * double(c.value(0, 0, 0)),
-              1e-6);
+  EXPECT_NEAR(c.sample(Vec3(4.9, 0.5, 0.5), VolumeAddress::kWrap),
+              0.6 * double(c.value(4, 0, 0)) + 0.4 * double(c.value(0, 0, 0)), 1e-6);
 }
 
 TEST(Volume, CentralDifferencesAreExactOnLinearFields) {
@@ -89,7 +89,8 @@ TEST(Volume, QuantisedStorageKeepsValuesToHalfAStep) {
     double worst = 0;
     for (int k = 0; k < 16; ++k)
       for (int j = 0; j < 16; ++j)
-        for (int i = 0; i < 16; ++i) worst = std::max(worst, std::abs(double(q.value(i, j, k)) - double(f.value(i, j, k))));
+        for (int i = 0; i < 16; ++i)
+          worst = std::max(worst, std::abs(double(q.value(i, j, k)) - double(f.value(i, j, k))));
     EXPECT_LE(worst, 0.5 * step * (1 + 1e-5));
     EXPECT_EQ(q.domain().hi, f.domain().hi);
   }
@@ -98,7 +99,8 @@ TEST(Volume, QuantisedStorageKeepsValuesToHalfAStep) {
 TEST(Volume, RefusesBadDimensionsAndCountsOverTheLimit) {
   EXPECT_THROW(Volume::allocate(0, 4, 4, SampleType::kFloat32), InputError);
   EXPECT_THROW(Volume::allocate(-3, 4, 4, SampleType::kUint8), InputError);
-  EXPECT_THROW(Volume::allocate(1 << 30, 1 << 30, 1 << 30, SampleType::kUint8), InputError);  // overflows int64? no: over the limit
+  EXPECT_THROW(Volume::allocate(1 << 30, 1 << 30, 1 << 30, SampleType::kUint8),
+               InputError);  // overflows int64? no: over the limit
   Volume v = Volume::allocate(2, 2, 2, SampleType::kFloat32);
   EXPECT_THROW(v.fit_to_box(Box3{Vec3(0, 0, 0), Vec3(1, 0, 1)}), InputError);
 }
@@ -130,7 +132,8 @@ TEST(ImprovedNoise, TurbulenceClipsPerOctaveAndTheSum) {
     ASSERT_LE(t, 1.0);
     // By hand: Σ clip(N(4·2^k p)) / 2^k, then clipped.
     double sum = 0;
-    for (int k = 0; k < 4; ++k) sum += std::clamp(improved_noise(4 * x * (1 << k), 4 * y * (1 << k), 4 * z * (1 << k)), 0.0, 1.0) / (1 << k);
+    for (int k = 0; k < 4; ++k)
+      sum += std::clamp(improved_noise(4 * x * (1 << k), 4 * y * (1 << k), 4 * z * (1 << k)), 0.0, 1.0) / (1 << k);
     EXPECT_DOUBLE_EQ(t, std::clamp(sum, 0.0, 1.0));
   }
 }

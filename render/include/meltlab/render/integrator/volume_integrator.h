@@ -77,10 +77,10 @@ enum class LightFalloff { kNone, kInverseSquare };
 
 struct VolumeLight {
   LightType type = LightType::kPoint;
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();     ///< point light: world position
-  Eigen::Vector3d to_light = Eigen::Vector3d::UnitZ();    ///< directional light: unit vector towards it
-  Rgb intensity = Rgb::Ones();                            ///< L (radiance units of the image)
-  LightFalloff falloff = LightFalloff::kNone;             ///< inverse square: L / distance² (point lights)
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();   ///< point light: world position
+  Eigen::Vector3d to_light = Eigen::Vector3d::UnitZ();  ///< directional light: unit vector towards it
+  Rgb intensity = Rgb::Ones();                          ///< L (radiance units of the image)
+  LightFalloff falloff = LightFalloff::kNone;           ///< inverse square: L / distance² (point lights)
 };
 
 /// vlr.shadow.method (HGAttenuated).
@@ -122,11 +122,11 @@ struct VolumeRenderSettings {
   bool include_last_partial = false;  ///< vlr.sampling.last_partial: false = drop (the source's t < t1)
   Quadrature quadrature = Quadrature::kInclusive;
   // --- optics (Sabella's constants and the media) ---
-  double kappa = 1.0;  ///< κ: extinction per scene unit at f^γ = 1
-  double gamma = 1.0;  ///< γ: the data exponent
-  bool emission_scale_by_ds = true;  ///< vlr.emission.scale_by_ds (inclusive/exclusive quadrature)
-  bool kappa_in_source = false;      ///< vlr.emission.kappa_in_source
-  bool kappa_in_brdf = false;        ///< vlr.scatter.kappa_in_brdf
+  double kappa = 1.0;                 ///< κ: extinction per scene unit at f^γ = 1
+  double gamma = 1.0;                 ///< γ: the data exponent
+  bool emission_scale_by_ds = true;   ///< vlr.emission.scale_by_ds (inclusive/exclusive quadrature)
+  bool kappa_in_source = false;       ///< vlr.emission.kappa_in_source
+  bool kappa_in_brdf = false;         ///< vlr.scatter.kappa_in_brdf
   Rgb emission = Rgb(1.0, 0.6, 0.2);  ///< C
   EmissionField emission_field = EmissionField::kConstant;
   Rgb emission_rim = Rgb(0.8, 0.1, 0.0);  ///< C at the rim (kRadial)
@@ -140,8 +140,8 @@ struct VolumeRenderSettings {
   ShadowCacheBuild shadow_cache_build = ShadowCacheBuild::kSweep;
   double shadow_cache_scale = 1.0;  ///< cache samples per volume sample along each axis
   // --- acceleration ---
-  double ert_transmittance = 0.0;  ///< stop a ray once T falls below this (0: never)
-  bool skip_empty = true;          ///< empty-space skipping (changes no pixel)
+  double ert_transmittance = 0.0;                 ///< stop a ray once T falls below this (0: never)
+  bool skip_empty = true;                         ///< empty-space skipping (changes no pixel)
   VolumeAddress address = VolumeAddress::kClamp;  ///< vlr.tex.address
   // --- rays and output ---
   RayGeneration ray_generation = RayGeneration::kAnalytic;
@@ -179,14 +179,14 @@ TwoPassRays two_pass_rays(const Box3& box, const Camera& camera);
 
 /// Counters of one render.
 struct VolumeRenderStats {
-  std::int64_t rays = 0;            ///< pixel rays that met the box
-  std::int64_t samples = 0;         ///< primary samples evaluated (skipped empty samples not counted)
-  std::int64_t skipped = 0;         ///< primary samples crossed by empty-space skipping
-  std::int64_t shadow_samples = 0;  ///< volume samples taken by shadow marches (rendering and cache)
-  std::int64_t terminated = 0;      ///< rays stopped by early ray termination
+  std::int64_t rays = 0;                 ///< pixel rays that met the box
+  std::int64_t samples = 0;              ///< primary samples evaluated (skipped empty samples not counted)
+  std::int64_t skipped = 0;              ///< primary samples crossed by empty-space skipping
+  std::int64_t shadow_samples = 0;       ///< volume samples taken by shadow marches (rendering and cache)
+  std::int64_t terminated = 0;           ///< rays stopped by early ray termination
   std::int64_t silhouette_mismatch = 0;  ///< two-pass: pixels covered by one pass only
-  double shadow_cache_ms = 0;       ///< time to build the shadow caches
-  double render_ms = 0;             ///< time of the ray casting itself
+  double shadow_cache_ms = 0;            ///< time to build the shadow caches
+  double render_ms = 0;                  ///< time of the ray casting itself
 };
 
 /// A rendered frame: linear radiance I (3 channels) and the transmittance T (1 channel) of every

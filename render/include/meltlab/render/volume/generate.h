@@ -56,7 +56,7 @@ struct VolumeGenerateOptions {
   int nx = 64, ny = 64, nz = 64;
   TurbulenceOptions noise;
   SphereFalloff falloff = SphereFalloff::kLinear;
-  double constant = 1.0;                     ///< kConstant's value
+  double constant = 1.0;                      ///< kConstant's value
   SampleType storage = SampleType::kFloat32;  ///< vlr.data.quantization: float32, uint8 or uint16
 };
 

@@ -72,16 +72,17 @@ struct VolumeSamples {
   std::int64_t sx = 1, sy = 0, sz = 0;  ///< element strides
   float scale = 1.0f;                   ///< value = stored * scale
 
-  float at(int i, int j, int k) const {
-    return static_cast<float>(data[i * sx + j * sy + k * sz]) * scale;
-  }
+  float at(int i, int j, int k) const { return static_cast<float>(data[i * sx + j * sy + k * sz]) * scale; }
   /// Trilinear value at index coordinates (gx, gy, gz), indices clamped to the volume (clamp
   /// addressing). The arithmetic order is fixed (x, then y, then z), so every caller that samples
   /// the same point gets the same bits.
   float trilinear_clamped(float gx, float gy, float gz) const {
     const float fx = std::floor(gx), fy = std::floor(gy), fz = std::floor(gz);
-    const float tx = gx - fx, ty = gy - fy, tz = gz - fz;
-    const int i0 = static_cast<int>(fx), j0 = static_cast<int>(fy), k0 = static_cast<int>(fz);
+    return trilinear_cell(static_cast<int>(fx), static_cast<int>(fy), static_cast<int>(fz), gx - fx, gy - fy, gz - fz);
+  }
+  /// The same with the lower corner (i0, j0, k0) of the stencil and the weights given (clamped
+  /// indices): for callers that located the point already.
+  float trilinear_cell(int i0, int j0, int k0, float tx, float ty, float tz) const {
     const std::int64_t x0 = clampi(i0, nx) * sx, x1 = clampi(i0 + 1, nx) * sx;
     const std::int64_t y0 = clampi(j0, ny) * sy, y1 = clampi(j0 + 1, ny) * sy;
     const std::int64_t z0 = clampi(k0, nz) * sz, z1 = clampi(k0 + 1, nz) * sz;
@@ -220,9 +221,12 @@ class Volume {
 template <class Fn>
 decltype(auto) visit_samples(const Volume& v, Fn&& fn) {
   switch (v.type()) {
-    case SampleType::kUint8: return fn(v.samples<std::uint8_t>());
-    case SampleType::kUint16: return fn(v.samples<std::uint16_t>());
-    case SampleType::kFloat32: break;
+    case SampleType::kUint8:
+      return fn(v.samples<std::uint8_t>());
+    case SampleType::kUint16:
+      return fn(v.samples<std::uint16_t>());
+    case SampleType::kFloat32:
+      break;
   }
   return fn(v.samples<float>());
 }
