@@ -176,7 +176,7 @@ PixelFormat pixel_format_of(OIIO::TypeDesc type) {
 
 // Checks `file` and opens it with OpenImageIO, validating the header.
 std::unique_ptr<OIIO::ImageInput> open_image(const fs::path& file, std::int64_t max_pixels, ImageAlpha alpha) {
-  check_input_file(file, "image");
+  const std::int64_t file_bytes = check_input_file(file, "image");
   check_declared_image_size(file, max_pixels);  // before OpenImageIO allocates anything from the header
   OIIO::ImageSpec config;
   if (alpha == ImageAlpha::kAsStored) config.attribute("oiio:UnassociatedAlpha", 1);
@@ -196,6 +196,14 @@ std::unique_ptr<OIIO::ImageInput> open_image(const fs::path& file, std::int64_t 
   if (spec.depth > 1 || spec.deep || spec.nchannels < 1 || spec.nchannels > 64)
     refuse(fmt::format("not a flat 2-D image (depth {}, {} channels{})", spec.depth, spec.nchannels,
                        spec.deep ? ", deep" : ""));
+  // Every format's samples, whatever its header (BMP, TIFF, ... beyond the EXR/PNG pre-check),
+  // must fit in the file at the best compression any image codec reaches: a fuzzed 250-byte BMP
+  // declaring 8 x 16187400 pixels asked for 1.5 GB.
+  const std::int64_t sample_bytes = checked_mul(pixels, std::int64_t(spec.pixel_bytes(true)));
+  const std::int64_t room = checked_mul(file_bytes, kMaxImageCompressionRatio);
+  if (sample_bytes < 0 || (room >= 0 && sample_bytes > room))
+    refuse(fmt::format("corrupt or truncated image: {}x{} pixels of {} channels cannot fit in {} bytes", spec.width,
+                       spec.height, spec.nchannels, file_bytes));
   return in;
 }
 
