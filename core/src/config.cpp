@@ -227,6 +227,7 @@ T ConfigValue::as_in_range(T lo, T hi) const {
 }
 template double ConfigValue::as_in_range<double>(double, double) const;
 template int ConfigValue::as_in_range<int>(int, int) const;
+template std::int64_t ConfigValue::as_in_range<std::int64_t>(std::int64_t, std::int64_t) const;
 
 std::vector<double> ConfigValue::as_numbers(std::size_t n_min, std::size_t n_max) const {
   if (!node_.IsSequence()) fail_value(fmt::format("must be a list of numbers (got {})", got(node_)));

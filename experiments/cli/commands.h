@@ -20,5 +20,6 @@ Run add_fit(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_manufacture(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_render(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_reproduce(CLI::App& app);
+Run add_volume(CLI::App& app, const std::vector<std::string>& command_line);
 
 }  // namespace meltlab::cli

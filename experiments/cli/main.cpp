@@ -43,6 +43,7 @@ int main(int argc, char** argv) {
   add(cli::add_manufacture(app, command_line));
   add(cli::add_render(app, command_line));
   add(cli::add_reproduce(app));
+  add(cli::add_volume(app, command_line));
 
   try {
     app.parse(argc, argv);

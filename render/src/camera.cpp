@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace meltlab::render {
 
@@ -200,7 +201,12 @@ Camera parse_orthographic(const ConfigSection& c) {
 Camera parse_pinhole(const ConfigSection& c) {
   const int width = c.require_in_range<int>("width", 1, kMaxImageSide);
   const int height = c.require_in_range<int>("height", 1, kMaxImageSide);
-  const double fx = c.require_positive("fx");
+  // The focal length in pixels, or the vertical field of view it gives (fx = (height / 2) / tan(fov / 2)).
+  if (c.has("fx") == c.has("fov_deg")) c.fail("give exactly one of 'fx' and 'fov_deg'");
+  const double fx =
+      c.has("fx") ? c.require_positive("fx")
+                  : 0.5 * height /
+                        std::tan(0.5 * c.get_in_range<double>("fov_deg", 45.0, 1e-3, 179.0) * std::numbers::pi / 180.0);
   Pinhole p;
   const bool has_pose = c.has("eye") || c.has("target") || c.has("up");
   if (c.has("camera_from_world")) {

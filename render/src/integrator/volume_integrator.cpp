@@ -115,6 +115,13 @@ Macrocells build_macrocells(const Volume& v) {
   return m;
 }
 
+/// A located sample: the lower corner of its trilinear stencil and the weights (a shadow cache on
+/// the volume's grid is read with the same stencil).
+struct Cell {
+  int ix, iy, iz;
+  float tx, ty, tz;
+};
+
 /// One light as the kernel sees it.
 struct LightTerm {
   LightType type = LightType::kPoint;
@@ -187,9 +194,10 @@ class Sampler {
           continue;
         }
       }
+      const Cell cell{ix, iy, iz, float(gx - fx), float(gy - fy), float(gz - fz)};
       const float f = wrap_ ? s_.trilinear_wrapped(float(gx), float(gy), float(gz))
-                            : s_.trilinear_cell(ix, iy, iz, float(gx - fx), float(gy - fy), float(gz - fz));
-      if (!fn(i, gx, gy, gz, f)) return skipped;
+                            : s_.trilinear_cell(ix, iy, iz, cell.tx, cell.ty, cell.tz);
+      if (!fn(i, gx, gy, gz, f, cell)) return skipped;
       ++i;
     }
     return skipped;
@@ -251,11 +259,12 @@ struct Kernel {
     const double h = (end - start) / double(m);
     double sum = 0;
     std::int64_t taken = 0;
-    sampler.march(x, dir, start + s.shadow_start_offset * h, h, m, [&](std::int64_t, double, double, double, float f) {
-      ++taken;
-      if (f > 0.0f) sum += extinction_weight(f);
-      return true;
-    });
+    sampler.march(x, dir, start + s.shadow_start_offset * h, h, m,
+                  [&](std::int64_t, double, double, double, float f, const Cell&) {
+                    ++taken;
+                    if (f > 0.0f) sum += extinction_weight(f);
+                    return true;
+                  });
     samples += taken;
     return s.kappa * h * sum;
   }
@@ -339,72 +348,73 @@ struct Kernel {
     double T = 1.0, ext = 0.0;
     std::int64_t taken = 0;
     bool terminated = false;
-    st.skipped += sampler.march(o, v, a, h, n_max, [&](std::int64_t i, double gx, double gy, double gz, float f) {
-      ++taken;
-      if (!(f > 0.0f)) return true;  // e = 0: nothing added, T unchanged (bit for bit)
-      const double e = extinction_weight(f);
-      // The step this sample stands for: h, or the part of the last step before t1.
-      double w = h;
-      if (s.include_last_partial && i + 1 == n_max && s.step_rule == StepRule::kDiagonalOverN)
-        w = std::min(h, t1 - (a + double(i) * h));
-      Rgb g = Rgb::Zero();
-      if (emits) {
-        Vec3 x = Vec3::Zero();
-        if (need_x) x = volume.world_from_index(Vec3(gx, gy, gz));
-        g = (s.emission_field == EmissionField::kConstant ? s.emission : emission_colour(x)) * (emission_k * e);
-        if (nl > 0) {
-          if (i < chunk || i >= chunk + kChunk) {
-            chunk = i;
-            fill_chunk(chunk);
-          }
-          for (std::size_t l = 0; l < nl; ++l) {
-            const LightTerm& L = lights[l];
-            const double p = L.type == LightType::kDirectional ? phase_const[l] : phase[l][std::size_t(i - chunk)];
-            double Ts = 1.0;
-            if (attenuated) {
-              if (L.cache && L.cache_same_grid) {
-                Ts = L.cache->trilinear_clamped(float(gx), float(gy), float(gz));
-              } else if (L.cache) {
-                const Vec3 gc = (x - L.cache_origin).cwiseProduct(L.cache_inv_spacing);
-                Ts = L.cache->trilinear_clamped(float(gc.x()), float(gc.y()), float(gc.z()));
-              } else {
-                Ts = std::exp(-shadow_optical_depth(x, L, st.shadow_samples));
+    st.skipped += sampler.march(
+        o, v, a, h, n_max, [&](std::int64_t i, double gx, double gy, double gz, float f, const Cell& cell) {
+          ++taken;
+          if (!(f > 0.0f)) return true;  // e = 0: nothing added, T unchanged (bit for bit)
+          const double e = extinction_weight(f);
+          // The step this sample stands for: h, or the part of the last step before t1.
+          double w = h;
+          if (s.include_last_partial && i + 1 == n_max && s.step_rule == StepRule::kDiagonalOverN)
+            w = std::min(h, t1 - (a + double(i) * h));
+          Rgb g = Rgb::Zero();
+          if (emits) {
+            Vec3 x = Vec3::Zero();
+            if (need_x) x = volume.world_from_index(Vec3(gx, gy, gz));
+            g = (s.emission_field == EmissionField::kConstant ? s.emission : emission_colour(x)) * (emission_k * e);
+            if (nl > 0) {
+              if (i < chunk || i >= chunk + kChunk) {
+                chunk = i;
+                fill_chunk(chunk);
+              }
+              for (std::size_t l = 0; l < nl; ++l) {
+                const LightTerm& L = lights[l];
+                const double p = L.type == LightType::kDirectional ? phase_const[l] : phase[l][std::size_t(i - chunk)];
+                double Ts = 1.0;
+                if (attenuated) {
+                  if (L.cache && L.cache_same_grid) {
+                    Ts = L.cache->trilinear_cell(cell.ix, cell.iy, cell.iz, cell.tx, cell.ty, cell.tz);
+                  } else if (L.cache) {
+                    const Vec3 gc = (x - L.cache_origin).cwiseProduct(L.cache_inv_spacing);
+                    Ts = L.cache->trilinear_clamped(float(gc.x()), float(gc.y()), float(gc.z()));
+                  } else {
+                    Ts = std::exp(-shadow_optical_depth(x, L, st.shadow_samples));
+                  }
+                }
+                g += L.intensity * (scatter_k * e * p * Ts);
               }
             }
-            g += L.intensity * (scatter_k * e * p * Ts);
           }
-        }
-      }
-      // The source's sum of g (no Δs, vlr.emission.scale_by_ds = false) counts a partial step in proportion.
-      const double g_step = w == h ? source_step : source_step * (w / h);
-      if (!extinct) {
-        I += g * (s.quadrature == Quadrature::kExponential ? w : g_step);
-        return true;
-      }
-      switch (s.quadrature) {
-        case Quadrature::kInclusive:
-          ext += w == h ? e : e * (w / h);
-          T = std::exp(-kappa_h * ext);
-          I += g * (T * g_step);
-          break;
-        case Quadrature::kExclusive:
-          I += g * (T * g_step);
-          T *= std::exp(-s.kappa * e * w);
-          break;
-        case Quadrature::kExponential: {
-          const double sigma = s.kappa * e;
-          const double att = std::exp(-sigma * w);
-          I += g * (T * (sigma > 0 ? (1.0 - att) / sigma : w));
-          T *= att;
-          break;
-        }
-      }
-      if (T < s.ert_transmittance) {
-        terminated = true;
-        return false;
-      }
-      return true;
-    });
+          // The source's sum of g (no Δs, vlr.emission.scale_by_ds = false) counts a partial step in proportion.
+          const double g_step = w == h ? source_step : source_step * (w / h);
+          if (!extinct) {
+            I += g * (s.quadrature == Quadrature::kExponential ? w : g_step);
+            return true;
+          }
+          switch (s.quadrature) {
+            case Quadrature::kInclusive:
+              ext += w == h ? e : e * (w / h);
+              T = std::exp(-kappa_h * ext);
+              I += g * (T * g_step);
+              break;
+            case Quadrature::kExclusive:
+              I += g * (T * g_step);
+              T *= std::exp(-s.kappa * e * w);
+              break;
+            case Quadrature::kExponential: {
+              const double sigma = s.kappa * e;
+              const double att = std::exp(-sigma * w);
+              I += g * (T * (sigma > 0 ? (1.0 - att) / sigma : w));
+              T *= att;
+              break;
+            }
+          }
+          if (T < s.ert_transmittance) {
+            terminated = true;
+            return false;
+          }
+          return true;
+        });
     st.samples += taken;
     if (terminated) ++st.terminated;
     return extinct ? T : 1.0;

@@ -116,7 +116,8 @@ Volume read_vdb(const fs::path& file, const std::string& name) {
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
       if (r != c && m(r, c) != 0.0)
-        throw InputError(fmt::format("{}: the grid is rotated or sheared (only axis-aligned grids are read)", file.string()));
+        throw InputError(
+            fmt::format("{}: the grid is rotated or sheared (only axis-aligned grids are read)", file.string()));
   openvdb::CoordBBox box = grid->evalActiveVoxelBoundingBox();
   if (box.empty()) throw InputError(fmt::format("{}: the grid has no active voxels", file.string()));
   const auto dim = box.dim();

@@ -63,7 +63,9 @@ Volume read_meltlab_volume(const fs::path& header) {
   const Eigen::Vector3d origin = c.get_vec3("origin", Eigen::Vector3d::Zero());
   const Eigen::Vector3d spacing = c.get_vec3("spacing", Eigen::Vector3d::Ones());
   if (!(spacing.minCoeff() > 0)) c.fail_at("spacing", "'spacing' must be three numbers > 0");
-  const SampleType st = type == "uint8" ? SampleType::kUint8 : type == "uint16" ? SampleType::kUint16 : SampleType::kFloat32;
+  const SampleType st = type == "uint8"    ? SampleType::kUint8
+                        : type == "uint16" ? SampleType::kUint16
+                                           : SampleType::kFloat32;
   const double scale = c.get<double>("value_scale", st == SampleType::kUint8    ? 1.0 / 255
                                                     : st == SampleType::kUint16 ? 1.0 / 65535
                                                                                 : 1.0);
@@ -94,8 +96,7 @@ Volume read_meltlab_volume(const fs::path& header) {
   if (st == SampleType::kFloat32) {
     const auto* f = static_cast<const float*>(v.data());
     for (std::int64_t i = 0; i < count; ++i)
-      if (!std::isfinite(f[i]))
-        throw InputError(fmt::format("{}: sample {} is not a finite number", raw.string(), i));
+      if (!std::isfinite(f[i])) throw InputError(fmt::format("{}: sample {} is not a finite number", raw.string(), i));
   }
   if (hash && *hash != volume_content_hash(v))
     throw InputError(fmt::format("{}: the samples do not match the header's content_hash {} (the raw file changed?)",

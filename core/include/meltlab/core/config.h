@@ -119,6 +119,7 @@ template <>
 std::string ConfigValue::as<std::string>() const;
 extern template double ConfigValue::as_in_range<double>(double, double) const;
 extern template int ConfigValue::as_in_range<int>(int, int) const;
+extern template std::int64_t ConfigValue::as_in_range<std::int64_t>(std::int64_t, std::int64_t) const;
 
 /// One YAML mapping of a config: typed values by key, each key read counting as used. A
 /// ConfigSection is a handle: copies share what has been read.

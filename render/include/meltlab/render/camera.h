@@ -136,7 +136,8 @@ bool undistort_normalized(const std::array<double, 5>& distortion, double xd, do
 ///   {type: orthographic, width: 2048, height: 1536, pixels_per_mm: 10, centre_m: [0, 0]}
 ///   {type: orthographic, width: W, height: H, pixels_per_unit: 1e4, centre: [x, y]}
 ///   {type: pinhole, width: W, height: H, fx: .., fy: .., cx: .., cy: .., distortion: [k1,k2,p1,p2,k3],
-///    eye: [x,y,z], target: [x,y,z], up: [x,y,z]}       (or camera_from_world: 4x4 row-major list)
+///    eye: [x,y,z], target: [x,y,z], up: [x,y,z]}       (or camera_from_world: 4x4 row-major list;
+///    fov_deg: the vertical field of view instead of fx)
 Camera parse_camera(const ConfigSection& section);
 /// The same from a YAML node of the file `source`, refusing unknown keys.
 Camera parse_camera(const YAML::Node& node, const std::string& source);

@@ -1,0 +1,112 @@
+// meltlab volume: the volume renderers (seed 000): generate the seed's volumes, render a scene,
+// describe a volume file.
+
+#include <meltlab/experiments/volume_run.h>
+
+#include <fmt/format.h>
+
+#include <cstdio>
+
+#include "cli_util.h"
+#include "commands.h"
+
+namespace meltlab::cli {
+
+Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
+  auto* sub = app.add_subcommand("volume", "Volume ray casting (seed 000): generate volumes, render scenes, describe files");
+  sub->require_subcommand(1);
+
+  // --- generate ---
+  auto* gen = sub->add_subcommand("generate", "Write a generated volume: Perlin turbulence (box, sphere), fireball, constant");
+  auto g = std::make_shared<experiments::VolumeGenerateRunOptions>();
+  auto kind = std::make_shared<std::string>("turbulence_box");
+  auto size = std::make_shared<int>(64);
+  auto clip = std::make_shared<std::string>("per_octave");
+  auto falloff = std::make_shared<std::string>("linear");
+  auto storage = std::make_shared<std::string>("float32");
+  auto box = std::make_shared<std::vector<double>>();
+  auto seed = std::make_shared<std::uint64_t>(0);
+  gen->add_option("--kind", *kind, "turbulence_box, turbulence_sphere, fireball or constant")
+      ->check(CLI::IsMember({"turbulence_box", "turbulence_sphere", "fireball", "constant"}))
+      ->default_val("turbulence_box");
+  gen->add_option("--size", *size, "Samples per axis (the source: 64 or 128)")->check(CLI::Range(1, 4096))->default_val(64);
+  gen->add_option("--octaves", g->generate.noise.octaves, "Turbulence octaves (vlr.noise.octaves)")
+      ->check(CLI::Range(1, 16))
+      ->default_val(4);
+  gen->add_option("--gain", g->generate.noise.gain, "Amplitude divisor per octave")->default_val(2.0);
+  gen->add_option("--lacunarity", g->generate.noise.lacunarity, "Frequency factor per octave")->default_val(2.0);
+  gen->add_option("--base-frequency", g->generate.noise.base_frequency, "Noise cells across the box at octave 0")
+      ->default_val(4.0);
+  gen->add_option("--clip", *clip, "per_octave (the source), sum_only or none")
+      ->check(CLI::IsMember({"per_octave", "sum_only", "none"}))
+      ->default_val("per_octave");
+  gen->add_option("--seed", *seed, "0: Perlin's reference table as is; else a seeded offset of the domain")->default_val(0);
+  gen->add_option("--falloff", *falloff, "Sphere variant: linear (1 - r/R) or none")
+      ->check(CLI::IsMember({"linear", "none"}))
+      ->default_val("linear");
+  gen->add_option("--constant", g->generate.constant, "Value of --kind constant")->default_val(1.0);
+  gen->add_option("--quantization", *storage, "float32, uint8 or uint16 (vlr.data.quantization)")
+      ->check(CLI::IsMember({"float32", "uint8", "uint16"}))
+      ->default_val("float32");
+  gen->add_option("--box", *box, "World box: cx,cy,cz,sx,sy,sz (default: the unit box [0,1]^3)")
+      ->delimiter(',')
+      ->expected(6);
+  gen->add_option("--out", g->out, "NAME.json (raw samples in NAME.raw beside it) or NAME.vdb")->required();
+  gen->add_flag("--overwrite", g->overwrite, "Replace existing files");
+
+  // --- render ---
+  auto* ren = sub->add_subcommand("render", "Render a volume scene (experiments/configs/volume/*.yaml) into a folder");
+  auto r = std::make_shared<experiments::VolumeRenderRunOptions>();
+  r->command_line = command_line;
+  auto frames = std::make_shared<int>(0);
+  auto samples = std::make_shared<int>(0);
+  ren->add_option("--scene", r->scene_file, "Scene YAML: model, volume, camera, sampling, optics, lights, shadow, output")
+      ->required();
+  ren->add_option("--out", r->out_dir, "Output folder (image.png, image.exr, render.json)")->required();
+  ren->add_option("--width", r->width, "Image width (overrides the scene's; field of view kept)")->default_val(0);
+  ren->add_option("--height", r->height, "Image height (overrides the scene's)")->default_val(0);
+  ren->add_option("--frames", *frames, "Timed frames (overrides the scene's timing.frames)")->default_val(0);
+  ren->add_option("--samples", *samples, "Samples per ray n (overrides the scene's sampling.n)")->default_val(0);
+  ren->add_flag("--overwrite", r->overwrite, "Allow --out to hold a previous render");
+
+  // --- info ---
+  auto* info = sub->add_subcommand("info", "Describe a volume file (.json header or .vdb) as JSON");
+  auto info_file = std::make_shared<std::string>();
+  info->add_option("file", *info_file, "Volume file")->required();
+
+  return [=]() {
+    if (gen->parsed()) {
+      g->generate.kind = render::parse_volume_kind(*kind, "--kind");
+      g->generate.nx = g->generate.ny = g->generate.nz = *size;
+      g->generate.noise.clip = *clip == "per_octave" ? render::NoiseClip::kPerOctave
+                               : *clip == "sum_only" ? render::NoiseClip::kSumOnly
+                                                     : render::NoiseClip::kNone;
+      g->generate.noise.seed = *seed;
+      g->generate.falloff = *falloff == "none" ? render::SphereFalloff::kNone : render::SphereFalloff::kLinear;
+      g->generate.storage = *storage == "uint8"    ? render::SampleType::kUint8
+                            : *storage == "uint16" ? render::SampleType::kUint16
+                                                   : render::SampleType::kFloat32;
+      if (!box->empty()) {
+        const Eigen::Vector3d c((*box)[0], (*box)[1], (*box)[2]), s((*box)[3], (*box)[4], (*box)[5]);
+        if (!(s.minCoeff() > 0)) throw InputError("--box: the sides must be > 0");
+        g->box = render::Box3{c - 0.5 * s, c + 0.5 * s};
+      }
+      const auto j = experiments::run_volume_generate(*g);
+      std::printf("%s\n", j.dump(2).c_str());
+      return kExitOk;
+    }
+    if (info->parsed()) {
+      std::printf("%s\n", experiments::volume_info(*info_file).dump(2).c_str());
+      return kExitOk;
+    }
+    if (*frames > 0) r->frames = *frames;
+    if (*samples > 0) r->samples = *samples;
+    const auto res = experiments::run_volume_render(*r);
+    std::fprintf(stderr, "meltlab: volume render: %lld rays, %lld samples, median %.1f ms/frame; wrote %s\n",
+                 static_cast<long long>(res.stats.rays), static_cast<long long>(res.stats.samples), res.median_frame_ms,
+                 r->out_dir.string().c_str());
+    return kExitOk;
+  };
+}
+
+}  // namespace meltlab::cli
