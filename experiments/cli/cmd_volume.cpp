@@ -13,11 +13,13 @@
 namespace meltlab::cli {
 
 Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
-  auto* sub = app.add_subcommand("volume", "Volume ray casting (seed 000): generate volumes, render scenes, describe files");
+  auto* sub =
+      app.add_subcommand("volume", "Volume ray casting (seed 000): generate volumes, render scenes, describe files");
   sub->require_subcommand(1);
 
   // --- generate ---
-  auto* gen = sub->add_subcommand("generate", "Write a generated volume: Perlin turbulence (box, sphere), fireball, constant");
+  auto* gen =
+      sub->add_subcommand("generate", "Write a generated volume: Perlin turbulence (box, sphere), fireball, constant");
   auto g = std::make_shared<experiments::VolumeGenerateRunOptions>();
   auto kind = std::make_shared<std::string>("turbulence_box");
   auto size = std::make_shared<int>(64);
@@ -29,7 +31,9 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
   gen->add_option("--kind", *kind, "turbulence_box, turbulence_sphere, fireball or constant")
       ->check(CLI::IsMember({"turbulence_box", "turbulence_sphere", "fireball", "constant"}))
       ->default_val("turbulence_box");
-  gen->add_option("--size", *size, "Samples per axis (the source: 64 or 128)")->check(CLI::Range(1, 4096))->default_val(64);
+  gen->add_option("--size", *size, "Samples per axis (the source: 64 or 128)")
+      ->check(CLI::Range(1, 4096))
+      ->default_val(64);
   gen->add_option("--octaves", g->generate.noise.octaves, "Turbulence octaves (vlr.noise.octaves)")
       ->check(CLI::Range(1, 16))
       ->default_val(4);
@@ -40,7 +44,8 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
   gen->add_option("--clip", *clip, "per_octave (the source), sum_only or none")
       ->check(CLI::IsMember({"per_octave", "sum_only", "none"}))
       ->default_val("per_octave");
-  gen->add_option("--seed", *seed, "0: Perlin's reference table as is; else a seeded offset of the domain")->default_val(0);
+  gen->add_option("--seed", *seed, "0: Perlin's reference table as is; else a seeded offset of the domain")
+      ->default_val(0);
   gen->add_option("--falloff", *falloff, "Sphere variant: linear (1 - r/R) or none")
       ->check(CLI::IsMember({"linear", "none"}))
       ->default_val("linear");
@@ -60,7 +65,8 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
   r->command_line = command_line;
   auto frames = std::make_shared<int>(0);
   auto samples = std::make_shared<int>(0);
-  ren->add_option("--scene", r->scene_file, "Scene YAML: model, volume, camera, sampling, optics, lights, shadow, output")
+  ren->add_option("--scene", r->scene_file,
+                  "Scene YAML: model, volume, camera, sampling, optics, lights, shadow, output")
       ->required();
   ren->add_option("--out", r->out_dir, "Output folder (image.png, image.exr, render.json)")->required();
   ren->add_option("--width", r->width, "Image width (overrides the scene's; field of view kept)")->default_val(0);

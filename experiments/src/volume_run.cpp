@@ -86,7 +86,8 @@ json volume_info(const fs::path& file) {
 json run_volume_generate(const VolumeGenerateRunOptions& o) {
   const std::string ext = o.out.extension().string();
   if (ext != ".json" && ext != ".vdb")
-    throw InputError(fmt::format("--out {}: name the header NAME.json (raw samples in NAME.raw) or NAME.vdb", o.out.string()));
+    throw InputError(
+        fmt::format("--out {}: name the header NAME.json (raw samples in NAME.raw) or NAME.vdb", o.out.string()));
   fs::path raw = o.out;
   raw.replace_extension(".raw");
   for (const fs::path& f : {o.out, raw}) {
@@ -130,6 +131,26 @@ VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
       background = rgb;
     }
   }
+  // Settings the integrator refuses (an eye inside the box, ...) are problems of the scene file.
+  const std::string scene_name = o.scene_file.string();
+  auto named = [&](const auto& call) {
+    try {
+      call();
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      if (what.rfind(scene_name, 0) == 0) throw;
+      throw InputError(fmt::format("{}: {}", scene_name, what));
+    }
+  };
+  if (const auto* pin = std::get_if<render::Pinhole>(&scene.camera)) {
+    const Eigen::Vector3d eye = pin->camera_from_world.inverse().translation();
+    if (volume.domain().contains(eye) && scene.settings.camera_inside == render::CameraInside::kReject)
+      throw InputError(
+          fmt::format("{}: the camera is inside the volume's box (vlr.camera.inside: reject); move it "
+                      "out or set rays: {{camera_inside: start_at_eye}}",
+                      scene_name));
+  }
+  named([&] { render::check_volume_render_settings(volume, scene.settings); });
   RunFolder folder(o.out_dir, RunFolderOptions{"--out", "render.json", "volume render", o.overwrite});
   Provenance provenance = start_provenance("volume render", o.command_line);
   const fs::path dir = folder.path();
@@ -139,7 +160,8 @@ VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
   std::vector<render::ShadowCache> caches;
   double cache_ms = 0;
   render::VolumeRenderStats cache_stats;
-  if (scene.settings.model == render::OpticalModel::kHGAttenuated && scene.settings.shadow == render::ShadowMethod::kCache) {
+  if (scene.settings.model == render::OpticalModel::kHGAttenuated &&
+      scene.settings.shadow == render::ShadowMethod::kCache) {
     const auto t = std::chrono::steady_clock::now();
     const int n = int(render::effective_lights(volume, scene.settings).size());
     for (int l = 0; l < n; ++l) caches.push_back(render::build_shadow_cache(volume, scene.settings, l, &cache_stats));
@@ -193,9 +215,13 @@ VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
                     {"median_frame", result.median_frame_ms},
                     {"warmup_frames", scene.warmup_frames},
                     {"shadow_cache_build", cache_ms}};
-  j["image"] = {{"png", "image.png"}, {"exr", "image.exr"}, {"exposure", scene.exposure},
-                {"background", scene.mode == render::VolumeOutputMode::kComposite ? scene.background_image.string()
-                                                                                  : fmt::format("[{}, {}, {}]", scene.settings.background.x(), scene.settings.background.y(), scene.settings.background.z())}};
+  j["image"] = {{"png", "image.png"},
+                {"exr", "image.exr"},
+                {"exposure", scene.exposure},
+                {"background", scene.mode == render::VolumeOutputMode::kComposite
+                                   ? scene.background_image.string()
+                                   : fmt::format("[{}, {}, {}]", scene.settings.background.x(),
+                                                 scene.settings.background.y(), scene.settings.background.z())}};
   j["provenance"] = finish_provenance(provenance);
   result.run_json = j;
   write_text_atomically(dir / "render.json", j.dump(2) + "\n");

@@ -357,6 +357,90 @@ def option_cases():
     ]
 
 
+def volume_cases():
+    """Volume files (raw + JSON header, .vdb) and volume scenes: lying sizes, overflowing dims,
+    broken headers and files, refused before anything is allocated."""
+    def header(dims, typ="uint8", extra=""):
+        return ('{"format": "meltlab-volume", "version": 1, "dims": %s, "sample_type": "%s", "data": "v.raw"%s}\n'
+                % (dims, typ, extra))
+    cam = "camera: {type: pinhole, width: 8, height: 8, fov_deg: 40, eye: [400, 0, 0], target: [0, 0, 0]}\n"
+    files = {
+        "raw_shorter_than_header": (header("[4, 4, 4]"), b"\1" * 63),
+        "raw_longer_than_header": (header("[4, 4, 4]"), b"\1" * 65),
+        "dims_overflow_int64": (header("[2147483647, 2147483647, 2147483647]"), b"\1"),
+        "dims_over_the_limit": (header("[4096, 4096, 1024]"), b"\1"),
+        "dims_zero": (header("[0, 4, 4]"), b""),
+        "dims_negative": (header("[-4, 4, 4]"), b"\1"),
+        "dims_fraction": (header("[2.5, 4, 4]"), b"\1"),
+        "dims_two": (header("[4, 4]"), b"\1" * 16),
+        "type_unknown": (header("[2, 2, 2]", "int128"), b"\1" * 8),
+        "float_nan": (header("[2, 1, 1]", "float32"), b"\0\0\x80\x3f\0\0\xc0\x7f"),
+        "hash_mismatch": (header("[2, 2, 2]", "uint8", ', "content_hash": "0123456789abcdef"'), b"\1" * 8),
+        "unknown_key": (header("[2, 2, 2]", "uint8", ', "colour": 3'), b"\1" * 8),
+        "wrong_format": ('{"format": "nrrd", "version": 1}\n', b""),
+        "version_2": ('{"format": "meltlab-volume", "version": 2}\n', b""),
+        "json_truncated": ('{"format": "meltlab-volume", "dims": [', b""),
+        "raw_missing": (header("[2, 2, 2]").replace("v.raw", "w.raw"), None),
+        "spacing_zero": (header("[2, 2, 2]", "uint8", ', "spacing": [1, 0, 1]'), b"\1" * 8),
+    }
+    # The file each refusal names: the raw file for its size and contents, else the header.
+    named = {"raw_shorter_than_header": "v.raw", "raw_longer_than_header": "v.raw", "float_nan": "v.raw",
+             "hash_mismatch": "v.raw", "raw_missing": "w.raw"}
+    cases = []
+    for n, (h, raw) in files.items():
+        fs = {"v.json": h}
+        if raw is not None:
+            fs["v.raw"] = raw
+        names = [named.get(n, "v.json")]
+        cases.append(Case(f"volume/{n}/info", ["volume", "info", "{f}"], fs, names=names))
+        scene = "model: absorption\nvolume: {file: v.json}\n" + cam
+        cases.append(Case(f"volume/{n}/render", ["volume", "render", "--scene", "{f}", "--out", "{out}"],
+                          {"s.yaml": scene, **fs}, names=names))
+    vdb = {
+        "vdb_text": b"this is not an OpenVDB file\n",
+        "vdb_magic_only": b"\x20\x42\x44\x56\x00\x00\x00\x00",
+        "vdb_random": bytes((i * 97 + 13) % 256 for i in range(4096)),
+        "vdb_empty": b"",
+    }
+    for n, data in vdb.items():
+        cases.append(Case(f"volume/{n}", ["volume", "info", "{f}"], {"v.vdb": data}, names=["v.vdb"]))
+    scenes = {
+        "scene_unknown_key": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "smaples: {n: 3}\n",
+        "scene_bad_model": "model: plasma\nvolume: {generate: {kind: constant, size: 4}}\n" + cam,
+        "scene_hg_c_one": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "optics: {hg_c: 1}\n",
+        "scene_kappa_negative": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "optics: {kappa: -1}\n",
+        "scene_samples_zero": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "sampling: {n: 0}\n",
+        "scene_size_huge": "model: hg\nvolume: {generate: {kind: constant, size: 100000}}\n" + cam,
+        "scene_two_sources": "model: hg\nvolume: {generate: {kind: constant, size: 4}, file: v.json}\n" + cam,
+        "scene_orthographic": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n"
+                              "camera: {type: orthographic, width: 8, height: 8, pixels_per_unit: 1}\n",
+        "scene_eye_inside": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n"
+                            "camera: {type: pinhole, width: 8, height: 8, fov_deg: 40, eye: [1, 0, 0], target: [100, 0, 0]}\n",
+        "scene_light_zero_dir": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n" + cam +
+                                "lights: [{type: directional, to_light: [0, 0, 0]}]\n",
+        "scene_composite_no_image": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n" + cam +
+                                    "output: {mode: composite}\n",
+        "scene_background_claims_30000": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n" + cam +
+                                         "output: {mode: composite, background_image: bg.png}\n",
+        "scene_fov_and_fx": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n" + cam.replace("fov_deg: 40", "fov_deg: 40, fx: 9"),
+    }
+    for n, t in scenes.items():
+        cases.append(Case(f"volume/{n}", ["volume", "render", "--scene", "{f}", "--out", "{out}"],
+                          {"s.yaml": t, "bg.png": png_claiming(30000, 30000)},
+                          names=["bg.png"] if n == "scene_background_claims_30000" else None))
+    o = ["volume", "generate"]
+    cases += [
+        Case("volume/generate_kind", o + ["--kind", "smoke", "--out", "{out}.json"], names=["--kind"]),
+        Case("volume/generate_size_zero", o + ["--size", "0", "--out", "{out}.json"], names=["--size"]),
+        Case("volume/generate_extension", o + ["--out", "{out}.png"], names=["--out"]),
+        Case("volume/generate_box_negative", o + ["--box", "0,0,0,1,-1,1", "--out", "{out}.json"], names=["--box"]),
+        Case("volume/generate_out_is_a_folder", o + ["--out", "{d}"], {"full/keep.txt": "mine"}, names=["--out"]),
+        Case("volume/render_no_scene", ["volume", "render", "--scene", "nowhere.yaml", "--out", "{out}"],
+             names=["nowhere.yaml"]),
+    ]
+    return cases
+
+
 def run_case(meltlab, case, root, fixtures, asan):
     work = tempfile.mkdtemp(prefix="case-", dir=root)
     first = None
@@ -429,7 +513,8 @@ def main():
     ap.add_argument("--only", default="")
     ap.add_argument("--list", action="store_true")
     a = ap.parse_args()
-    cases = mesh_cases() + manifest_cases() + kl_cases() + scene_cases() + reproduce_cases() + option_cases()
+    cases = (mesh_cases() + manifest_cases() + kl_cases() + scene_cases() + reproduce_cases() + option_cases() +
+             volume_cases())
     cases = [c for c in cases if a.only in c.name]
     if a.list:
         for c in cases:

@@ -696,6 +696,11 @@ VolumeFrame render_typed(const Volume& volume, const VolumeSamples<S>& samples, 
 
 }  // namespace
 
+void check_volume_render_settings(const Volume& volume, const VolumeRenderSettings& settings) {
+  validate(volume, settings);
+  (void)light_terms(volume, settings);
+}
+
 double henyey_greenstein(double cos_theta, double c) {
   const double denom = 1.0 + c * c - 2.0 * c * cos_theta;
   return (1.0 - c * c) / (4.0 * std::numbers::pi * denom * std::sqrt(denom));

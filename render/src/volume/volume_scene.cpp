@@ -26,14 +26,15 @@ Rgb colour(const ConfigSection& c, const std::string& key, const Rgb& fallback) 
 
 VolumeGenerateOptions parse_generate(const ConfigSection& g) {
   VolumeGenerateOptions o;
-  o.kind = parse_volume_kind(g.get_choice("kind", "turbulence_box",
-                                          {"turbulence_box", "turbulence_sphere", "fireball", "constant"}),
-                             g.where());
+  o.kind = parse_volume_kind(
+      g.get_choice("kind", "turbulence_box", {"turbulence_box", "turbulence_sphere", "fireball", "constant"}),
+      g.where());
   if (g.has("size") && g.has("dims")) g.fail("give 'size' or 'dims', not both");
   if (g.has("dims")) {
     const auto d = g.require_numbers("dims", 3, 3);
     for (double x : d)
-      if (!(x >= 1 && x <= 4096 && x == std::floor(x))) g.fail_at("dims", "'dims' must be three whole numbers in [1, 4096]");
+      if (!(x >= 1 && x <= 4096 && x == std::floor(x)))
+        g.fail_at("dims", "'dims' must be three whole numbers in [1, 4096]");
     o.nx = int(d[0]), o.ny = int(d[1]), o.nz = int(d[2]);
   } else {
     o.nx = o.ny = o.nz = g.get_in_range<int>("size", 64, 1, 4096);
@@ -43,10 +44,12 @@ VolumeGenerateOptions parse_generate(const ConfigSection& g) {
   o.noise.lacunarity = g.get_in_range<double>("lacunarity", 2.0, 1e-6, 1e6);
   o.noise.base_frequency = g.get_in_range<double>("base_frequency", 4.0, 1e-6, 1e6);
   const std::string clip = g.get_choice("clip", "per_octave", {"per_octave", "sum_only", "none"});
-  o.noise.clip = clip == "per_octave" ? NoiseClip::kPerOctave : clip == "sum_only" ? NoiseClip::kSumOnly : NoiseClip::kNone;
+  o.noise.clip = clip == "per_octave" ? NoiseClip::kPerOctave
+                 : clip == "sum_only" ? NoiseClip::kSumOnly
+                                      : NoiseClip::kNone;
   o.noise.seed = std::uint64_t(g.get_in_range<std::int64_t>("seed", 0, 0, std::int64_t(1) << 62));
-  o.falloff = g.get_choice("falloff", "linear", {"linear", "none"}) == "none" ? SphereFalloff::kNone
-                                                                             : SphereFalloff::kLinear;
+  o.falloff =
+      g.get_choice("falloff", "linear", {"linear", "none"}) == "none" ? SphereFalloff::kNone : SphereFalloff::kLinear;
   o.constant = g.get<double>("constant", 1.0);
   const std::string q = g.get_choice("quantization", "float32", {"float32", "uint8", "uint16"});
   o.storage = q == "uint8" ? SampleType::kUint8 : q == "uint16" ? SampleType::kUint16 : SampleType::kFloat32;
@@ -60,7 +63,7 @@ VolumeLight parse_light(const ConfigSection& c) {
   if (l.type == LightType::kPoint) {
     l.position = c.require_vec3("position");
     l.falloff = c.get_choice("falloff", "none", {"none", "inv_square"}) == "inv_square" ? LightFalloff::kInverseSquare
-                                                                                         : LightFalloff::kNone;
+                                                                                        : LightFalloff::kNone;
   } else {
     l.to_light = c.require_vec3("to_light");
     if (!(l.to_light.norm() > 0)) c.fail_at("to_light", "'to_light' must not be the zero vector");
@@ -76,8 +79,8 @@ VolumeLight parse_light(const ConfigSection& c) {
 VolumeScene parse_volume_scene(const ConfigSection& c, const fs::path& base_dir) {
   VolumeScene scene;
   VolumeRenderSettings& s = scene.settings;
-  const std::string model =
-      c.get_choice("model", "emission_absorption", {"absorption", "emission", "emission_absorption", "hg", "hg_attenuated"});
+  const std::string model = c.get_choice("model", "emission_absorption",
+                                         {"absorption", "emission", "emission_absorption", "hg", "hg_attenuated"});
   s.model = model == "absorption"            ? OpticalModel::kAbsorption
             : model == "emission"            ? OpticalModel::kEmission
             : model == "emission_absorption" ? OpticalModel::kEmissionAbsorption
@@ -99,7 +102,8 @@ VolumeScene parse_volume_scene(const ConfigSection& c, const fs::path& base_dir)
   } else if (scene.volume.generate) {
     scene.volume.box = Box3{Eigen::Vector3d::Constant(-150), Eigen::Vector3d::Constant(150)};  // the seed's Box300
   }
-  s.address = v.get_choice("address", "clamp", {"clamp", "wrap"}) == "wrap" ? VolumeAddress::kWrap : VolumeAddress::kClamp;
+  s.address =
+      v.get_choice("address", "clamp", {"clamp", "wrap"}) == "wrap" ? VolumeAddress::kWrap : VolumeAddress::kClamp;
   // --- camera ---
   scene.camera = parse_camera(c.section("camera"));
   if (!std::holds_alternative<Pinhole>(scene.camera)) c.fail_at("camera", "the volume renderer needs a pinhole camera");
@@ -116,8 +120,9 @@ VolumeScene parse_volume_scene(const ConfigSection& c, const fs::path& base_dir)
     s.include_last_partial = sm->get_choice("last_partial", "drop", {"drop", "weight"}) == "weight";
   }
   const std::string quad = c.get_choice("quadrature", "inclusive", {"inclusive", "exclusive", "exponential"});
-  s.quadrature = quad == "exclusive" ? Quadrature::kExclusive : quad == "exponential" ? Quadrature::kExponential
-                                                                                      : Quadrature::kInclusive;
+  s.quadrature = quad == "exclusive"     ? Quadrature::kExclusive
+                 : quad == "exponential" ? Quadrature::kExponential
+                                         : Quadrature::kInclusive;
   // --- optics ---
   if (const auto o = c.optional_section("optics")) {
     s.kappa = o->get_in_range<double>("kappa", 1.0, 0.0, 1e12);
@@ -126,9 +131,9 @@ VolumeScene parse_volume_scene(const ConfigSection& c, const fs::path& base_dir)
     s.hg_c = o->get_in_range<double>("hg_c", 0.5, -0.999999, 0.999999);
     s.emission = colour(*o, "emission", s.emission);
     s.emission_rim = colour(*o, "emission_rim", s.emission_rim);
-    s.emission_field =
-        o->get_choice("emission_field", "constant", {"constant", "radial"}) == "radial" ? EmissionField::kRadial
-                                                                                       : EmissionField::kConstant;
+    s.emission_field = o->get_choice("emission_field", "constant", {"constant", "radial"}) == "radial"
+                           ? EmissionField::kRadial
+                           : EmissionField::kConstant;
     s.emission_scale_by_ds = o->get<bool>("emission_scale_by_ds", true);
     s.kappa_in_source = o->get<bool>("kappa_in_source", false);
     s.kappa_in_brdf = o->get<bool>("kappa_in_brdf", false);
@@ -140,11 +145,13 @@ VolumeScene parse_volume_scene(const ConfigSection& c, const fs::path& base_dir)
     for (const ConfigSection& l : c.sections("lights")) s.lights.push_back(parse_light(l));
   // --- shadows, acceleration, rays ---
   if (const auto sh = c.optional_section("shadow")) {
-    s.shadow = sh->get_choice("method", "march", {"march", "cache"}) == "cache" ? ShadowMethod::kCache : ShadowMethod::kMarch;
+    s.shadow =
+        sh->get_choice("method", "march", {"march", "cache"}) == "cache" ? ShadowMethod::kCache : ShadowMethod::kMarch;
     s.shadow_step = sh->get_in_range<double>("step", 0.0, 0.0, 1e300);
     s.shadow_start_offset = sh->get_in_range<double>("start_offset", 0.5, 0.0, 1.0);
-    s.shadow_cache_build =
-        sh->get_choice("cache_build", "sweep", {"sweep", "march"}) == "march" ? ShadowCacheBuild::kMarch : ShadowCacheBuild::kSweep;
+    s.shadow_cache_build = sh->get_choice("cache_build", "sweep", {"sweep", "march"}) == "march"
+                               ? ShadowCacheBuild::kMarch
+                               : ShadowCacheBuild::kSweep;
     s.shadow_cache_scale = sh->get_in_range<double>("cache_scale", 1.0, 0.05, 8.0);
   }
   if (const auto a = c.optional_section("acceleration")) {
@@ -152,8 +159,9 @@ VolumeScene parse_volume_scene(const ConfigSection& c, const fs::path& base_dir)
     s.skip_empty = a->get<bool>("skip_empty", true);
   }
   if (const auto r = c.optional_section("rays")) {
-    s.ray_generation = r->get_choice("method", "analytic", {"analytic", "two_pass"}) == "two_pass" ? RayGeneration::kTwoPass
-                                                                                                  : RayGeneration::kAnalytic;
+    s.ray_generation = r->get_choice("method", "analytic", {"analytic", "two_pass"}) == "two_pass"
+                           ? RayGeneration::kTwoPass
+                           : RayGeneration::kAnalytic;
     s.camera_inside = r->get_choice("camera_inside", "reject", {"reject", "start_at_eye"}) == "start_at_eye"
                           ? CameraInside::kStartAtEye
                           : CameraInside::kReject;
@@ -220,14 +228,16 @@ std::vector<std::pair<std::string, std::string>> describe_vlr(const VolumeScene&
   add("kappa", num(s.kappa));
   add("gamma", num(s.gamma));
   add("emission.color", rgb(s.emission));
-  add("emission.color_field", s.emission_field == EmissionField::kRadial ? "radial to " + rgb(s.emission_rim) : "constant");
+  add("emission.color_field",
+      s.emission_field == EmissionField::kRadial ? "radial to " + rgb(s.emission_rim) : "constant");
   const auto lights = effective_lights(volume, s);
   add("light.count", std::to_string(lights.size()));
   for (std::size_t i = 0; i < lights.size(); ++i) {
     const auto& l = lights[i];
     const std::string p = fmt::format("light[{}].", i);
     add(p + "type", l.type == LightType::kPoint ? "point" : "directional");
-    add(p + (l.type == LightType::kPoint ? "pos" : "to_light"), rgb(l.type == LightType::kPoint ? l.position : l.to_light));
+    add(p + (l.type == LightType::kPoint ? "pos" : "to_light"),
+        rgb(l.type == LightType::kPoint ? l.position : l.to_light));
     add(p + "intensity", rgb(l.intensity));
     add(p + "falloff", l.falloff == LightFalloff::kInverseSquare ? "inv_square" : "none");
   }
@@ -250,7 +260,9 @@ std::vector<std::pair<std::string, std::string>> describe_vlr(const VolumeScene&
     add("noise.gain", num(g.noise.gain));
     add("noise.lacunarity", num(g.noise.lacunarity));
     add("noise.base_freq", num(g.noise.base_frequency));
-    add("noise.clip_mode", g.noise.clip == NoiseClip::kPerOctave ? "per_octave" : g.noise.clip == NoiseClip::kSumOnly ? "sum_only" : "none");
+    add("noise.clip_mode", g.noise.clip == NoiseClip::kPerOctave ? "per_octave"
+                           : g.noise.clip == NoiseClip::kSumOnly ? "sum_only"
+                                                                 : "none");
     add("noise.seed", std::to_string(g.noise.seed));
     add("noise.permutation", "Perlin 2002 reference");
     add("sphere.falloff", g.falloff == SphereFalloff::kLinear ? "linear 1 - r/R" : "none");

@@ -71,8 +71,8 @@ TEST(VolumeIo, OpenVdbRoundTripKeepsValuesAndPlacement) {
         const Vec3 g = v.index_from_world(p);
         const int a = int(std::lround(g.x())), b = int(std::lround(g.y())), c = int(std::lround(g.z()));
         ASSERT_NEAR(g.x(), a, 1e-9);
-        ASSERT_EQ(r.value(i, j, k), v.value(a, b, c)) << i << " " << j << " " << k << " -> " << a << " " << b << " " << c
-                                                       << " dims " << r.nx() << " " << r.ny() << " " << r.nz();
+        ASSERT_EQ(r.value(i, j, k), v.value(a, b, c)) << i << " " << j << " " << k << " -> " << a << " " << b << " "
+                                                      << c << " dims " << r.nx() << " " << r.ny() << " " << r.nz();
       }
   EXPECT_EQ(r.placement(), SamplePlacement::kCellCentred);
   EXPECT_TRUE(r.spacing().isApprox(v.spacing(), 1e-12));
@@ -101,7 +101,7 @@ TEST(VolumeIo, RefusesHeadersAndRawFilesThatLie) {
   };
   write_file(h, header_text("[2, 3, 4]"));
   EXPECT_NO_THROW((void)read_volume(h));
-  refused(header_text("[2, 3, 5]"), "holds 24 bytes");                          // lying size
+  refused(header_text("[2, 3, 5]"), "holds 24 bytes");                             // lying size
   refused(header_text("[2, 3, 4]", "", "float32"), "declares 2 x 3 x 4 float32");  // wrong type
   refused(header_text("[0, 3, 4]"), "'dims' must be three whole numbers >= 1");
   refused(header_text("[-2, 3, 4]"), "'dims' must be three whole numbers >= 1");

@@ -39,9 +39,9 @@ struct VolumeRenderRunOptions {
   std::filesystem::path scene_file;
   std::filesystem::path out_dir;
   bool overwrite = false;
-  int width = 0, height = 0;      ///< override the camera's image size (0 = keep; the field of view is kept)
-  std::optional<int> frames;      ///< override the scene's timed frames
-  std::optional<int> samples;     ///< override vlr.sampling.n
+  int width = 0, height = 0;   ///< override the camera's image size (0 = keep; the field of view is kept)
+  std::optional<int> frames;   ///< override the scene's timed frames
+  std::optional<int> samples;  ///< override vlr.sampling.n
   std::vector<std::string> command_line;
 };
 

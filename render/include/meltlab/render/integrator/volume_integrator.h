@@ -202,6 +202,9 @@ struct ShadowCache {
   Volume transmittance;  ///< float32, cell-centred or nodes as the volume, same domain
 };
 
+/// Throws the InputError render_volume would throw for these settings (checked before any work).
+void check_volume_render_settings(const Volume& volume, const VolumeRenderSettings& settings);
+
 /// Renders the volume seen by the camera. Throws InputError for bad settings (n < 1, κ < 0, γ <= 0,
 /// c outside (-1, 1), a light inside the box for the cache, the eye inside the box with
 /// CameraInside::kReject, ...) naming the parameter.

@@ -10,10 +10,10 @@
 //     # or file: cloud.vdb | volume.json     (meltlab's raw + header, or OpenVDB)
 //     box: {centre: [0, 0, 0], size: [300, 300, 300]}   # the seed's Box300 (default for generated)
 //     address: clamp              # vlr.tex.address: clamp | wrap
-//   camera: {type: pinhole, width: 512, height: 512, fov_deg: 45, eye: [400, -550, 300], target: [0, 0, 0], up: [0, 0, 1]}
-//   sampling: {n: 100, ds_rule: diag_over_n, step: 0, first_offset: zero, seed: 1, last_partial: drop}
-//   quadrature: inclusive         # vlr.quad: inclusive (extinction_inclusive) | exclusive | exponential
-//   optics: {kappa: 0.01, gamma: 1, albedo: 0.9, hg_c: 0.5, emission: [1, 0.6, 0.2],
+//   camera: {type: pinhole, width: 512, height: 512, fov_deg: 45, eye: [400, -550, 300], target: [0, 0, 0], up: [0, 0,
+//   1]} sampling: {n: 100, ds_rule: diag_over_n, step: 0, first_offset: zero, seed: 1, last_partial: drop} quadrature:
+//   inclusive         # vlr.quad: inclusive (extinction_inclusive) | exclusive | exponential optics: {kappa: 0.01,
+//   gamma: 1, albedo: 0.9, hg_c: 0.5, emission: [1, 0.6, 0.2],
 //            emission_field: constant, emission_rim: [0.8, 0.1, 0], emission_scale_by_ds: true,
 //            kappa_in_source: false, kappa_in_brdf: false}
 //   lights:                       # default: one point light at the box centre + 2 x its sides, L = 1
