@@ -1,6 +1,7 @@
 // meltlab volume: the volume renderers (seed 000): generate the seed's volumes, render a scene,
 // describe a volume file.
 
+#include <meltlab/experiments/volume_bench.h>
 #include <meltlab/experiments/volume_run.h>
 
 #include <fmt/format.h>
@@ -80,7 +81,27 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
   auto info_file = std::make_shared<std::string>();
   info->add_option("file", *info_file, "Volume file")->required();
 
+  // --- bench ---
+  auto* bench =
+      sub->add_subcommand("bench", "Timing and accuracy studies for the report (tables, scaling, pareto, peer)");
+  auto b = std::make_shared<experiments::VolumeBenchOptions>();
+  b->command_line = command_line;
+  auto full = std::make_shared<bool>(false);
+  bench->add_option("--study", b->studies, "tables, scaling, pareto, peer (default: all)")->delimiter(',');
+  bench->add_flag("--full", *full, "Full sizes (default: quick: smaller images for the brute-force references)");
+  bench->add_option("--warmup", b->warmup, "Frames rendered before timing")->default_val(1);
+  bench->add_option("--repeats", b->repeats, "Timed frames (the median is reported)")->default_val(3);
+  bench->add_option("--out", b->out_dir, "Output folder (tables.csv, scaling.csv, pareto.csv, peer.csv, bench.json)")
+      ->required();
+  bench->add_flag("--overwrite", b->overwrite, "Allow --out to hold a previous bench");
+
   return [=]() {
+    if (bench->parsed()) {
+      b->quick = !*full;
+      experiments::run_volume_bench(*b);
+      std::fprintf(stderr, "meltlab: volume bench: wrote %s\n", b->out_dir.string().c_str());
+      return kExitOk;
+    }
     if (gen->parsed()) {
       g->generate.kind = render::parse_volume_kind(*kind, "--kind");
       g->generate.nx = g->generate.ny = g->generate.nz = *size;

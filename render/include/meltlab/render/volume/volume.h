@@ -82,7 +82,7 @@ struct VolumeSamples {
   }
   /// The same with the lower corner (i0, j0, k0) of the stencil and the weights given (clamped
   /// indices): for callers that located the point already.
-  float trilinear_cell(int i0, int j0, int k0, float tx, float ty, float tz) const {
+  [[gnu::always_inline]] float trilinear_cell(int i0, int j0, int k0, float tx, float ty, float tz) const {
     const std::int64_t x0 = clampi(i0, nx) * sx, x1 = clampi(i0 + 1, nx) * sx;
     const std::int64_t y0 = clampi(j0, ny) * sy, y1 = clampi(j0 + 1, ny) * sy;
     const std::int64_t z0 = clampi(k0, nz) * sz, z1 = clampi(k0 + 1, nz) * sz;
@@ -101,13 +101,13 @@ struct VolumeSamples {
   }
 
  private:
-  static std::int64_t clampi(int i, int n) { return i < 0 ? 0 : (i >= n ? n - 1 : i); }
+  [[gnu::always_inline]] static std::int64_t clampi(int i, int n) { return i < 0 ? 0 : (i >= n ? n - 1 : i); }
   static std::int64_t wrapi(std::int64_t i, int n) {
     const std::int64_t r = i % n;
     return r < 0 ? r + n : r;
   }
-  float blend(std::int64_t x0, std::int64_t x1, std::int64_t y0, std::int64_t y1, std::int64_t z0, std::int64_t z1,
-              float tx, float ty, float tz) const {
+  [[gnu::always_inline]] float blend(std::int64_t x0, std::int64_t x1, std::int64_t y0, std::int64_t y1,
+                                     std::int64_t z0, std::int64_t z1, float tx, float ty, float tz) const {
     auto v = [this](std::int64_t o) { return static_cast<float>(data[o]); };
     const float c00 = v(x0 + y0 + z0) * (1 - tx) + v(x1 + y0 + z0) * tx;
     const float c10 = v(x0 + y1 + z0) * (1 - tx) + v(x1 + y1 + z0) * tx;

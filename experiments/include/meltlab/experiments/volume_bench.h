@@ -1,0 +1,36 @@
+#pragma once
+// `meltlab volume bench`: the timing and accuracy studies of the volume ray caster (seed 000),
+// written as CSV for the report (report/experiments/volume.py):
+//   tables.csv   Tables 5.1-5.3 of the source on this CPU: Emission, HG, HGAttenuated (the
+//                source's shadow march) and HGAttenuated with the shadow cache, at 64³/128³,
+//                512²/256², 50/64/100 samples per ray: median frame time (warm-up frames first).
+//   scaling.csv  time against the sample count n (50, 64, 100, 200), the number of lights (0..8)
+//                and the pixel count: the spec's targets 9, 10 and 12.
+//   pareto.csv   time against error for every knob (samples per ray, shadow step, shadow cache
+//                resolution, ERT threshold, jitter, quadrature) against a reference of n = 1024 with
+//                the exact shadow march (HGAttenuated on the sphere turbulence).
+//   peer.csv     OpenVDB's tools::VolumeRender on the same volume (a FloatGrid), camera, light,
+//                steps and extinction (isotropic phase) beside ours (shadow march and shadow cache):
+//                time per frame, error against a fine reference, and the difference between the two.
+//   bench.json   the scenes, the machine, and the run's provenance.
+// Quick mode uses smaller images for the studies that need a brute-force reference.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace meltlab::experiments {
+
+struct VolumeBenchOptions {
+  std::vector<std::string> studies{"tables", "scaling", "pareto", "peer"};
+  bool quick = true;
+  int warmup = 1, repeats = 3;  ///< frames before timing, timed frames (the median is reported)
+  std::filesystem::path out_dir;
+  bool overwrite = false;
+  std::vector<std::string> command_line;
+};
+
+/// Runs the studies into the run folder (progress on stderr). Throws InputError for bad options.
+void run_volume_bench(const VolumeBenchOptions& options);
+
+}  // namespace meltlab::experiments
