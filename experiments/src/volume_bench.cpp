@@ -44,8 +44,8 @@ render::Volume turbulence(render::VolumeKind kind, int n) {
 
 /// The seed's camera on Box300: the whole box in view.
 render::Camera camera(int side) {
-  return render::Pinhole::look_at(side, side, 0.5 * side / std::tan(22.5 * std::numbers::pi / 180), Vec3(400, -550, 300),
-                                  Vec3::Zero(), Vec3::UnitZ());
+  return render::Pinhole::look_at(side, side, 0.5 * side / std::tan(22.5 * std::numbers::pi / 180),
+                                  Vec3(400, -550, 300), Vec3::Zero(), Vec3::UnitZ());
 }
 
 /// The seed's scene settings for a model (the same medium and light for every model).
@@ -131,10 +131,14 @@ void progress(const std::string& what) { std::fprintf(stderr, "meltlab: volume b
 
 const char* model_key(OpticalModel m, render::ShadowMethod sh) {
   switch (m) {
-    case OpticalModel::kEmission: return "emission";
-    case OpticalModel::kHG: return "hg";
-    case OpticalModel::kHGAttenuated: return sh == render::ShadowMethod::kCache ? "hg_attenuated_cache" : "hg_attenuated";
-    default: return "other";
+    case OpticalModel::kEmission:
+      return "emission";
+    case OpticalModel::kHG:
+      return "hg";
+    case OpticalModel::kHGAttenuated:
+      return sh == render::ShadowMethod::kCache ? "hg_attenuated_cache" : "hg_attenuated";
+    default:
+      return "other";
   }
 }
 
@@ -146,8 +150,10 @@ void study_tables(const VolumeBenchOptions& o, const fs::path& dir, json& record
     int volume, pixels;
     std::vector<int> samples;
   };
-  const std::vector<Config> configs = {{"5.1", 64, 512, {100, 64, 50}}, {"5.2", 64, 256, {100, 64}}, {"5.3", 128, 512, {50}}};
-  Csv csv("table,volume,pixels,samples,model,median_ms,min_ms,max_ms,fps,primary_samples,shadow_samples,cache_build_ms");
+  const std::vector<Config> configs = {
+      {"5.1", 64, 512, {100, 64, 50}}, {"5.2", 64, 256, {100, 64}}, {"5.3", 128, 512, {50}}};
+  Csv csv(
+      "table,volume,pixels,samples,model,median_ms,min_ms,max_ms,fps,primary_samples,shadow_samples,cache_build_ms");
   std::map<int, render::Volume> volumes;
   for (const auto& c : configs) {
     if (!volumes.count(c.volume)) volumes.emplace(c.volume, turbulence(render::VolumeKind::kTurbulenceBox, c.volume));
@@ -161,17 +167,21 @@ void study_tables(const VolumeBenchOptions& o, const fs::path& dir, json& record
         s.shadow = sh;
         // The source's shadow march is O(n·m): a few frames of it say enough.
         const bool slow = model == OpticalModel::kHGAttenuated && sh == render::ShadowMethod::kMarch;
-        const Timed t = time_render(v, camera(c.pixels), s, slow ? 0 : o.warmup, slow ? std::min(o.repeats, 3) : o.repeats);
+        const Timed t =
+            time_render(v, camera(c.pixels), s, slow ? 0 : o.warmup, slow ? std::min(o.repeats, 3) : o.repeats);
         csv.row("{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{},{},{:.3f}", c.table, c.volume, c.pixels, n,
                 model_key(model, sh), t.median_ms, t.min_ms, t.max_ms, 1000.0 / t.median_ms, t.frame.stats.samples,
                 t.frame.stats.shadow_samples, t.cache_ms);
-        progress(fmt::format("Table {} {}³ {}² n={} {}: {:.1f} ms", c.table, c.volume, c.pixels, n, model_key(model, sh),
-                             t.median_ms));
+        progress(fmt::format("Table {} {}³ {}² n={} {}: {:.1f} ms", c.table, c.volume, c.pixels, n,
+                             model_key(model, sh), t.median_ms));
       }
   }
   csv.write(dir / "tables.csv");
-  record["tables"] = {{"scene", "Box300 of turbulence_box, camera (400, -550, 300) fov 45, point light (600, 600, 600)"},
-                      {"kappa", 0.02}, {"albedo", 0.9}, {"hg_c", 0.5}};
+  record["tables"] = {
+      {"scene", "Box300 of turbulence_box, camera (400, -550, 300) fov 45, point light (600, 600, 600)"},
+      {"kappa", 0.02},
+      {"albedo", 0.9},
+      {"hg_c", 0.5}};
 }
 
 // ---- scaling (targets 9, 10, 12) -----------------------------------------------------------------
@@ -273,7 +283,12 @@ void study_pareto(const VolumeBenchOptions& o, const fs::path& dir, json& record
       auto s = base(n);
       s.shadow = render::ShadowMethod::kCache;
       s.first_offset = off;
-      measure("first_offset", fmt::format("n{} {}", n, off == render::FirstOffset::kZero ? "zero" : off == render::FirstOffset::kHalf ? "half" : "jitter"), s);
+      measure("first_offset",
+              fmt::format("n{} {}", n,
+                          off == render::FirstOffset::kZero   ? "zero"
+                          : off == render::FirstOffset::kHalf ? "half"
+                                                              : "jitter"),
+              s);
     }
   }
   for (auto q : {render::Quadrature::kInclusive, render::Quadrature::kExclusive, render::Quadrature::kExponential}) {
@@ -310,15 +325,17 @@ void study_pareto(const VolumeBenchOptions& o, const fs::path& dir, json& record
           worst = std::max(worst, std::abs(cached - exact));
         }
         cache_csv.row("{},{},{},{:.6g},{:.6g},{:.3f}", scale,
-                      build == render::ShadowCacheBuild::kSweep ? "sweep" : "march", points, sum / points, worst, build_ms);
+                      build == render::ShadowCacheBuild::kSweep ? "sweep" : "march", points, sum / points, worst,
+                      build_ms);
       }
     cache_csv.write(dir / "shadow_cache.csv");
   }
-  record["pareto"] = {{"scene", "Box300 of turbulence_sphere 64³, HGAttenuated, point light (600, 600, 600)"},
-                      {"image", fmt::format("{0}x{0}", side)},
-                      {"reference", "n = 1024, exact shadow march with shadow step = its Δs, no ERT"},
-                      {"reference_ms", ref_ms},
-                      {"error", "relative RMS difference of the pixel colours over black: sqrt(Σ|I - I_ref|² / Σ|I_ref|²)"}};
+  record["pareto"] = {
+      {"scene", "Box300 of turbulence_sphere 64³, HGAttenuated, point light (600, 600, 600)"},
+      {"image", fmt::format("{0}x{0}", side)},
+      {"reference", "n = 1024, exact shadow march with shadow step = its Δs, no ERT"},
+      {"reference_ms", ref_ms},
+      {"error", "relative RMS difference of the pixel colours over black: sqrt(Σ|I - I_ref|² / Σ|I_ref|²)"}};
 }
 
 // ---- OpenVDB peer ---------------------------------------------------------------------------------
@@ -384,20 +401,24 @@ void study_peer(const VolumeBenchOptions& o, const fs::path& dir, json& record) 
     for (auto sh : {render::ShadowMethod::kMarch, render::ShadowMethod::kCache}) {
       const Timed t = time_render(v, cam, ours(step, sh), o.warmup, o.repeats);
       const ImageF img = render::composite_over(t.frame, render::Rgb::Zero());
-      csv.row("{},{},{:.3f},{:.3f},{:.6g},{:.6g},{:.3f}", sh == render::ShadowMethod::kCache ? "meltlab_cache" : "meltlab_march",
-              step, t.median_ms, t.min_ms, rel_rmse(img, ref), rel_rmse(img, vdb), t.cache_ms);
+      csv.row("{},{},{:.3f},{:.3f},{:.6g},{:.6g},{:.3f}",
+              sh == render::ShadowMethod::kCache ? "meltlab_cache" : "meltlab_march", step, t.median_ms, t.min_ms,
+              rel_rmse(img, ref), rel_rmse(img, vdb), t.cache_ms);
       if (step == 1.0 && sh == render::ShadowMethod::kCache) write_image(dir / "peer_meltlab.png", img);
     }
     progress(fmt::format("peer: step {} voxel done", step));
   }
   csv.write(dir / "peer.csv");
-  record["peer"] = {{"volume", fmt::format("turbulence_sphere {}³ in Box300 ({} active voxels, {} bytes as a FloatGrid)",
-                                           n_vol, peer.active_voxels(), peer.memory_bytes())},
-                    {"image", fmt::format("{0}x{0}", side)},
-                    {"physics", "single scattering of a directional light, isotropic phase, shadowed, exponential step; "
-                                "OpenVDB's radiance divided by 4π (its phase is 1)"},
-                    {"reference", fmt::format("meltlab, steps of {} voxel, exact shadow march", ref_step)},
-                    {"kappa", kappa}, {"albedo", albedo}};
+  record["peer"] = {
+      {"volume", fmt::format("turbulence_sphere {}³ in Box300 ({} active voxels, {} bytes as a FloatGrid)", n_vol,
+                             peer.active_voxels(), peer.memory_bytes())},
+      {"image", fmt::format("{0}x{0}", side)},
+      {"physics",
+       "single scattering of a directional light, isotropic phase, shadowed, exponential step; "
+       "OpenVDB's radiance divided by 4π (its phase is 1)"},
+      {"reference", fmt::format("meltlab, steps of {} voxel, exact shadow march", ref_step)},
+      {"kappa", kappa},
+      {"albedo", albedo}};
 }
 
 }  // namespace

@@ -444,21 +444,23 @@ struct Kernel {
             return true;
           } else {
             double k = 0;
-            // Exponentials in float (glibc's expf is several times faster than exp; ~1 ulp, 6e-8
-            // relative, below the float sampling of the volume); 1 - e^{-x} as -expm1 so a thin step
-            // keeps its digits.
+            // T = exp(-τ) from the optical depth τ summed in double, never a running product (which
+            // would drift by the rounding of every factor); the exponentials in float (glibc's expf is
+            // several times faster than exp; ~1 ulp, 6e-8 relative, below the float sampling of the
+            // volume); 1 - e^{-x} as -expm1 so a thin step keeps its digits.
             if constexpr (Q == Quadrature::kInclusive) {
               ext += w == h ? e : e * (w / h);
               T = double(std::exp(float(-kappa_h * ext)));
               k = T * g_step;
             } else if constexpr (Q == Quadrature::kExclusive) {
               k = T * g_step;
-              T *= double(std::exp(float(-s.kappa * e * w)));
+              ext += e * w;
+              T = double(std::exp(float(-s.kappa * ext)));
             } else {
               const double sigma = s.kappa * e;
-              const float x = float(-sigma * w);
-              k = T * (sigma > 0 ? double(-std::expm1(x)) / sigma : w);
-              T *= double(std::exp(x));
+              k = T * (sigma > 0 ? double(-std::expm1(float(-sigma * w))) / sigma : w);
+              ext += e * w;
+              T = double(std::exp(float(-s.kappa * ext)));
             }
             if constexpr (emits) Ir += gr * k, Ig += gg * k, Ib += gb * k;
             if (T < s.ert_transmittance) {
