@@ -14,6 +14,7 @@ Provenance start_provenance(const std::string& subcommand, const std::vector<std
   // What the parallel loops get by default (cgroup and affinity limits included), which may
   // be fewer than the machine's threads.
   p.hardware.extra["tbb_default_concurrency"] = tbb::info::default_concurrency();
+  p.batch_job = probe_batch_job();
   p.command_line = command_line;
   p.start();
   return p;

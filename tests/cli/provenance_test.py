@@ -16,7 +16,7 @@ import subprocess
 import sys
 import tempfile
 
-KEYS = {"subcommand", "meltlab", "hardware", "command_line", "started_utc", "finished_utc", "timings_s"}
+KEYS = {"subcommand", "meltlab", "hardware", "command_line", "started_utc", "finished_utc", "timings_s", "batch_job"}
 HARDWARE_KEYS = {"cpu", "threads", "host", "tbb_default_concurrency"}
 OLD_TOP_LEVEL = {"meltlab", "meltlab_version", "git_revision", "command", "command_line", "hardware",
                  "started_utc", "finished_utc"}
@@ -37,6 +37,8 @@ def run(argv):
 
 def main():
     meltlab = os.path.abspath(sys.argv[1])
+    for k in [k for k in os.environ if k.startswith("SLURM")]:
+        del os.environ[k]  # the suite may itself run inside a Slurm job
     version_line = run([meltlab, "--version"]).strip()  # "meltlab <version> (<git revision>)"
     m = re.fullmatch(r"meltlab (\S+) \((\S+)\)", version_line)
     if not m:
@@ -89,6 +91,9 @@ def main():
             t = p["timings_s"]
             if not isinstance(t.get("total"), (int, float)) or t["total"] < 0:
                 fail(f"{record}: timings_s.total missing or negative: {t}")
+            # outside a batch job (the test clears SLURM_* below); the Slurm test checks the object
+            if p["batch_job"] is not None:
+                fail(f"{record}: batch_job {p['batch_job']!r} outside a batch job")
             left = OLD_TOP_LEVEL & set(j)
             if left:
                 fail(f"{record}: provenance fields still at the top level: {sorted(left)}")

@@ -61,6 +61,7 @@ json summary_json(const ReproduceOptions& o, const ReproduceResult& result,
   return json{{"meltlab", {{"version", kVersion}, {"git_revision", kGitRevision}}},
               {"mode", o.quick ? "quick" : "full"},
               {"jobs", jobs},
+              {"executor", o.executor},
               {"finished", utc_timestamp_iso8601_now()},
               {"seconds", result.seconds},
               {"interrupted", result.interrupted},
@@ -96,7 +97,8 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
   fs::create_directories(o.out_dir);
   const auto t0 = Clock::now();
   std::mutex mu;
-  std::size_t finished = 0, failed = 0, running = 0;
+  Counters counters;
+  std::size_t &finished = counters.finished, &failed = counters.failed, &running = counters.running;
   ReproduceResult result;
   result.experiments.resize(experiments.size());
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
@@ -153,12 +155,16 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
     }
   };
   const int jobs = std::max(1, std::min<int>(o.jobs, static_cast<int>(std::max<std::size_t>(1, experiments.size()))));
-  worker();  // the exclusive ones, on this thread
-  next = 0;
-  queue = &shared;
-  std::vector<std::thread> pool;
-  for (int j = 0; j < jobs; ++j) pool.emplace_back(worker);
-  for (auto& t : pool) t.join();
+  if (o.executor == "slurm") {
+    run_on_slurm(o, experiments, result.experiments, counters, say, stop);
+  } else {
+    worker();  // the exclusive ones, on this thread
+    next = 0;
+    queue = &shared;
+    std::vector<std::thread> pool;
+    for (int j = 0; j < jobs; ++j) pool.emplace_back(worker);
+    for (auto& t : pool) t.join();
+  }
   for (std::size_t i = 0; i < experiments.size(); ++i)
     if (result.experiments[i].status.empty()) {
       result.experiments[i].name = experiments[i].name;
@@ -176,7 +182,10 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
   write_text_atomically(o.out_dir / "summary.json", summary_json(o, result, listed, jobs).dump(2) + "\n");
 
   result.report_status = "skipped";
-  if (o.report && !result.interrupted) result.report_status = build_report(o, say, result.report_file);
+  const bool waiting = std::any_of(result.experiments.begin(), result.experiments.end(),
+                                   [](const ExperimentOutcome& r) { return r.status == "submitted"; });
+  if (waiting) result.report_status = "skipped (experiments still on Slurm: run again to collect them)";
+  if (o.report && !result.interrupted && !waiting) result.report_status = build_report(o, say, result.report_file);
   return result;
 }
 
