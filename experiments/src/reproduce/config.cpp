@@ -160,7 +160,8 @@ ReproduceStep read_step(const ConfigValue& item, const Vars& vars, const fs::pat
     for (const fs::path& module : python_modules_beside(step.args[0])) e.hashed_files.push_back(module);
   }
   if (const auto out = s.optional<std::string>("stdout")) step.stdout_file = substitute(*out, step_vars, config);
-  step.slurm = e_slurm.overridden_by(s.optional_section("slurm") ? read_slurm(s.section("slurm")) : SlurmResources{});
+  const auto slurm = s.optional_section("slurm");
+  step.slurm = e_slurm.overridden_by(slurm ? read_slurm(*slurm) : SlurmResources{});
   // Files named by the arguments (a mesh, a kl field, a script) are inputs too; what lies
   // under the output folder is not.
   for (const auto& a : step.args) {
@@ -265,7 +266,8 @@ ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) 
   if (!root.has("steps")) root.fail("missing key 'steps' (a non-empty list)");
   const std::vector<ConfigValue> steps = root.value("steps").items();
   if (steps.empty()) root.fail_at("steps", "'steps' must be a non-empty list");
-  const SlurmResources e_slurm = root.optional_section("slurm") ? read_slurm(root.section("slurm")) : SlurmResources{};
+  const auto slurm = root.optional_section("slurm");
+  const SlurmResources e_slurm = slurm ? read_slurm(*slurm) : SlurmResources{};
   std::set<std::string> step_names;
   for (const ConfigValue& item : steps) e.steps.push_back(read_step(item, vars, config, o, e_slurm, step_names, e));
   root.finish();

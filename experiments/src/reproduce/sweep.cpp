@@ -234,7 +234,7 @@ Sweep load_sweep(const fs::path& file) {
     if (!option_set.count(*x)) root.fail_at("x", fmt::format("'{}' is not a swept option", *x));
     s.x = *x;
   }
-  if (root.optional_section("slurm")) s.slurm = reproduce_detail::slurm_section(root.section("slurm"));
+  if (const auto slurm = root.optional_section("slurm")) s.slurm = reproduce_detail::slurm_section(*slurm);
   root.finish();
   return s;
 }
