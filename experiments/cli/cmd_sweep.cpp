@@ -27,8 +27,9 @@ extern "C" void on_sweep_interrupt(int) { g_stop.store(true); }
 Run add_sweep(CLI::App& app, const std::vector<std::string>&) {
   namespace fs = std::filesystem;
   auto* sub = app.add_subcommand(
-      "sweep", "Run one subcommand over a grid or list of option values (locally or as a Slurm job array): one CSV "
-               "and one figure per measure, in the report");
+      "sweep",
+      "Run one subcommand over a grid or list of option values (locally or as a Slurm job array): one CSV "
+      "and one figure per measure, in the report");
   auto o = std::make_shared<experiments::ReproduceOptions>();
   auto config = std::make_shared<std::string>();
   auto collect = std::make_shared<std::string>();
@@ -43,7 +44,9 @@ Run add_sweep(CLI::App& app, const std::vector<std::string>&) {
   sub->add_option("--collect", *collect,
                   "Only write sweep.csv from the finished points in this folder (the sweep's own collect step)")
       ->excludes(out);
-  sub->add_option("--jobs", o->jobs, "Points run in parallel (local executor)")->default_val(2)->check(CLI::Range(1, 64));
+  sub->add_option("--jobs", o->jobs, "Points run in parallel (local executor)")
+      ->default_val(2)
+      ->check(CLI::Range(1, 64));
   sub->add_option("--source-dir", *source_dir, "The meltlab repository (report/ scripts)")
       ->default_str(MELTLAB_SOURCE_DIR);
   sub->add_option("--python", o->python, "Python interpreter with matplotlib")->default_val("/usr/bin/python3");

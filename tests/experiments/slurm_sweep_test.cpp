@@ -117,7 +117,8 @@ steps:
   - {name: f, meltlab: [render, --out, "${step}"]}
   - {name: g, meltlab: [render, --in, "${out}/unknown.txt", --out, "${step}"]}
   - {name: r, python: [report/r.py, "${out}"]}
-)").front();
+)")
+                     .front();
   std::map<std::string, int> wave;
   for (const auto& s : e.steps) wave[s.name] = s.wave;
   EXPECT_EQ(wave.at("a"), 0);
@@ -138,19 +139,22 @@ slurm: {partition: batch, time: "1:00:00"}
 steps:
   - {name: a, meltlab: [simulate], slurm: {cpus: 4, mem: 8G}}
   - {name: b, meltlab: [simulate]}
-)").front();
+)")
+                     .front();
   EXPECT_EQ(e.steps[0].slurm.partition, "batch");
   EXPECT_EQ(e.steps[0].slurm.cpus, 4);
   EXPECT_EQ(e.steps[0].slurm.mem, "8G");
   EXPECT_EQ(e.steps[1].slurm.time, "1:00:00");
   EXPECT_EQ(e.steps[1].slurm.cpus, 0);
   TempFolder bad;
-  EXPECT_NE(message_of([&] { load_one(bad, "name: x\nslurm: {mem: lots}\nsteps: [{name: a, meltlab: [x]}]\n"); })
-                .find("x.yaml:2: slurm: 'lots' is not a Slurm memory size"),
+  EXPECT_NE(message_of([&] {
+              load_one(bad, "name: x\nslurm: {mem: lots}\nsteps: [{name: a, meltlab: [x]}]\n");
+            }).find("x.yaml:2: slurm: 'lots' is not a Slurm memory size"),
             std::string::npos)
       << message_of([&] { load_one(bad, "name: x\nslurm: {mem: lots}\nsteps: [{name: a, meltlab: [x]}]\n"); });
-  EXPECT_NE(message_of([&] { load_one(bad, "name: x\nslurm: {nodes: 2}\nsteps: [{name: a, meltlab: [x]}]\n"); })
-                .find("unknown key 'nodes'"),
+  EXPECT_NE(message_of([&] {
+              load_one(bad, "name: x\nslurm: {nodes: 2}\nsteps: [{name: a, meltlab: [x]}]\n");
+            }).find("unknown key 'nodes'"),
             std::string::npos);
 }
 
@@ -183,7 +187,7 @@ measures:
   const ReproduceExperiment e = sweep_experiment(s, o);
   ASSERT_EQ(e.steps.size(), 7u);  // 5 points, collect, figures
   EXPECT_EQ(e.steps[0].args, (std::vector<std::string>{"simulate", "--cycles", "5", "--mesh", "a", "--kg", "0.5",
-                                                        "--out", (tmp / "out/s/p000").string()}));
+                                                       "--out", (tmp / "out/s/p000").string()}));
   for (std::size_t k = 0; k < 5; ++k) EXPECT_EQ(e.steps[k].wave, 0);  // one job array
   EXPECT_EQ(e.steps[5].wave, 1);
   EXPECT_EQ(e.steps[6].wave, 2);

@@ -37,9 +37,7 @@ using json = nlohmann::json;
 
 namespace {
 
-double unix_now() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
+double unix_now() { return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count(); }
 
 fs::path slurm_dir(const ReproduceExperiment& e) { return e.out_dir / "slurm"; }
 fs::path plan_file(const ReproduceExperiment& e) { return slurm_dir(e) / "plan.json"; }
@@ -74,7 +72,8 @@ struct Job {
   bool array = false;
   std::string task_id(std::size_t a) const { return array ? fmt::format("{}_{}", id, a) : id; }
   fs::path log(const fs::path& slurm, std::size_t a) const {
-    return slurm / "logs" / (array ? fmt::format("job-{}_{}.log", wave_index, a) : fmt::format("job-{}.log", wave_index));
+    return slurm / "logs" /
+           (array ? fmt::format("job-{}_{}.log", wave_index, a) : fmt::format("job-{}.log", wave_index));
   }
   std::size_t wave_index = 0;  ///< k of job-<k>
 };
@@ -105,9 +104,14 @@ json plan_json(const ReproduceOptions& o, const ReproduceExperiment& e, const st
     for (const auto k : j.steps) names.push_back(e.steps[k].name);
     js.push_back({{"id", j.id}, {"wave", j.wave}, {"array", j.array}, {"steps", names}});
   }
-  return {{"experiment", e.name}, {"hash", e.hash},         {"mode", o.quick ? "quick" : "full"},
-          {"steps", steps},       {"jobs", js},             {"submitted_utc", utc_timestamp_iso8601_now()},
-          {"reported", false},    {"meltlab", o.self_exe.string()}};
+  return {{"experiment", e.name},
+          {"hash", e.hash},
+          {"mode", o.quick ? "quick" : "full"},
+          {"steps", steps},
+          {"jobs", js},
+          {"submitted_utc", utc_timestamp_iso8601_now()},
+          {"reported", false},
+          {"meltlab", o.self_exe.string()}};
 }
 
 /// The jobs of a plan read back (ids, waves, step indices by name).
@@ -163,8 +167,7 @@ std::vector<Job> submit_experiment(const ReproduceOptions& o, const ReproduceExp
   // Jobs: by wave, then by resources (one array needs one resource set).
   std::map<int, std::map<std::tuple<std::string, std::string, int, std::string>, std::vector<std::size_t>>> groups;
   for (const auto k : todo) {
-    const SlurmResources r =
-        default_slurm_resources().overridden_by(e.steps[k].slurm).overridden_by(o.slurm.resources);
+    const SlurmResources r = default_slurm_resources().overridden_by(e.steps[k].slurm).overridden_by(o.slurm.resources);
     groups[e.steps[k].wave][{r.partition, r.time, r.cpus, r.mem}].push_back(k);
   }
   std::vector<Job> jobs;
@@ -180,7 +183,8 @@ std::vector<Job> submit_experiment(const ReproduceOptions& o, const ReproduceExp
       r.name = fmt::format("meltlab-{}-{}", e.name, j.wave_index);
       r.resources = {std::get<0>(res), std::get<1>(res), std::get<2>(res), std::get<3>(res)};
       r.array_size = j.array ? static_cast<int>(steps.size()) : 0;
-      r.log = slurm / "logs" / (j.array ? fmt::format("job-{}_%a.log", j.wave_index) : fmt::format("job-{}.log", j.wave_index));
+      r.log = slurm / "logs" /
+              (j.array ? fmt::format("job-{}_%a.log", j.wave_index) : fmt::format("job-{}.log", j.wave_index));
       r.workdir = e.out_dir;
       r.exclusive = e.exclusive;
       r.extra_args = o.slurm.sbatch_args;
@@ -214,7 +218,8 @@ std::vector<Job> submit_experiment(const ReproduceOptions& o, const ReproduceExp
   write_text_atomically(plan_file(e), plan_json(o, e, jobs).dump(2) + "\n");
   std::string ids;
   for (const auto& j : jobs)
-    ids += fmt::format("{}{}{}", ids.empty() ? "" : ", ", j.id, j.array ? fmt::format(" (array of {})", j.steps.size()) : "");
+    ids += fmt::format("{}{}{}", ids.empty() ? "" : ", ", j.id,
+                       j.array ? fmt::format(" (array of {})", j.steps.size()) : "");
   say(fmt::format("{}: {} {} step(s) as Slurm job(s) {}", e.name, resume ? "resubmitted" : "submitted", todo.size(),
                   ids));
   return jobs;
@@ -293,10 +298,9 @@ void update(const ReproduceOptions& o, Tracked& t, const std::map<std::string, s
       const std::string task = j.task_id(a);
       const auto it = states.find(task);
       // A queued array whose tasks have not been split off yet is listed as "ID_[0-3]".
-      const bool queued_whole =
-          !states.count(task) && std::any_of(states.begin(), states.end(), [&](const auto& kv) {
-            return kv.second.live && kv.first.rfind(j.id + "_[", 0) == 0;
-          });
+      const bool queued_whole = !states.count(task) && std::any_of(states.begin(), states.end(), [&](const auto& kv) {
+        return kv.second.live && kv.first.rfind(j.id + "_[", 0) == 0;
+      });
       std::string shown;
       if ((it != states.end() && it->second.live) || queued_whole) {
         live = true;
@@ -404,9 +408,10 @@ void run_on_slurm(const ReproduceOptions& o, const std::vector<ReproduceExperime
           if (!live.empty()) {
             std::string ids;
             for (const auto& id : live) ids += (ids.empty() ? "" : " ") + id;
-            throw InputError(fmt::format("Slurm jobs of an earlier submission of this experiment are still queued "
-                                         "({}): wait for them or cancel them (scancel {})",
-                                         ids, ids));
+            throw InputError(
+                fmt::format("Slurm jobs of an earlier submission of this experiment are still queued "
+                            "({}): wait for them or cancel them (scancel {})",
+                            ids, ids));
           }
         }
         const bool resume = plan && plan->value("hash", "") == e.hash && !o.force && fs::exists(e.out_dir);
@@ -425,7 +430,8 @@ void run_on_slurm(const ReproduceOptions& o, const std::vector<ReproduceExperime
   }
   if (o.slurm.detach) {
     if (!tracked.empty())
-      say(fmt::format("detached: {} experiment(s) on Slurm; run the same command again (without --detach) to wait "
+      say(
+          fmt::format("detached: {} experiment(s) on Slurm; run the same command again (without --detach) to wait "
                       "for them, collect them and build the report",
                       tracked.size()));
     return;

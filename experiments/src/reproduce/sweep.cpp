@@ -308,9 +308,9 @@ void collect_sweep(const Sweep& s, const fs::path& dir) {
   json measures = json::array();
   for (const auto& m : s.measures)
     measures.push_back({{"name", m.name}, {"file", m.file}, {"key", m.json.empty() ? m.column : m.json}});
-  const json meta = {{"name", s.name},          {"title", s.title},        {"command", s.command},
-                     {"args", s.args},          {"options", s.options},    {"measures", measures},
-                     {"x", s.x},                {"points", s.points.size()}};
+  const json meta = {{"name", s.name}, {"title", s.title},         {"command", s.command},
+                     {"args", s.args}, {"options", s.options},     {"measures", measures},
+                     {"x", s.x},       {"points", s.points.size()}};
   write_text_atomically(dir / "sweep.csv", csv);
   write_text_atomically(dir / "sweep.json", meta.dump(2) + "\n");
 }

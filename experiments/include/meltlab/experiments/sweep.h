@@ -44,7 +44,7 @@ struct SweepMeasure {
 };
 
 struct SweepPoint {
-  std::string name;                                          ///< p000, p001, ...
+  std::string name;                                         ///< p000, p001, ...
   std::vector<std::pair<std::string, std::string>> values;  ///< option -> value, in the options' order
 };
 
