@@ -152,6 +152,9 @@ rc=$?
 grep -q "1 still on Slurm" d.out || fail "--detach summary: $(cat d.out)"
 [ "$($PY -c "import json; print(json.load(open('c/summary.json'))['experiments'][0]['status'])")" = submitted ] ||
   fail "summary status after --detach"
+# a local run does not run over a submission that is not collected (its jobs write into the folder)
+"$M" reproduce --configs "$SC" --only cancel_me --out c --no-report >lc.out 2>&1
+[ $? -eq 1 ] && grep -q "submitted to Slurm .* and not collected" lc.out || fail "local run over live jobs: $(cat lc.out)"
 slow_job=$($PY -c "import json; p=json.load(open('c/cancel_me/slurm/plan.json')); print([j['id'] for j in p['jobs'] if j['steps']==['slow']][0])")
 for _ in $(seq 300); do
   [ "$(squeue -h -j "$slow_job" -o %T 2>/dev/null)" = RUNNING ] && break

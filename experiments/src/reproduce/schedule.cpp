@@ -5,6 +5,7 @@
 #include "stages.h"
 
 #include <meltlab/core/atomic_file.h>
+#include <meltlab/core/input_file.h>
 #include <meltlab/core/process.h>
 #include <meltlab/core/time.h>
 #include <meltlab/version.h>
@@ -36,6 +37,20 @@ void add_kept(const ReproduceOptions& o, ReproduceResult& result) {
     kept->status = "kept";
     result.experiments.push_back(std::move(*kept));
     result.kept.push_back(e);
+  }
+}
+
+/// Whether the folder of `e` holds a Slurm submission of this hash that no run has collected
+/// or reported (its jobs may still be writing into the folder).
+bool submitted_to_slurm(const ReproduceExperiment& e) {
+  const fs::path plan = e.out_dir / "slurm" / "plan.json";
+  std::error_code ec;
+  if (!fs::is_regular_file(plan, ec)) return false;
+  try {
+    const json p = json::parse(read_text_file(plan, "Slurm plan"));
+    return p.value("hash", "") == e.hash && !p.value("reported", false);
+  } catch (const std::exception&) {
+    return false;
   }
 }
 
@@ -118,6 +133,17 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
         out.status = "reused";
         return;
       }
+    }
+    if (!o.force && submitted_to_slurm(e)) {
+      out.name = e.name;
+      out.title = e.title;
+      out.hash = e.hash;
+      out.status = "failed";
+      out.error = fmt::format(
+          "its steps were submitted to Slurm ({}) and not collected: run with --executor slurm to collect them, or "
+          "--force to run it here (after scancel of its jobs)",
+          (e.out_dir / "slurm" / "plan.json").string());
+      return;
     }
     run_experiment(o, e, out, say, stop);
   };
