@@ -193,6 +193,31 @@ measures:
   EXPECT_EQ(e.steps[6].wave, 2);
 }
 
+TEST(Sweep, AReproduceExperimentCanBeASweep) {
+  TempFolder tmp;
+  write_file(tmp / "report/experiment_report.py", "# the report script\n");
+  write_file(tmp / "sweeps/s.yaml", R"(name: s
+command: simulate
+grid: {--kg: [0.5, 1]}
+measures: [{name: v, file: run.json, json: final.volume}]
+slurm: {cpus: 1}
+)");
+  const auto e = load_one(tmp, "name: x\nslurm: {time: '0:10:00', cpus: 4}\nsweep: sweeps/s.yaml\n").front();
+  ASSERT_EQ(e.steps.size(), 4u);
+  EXPECT_EQ(e.steps[1].args.back(), (tmp / "out/x/p001").string());  // the experiment's folder, not the sweep's name
+  EXPECT_EQ(e.steps[2].args, (std::vector<std::string>{"sweep", "--config", (tmp / "sweeps/s.yaml").string(),
+                                                       "--collect", (tmp / "out/x").string()}));
+  EXPECT_EQ(e.steps[0].slurm.cpus, 1);  // the sweep's resources over the experiment's
+  EXPECT_EQ(e.steps[0].slurm.time, "0:10:00");
+  EXPECT_EQ(e.steps[3].wave, 2);
+  TempFolder both;
+  write_file(both / "sweeps/s.yaml", "name: s\n");
+  EXPECT_NE(message_of([&] {
+              load_one(both, "name: x\nsweep: sweeps/s.yaml\nsteps: [{name: a, meltlab: [x]}]\n");
+            }).find("has both 'steps' and 'sweep'"),
+            std::string::npos);
+}
+
 TEST(Sweep, RefusesBadConfigsNamingTheLine) {
   TempFolder tmp;
   const auto msg = [&](const std::string& yaml) {

@@ -263,11 +263,23 @@ ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) 
       if (!fs::is_regular_file(p)) in.fail(fmt::format("input '{}' does not exist", p.string()));
       e.hashed_files.push_back(p);
     }
+  const auto slurm = root.optional_section("slurm");
+  const SlurmResources e_slurm = slurm ? read_slurm(*slurm) : SlurmResources{};
+  if (root.has("sweep")) {
+    // the experiment is a sweep (meltlab/experiments/sweep.h): its points, collect and figures
+    if (root.has("steps")) root.fail("has both 'steps' and 'sweep' (a sweep brings its own steps)");
+    const fs::path file = resolve(substitute(root.require<std::string>("sweep"), vars, config), o);
+    if (!fs::is_regular_file(file)) root.fail_at("sweep", fmt::format("sweep '{}' does not exist", file.string()));
+    reproduce_detail::add_sweep_steps(load_sweep(file), o, e);
+    for (auto& step : e.steps) step.slurm = e_slurm.overridden_by(step.slurm);
+    root.finish();
+    assign_waves(e);
+    e.hash = experiment_hash(e, text, mode);
+    return e;
+  }
   if (!root.has("steps")) root.fail("missing key 'steps' (a non-empty list)");
   const std::vector<ConfigValue> steps = root.value("steps").items();
   if (steps.empty()) root.fail_at("steps", "'steps' must be a non-empty list");
-  const auto slurm = root.optional_section("slurm");
-  const SlurmResources e_slurm = slurm ? read_slurm(*slurm) : SlurmResources{};
   std::set<std::string> step_names;
   for (const ConfigValue& item : steps) e.steps.push_back(read_step(item, vars, config, o, e_slurm, step_names, e));
   root.finish();

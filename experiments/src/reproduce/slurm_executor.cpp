@@ -284,6 +284,7 @@ void update(const ReproduceOptions& o, Tracked& t, const std::map<std::string, s
             Counters& counters, const Say& say) {
   const ReproduceExperiment& e = *t.e;
   const fs::path slurm = slurm_dir(e);
+  std::error_code ec;
   bool live = false;
   struct Failure {
     std::size_t step;
@@ -321,7 +322,10 @@ void update(const ReproduceOptions& o, Tracked& t, const std::map<std::string, s
           text += fmt::format(", step exited with code {}: {}", rec->value("exit_code", -1), last_line(err));
         else if (st.state.empty())
           text += " (no record of the step: the job ended before it finished)";
-        text += fmt::format(" (logs: {}, {})", err.string(), j.log(slurm, a).string());
+        std::string logs;
+        for (const fs::path& log : {err, j.log(slurm, a)})
+          if (fs::exists(log, ec)) logs += (logs.empty() ? "" : ", ") + log.string();
+        text += logs.empty() ? std::string(" (the job never started: no logs)") : " (logs: " + logs + ")";
         failures.push_back({k, text});
       }
       if (t.shown[k] != shown) {

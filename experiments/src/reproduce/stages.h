@@ -8,6 +8,7 @@
 #include <meltlab/core/config.h>
 #include <meltlab/core/process.h>
 #include <meltlab/experiments/reproduce.h>
+#include <meltlab/experiments/sweep.h>
 
 #include <nlohmann/json.hpp>
 
@@ -56,6 +57,10 @@ std::string content_hash(const ReproduceExperiment& experiment, const std::strin
 void find_waves(ReproduceExperiment& experiment);
 /// A `slurm:` mapping of a config (partition, time, cpus, mem), checked.
 SlurmResources slurm_section(const ConfigSection& section);
+
+/// The steps of a sweep (sweep.cpp) appended to `experiment` (into its out_dir): one per point,
+/// then collect and figures; its files added to the hashed ones. Waves and hash left to the caller.
+void add_sweep_steps(const Sweep& sweep, const ReproduceOptions& options, ReproduceExperiment& experiment);
 
 /// Steps as done.json and summary.json list them: [{name, exit_code, seconds}].
 nlohmann::json steps_json(const std::vector<StepOutcome>& steps);

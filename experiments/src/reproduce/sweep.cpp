@@ -246,6 +246,15 @@ ReproduceExperiment sweep_experiment(const Sweep& s, const ReproduceOptions& o) 
   e.sources = {"sweep"};
   e.config_file = s.file;
   e.out_dir = o.out_dir / s.name;
+  reproduce_detail::add_sweep_steps(s, o, e);
+  reproduce_detail::find_waves(e);
+  e.hash = reproduce_detail::content_hash(e, s.text, "sweep");
+  return e;
+}
+
+namespace reproduce_detail {
+
+void add_sweep_steps(const Sweep& s, const ReproduceOptions& o, ReproduceExperiment& e) {
   for (const auto& p : s.points) {
     ReproduceStep step;
     step.name = p.name;
@@ -275,9 +284,13 @@ ReproduceExperiment sweep_experiment(const Sweep& s, const ReproduceOptions& o) 
   // Inputs: the config, the report scripts, and the files the arguments name (a mesh, a kl field).
   e.hashed_files.push_back(s.file);
   std::error_code ec;
+  std::size_t modules = 0;
   for (fs::recursive_directory_iterator it(o.source_dir / "report", ec), end; !ec && it != end; it.increment(ec))
-    if (it->is_regular_file(ec) && it->path().extension() == ".py") e.hashed_files.push_back(it->path());
-  std::sort(e.hashed_files.begin() + 1, e.hashed_files.end());
+    if (it->is_regular_file(ec) && it->path().extension() == ".py") {
+      e.hashed_files.push_back(it->path());
+      ++modules;
+    }
+  std::sort(e.hashed_files.end() - static_cast<std::ptrdiff_t>(modules), e.hashed_files.end());
   std::set<fs::path> named;
   for (const auto& step : e.steps)
     for (const auto& a : step.args) {
@@ -289,10 +302,9 @@ ReproduceExperiment sweep_experiment(const Sweep& s, const ReproduceOptions& o) 
         e.hashed_files.push_back(p);
       }
     }
-  reproduce_detail::find_waves(e);
-  e.hash = reproduce_detail::content_hash(e, s.text, "sweep");
-  return e;
 }
+
+}  // namespace reproduce_detail
 
 void collect_sweep(const Sweep& s, const fs::path& dir) {
   std::string csv = "point";

@@ -26,6 +26,8 @@
 //       python: [report/experiment_report.py, cycle_time, "${out}"]   # script relative to the repository
 //       stdout: "${out}/x.json"           # optional: the step's stdout goes to this file
 //       slurm: {time: "4:00:00"}          # optional: this step's Slurm resources (below)
+//   sweep: experiments/sweeps/x.yaml      # instead of steps: the experiment is that sweep (its
+//                                         # points, collect, figures; meltlab/experiments/sweep.h)
 //   slurm: {partition: batch, time: "1:00:00", cpus: 2, mem: 4G}   # optional: every step's
 //                                         # (--executor slurm; each key optional, defaults below)
 //
