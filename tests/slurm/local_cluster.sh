@@ -2,8 +2,10 @@
 # A private single-node Slurm cluster on this machine, for the tests: munged, slurmctld and slurmd
 # from Debian's packages (slurm-wlm, munge), all state, logs, sockets and the generated slurm.conf
 # inside one folder, on free loopback ports, so it touches nothing of a system-wide Slurm.
-#   local_cluster.sh start DIR   starts it; prints "export SLURM_CONF=DIR/slurm.conf" to eval
-#   local_cluster.sh stop DIR    stops the daemons it started (by their pid files)
+#   local_cluster.sh start DIR [PID]   starts it; prints "export SLURM_CONF=DIR/slurm.conf" to
+#                                      eval; with PID, stops it by itself once process PID has
+#                                      ended (a test killed on its time limit leaves no daemons)
+#   local_cluster.sh stop DIR          stops the daemons it started (by their pid files)
 # Exit 77 from start: the cluster cannot run here (the message says why).
 set -euo pipefail
 cmd=${1:?start|stop}
@@ -93,7 +95,15 @@ slurmctld -f "$SLURM_CONF" >"$dir/log/slurmctld.out" 2>&1 || skip "slurmctld doe
 slurmd -f "$SLURM_CONF" -N "$host" >"$dir/log/slurmd.out" 2>&1 || skip "slurmd does not start: $(tail -3 "$dir/log/slurmd.log" 2>/dev/null | tr '\n' ' ')"
 for _ in $(seq 100); do
   state=$(sinfo -h -N -o %t 2>/dev/null | head -1 || true)
-  case "$state" in idle|mix|alloc) echo "export SLURM_CONF=$SLURM_CONF"; exit 0 ;; esac
+  case "$state" in
+    idle|mix|alloc)
+      if [ -n "${3:-}" ]; then  # the watchdog: detached, it outlives this script but not the test
+        setsid bash -c 'while kill -0 "$1" 2>/dev/null && [ -d "$2" ]; do sleep 2; done; "$0" stop "$2"' \
+          "$(realpath "$0")" "$3" "$dir" </dev/null >/dev/null 2>&1 &
+      fi
+      echo "export SLURM_CONF=$SLURM_CONF"
+      exit 0 ;;
+  esac
   sleep 0.2
 done
 skip "the node did not become idle in 20 s (state '$state'): $(tail -3 "$dir/log/slurmd.log" "$dir/log/slurmctld.log" 2>/dev/null | tr '\n' ' ')"

@@ -39,7 +39,7 @@ if ! command -v slurmctld >/dev/null || ! command -v munged >/dev/null; then
   "$REPO/scripts/install-deps" >install.log 2>&1 ||
     { echo "SKIP: slurm-wlm/munge not installed and scripts/install-deps failed: $(tail -1 install.log)"; exit 77; }
 fi
-start_out=$("$REPO/tests/slurm/local_cluster.sh" start "$CLUSTER" 2>start.err)
+start_out=$("$REPO/tests/slurm/local_cluster.sh" start "$CLUSTER" $$ 2>start.err)
 rc=$?
 if [ $rc -eq 77 ]; then echo "SKIP: $(cat start.err)"; exit 77; fi
 [ $rc -eq 0 ] || fail "local_cluster.sh start: exit $rc: $(cat start.err)"
