@@ -321,6 +321,7 @@ def reproduce_cases():
         "unknown_variable": "name: x\nsteps:\n  - {name: a, meltlab: [simulate, --out, '${nope}']}\n",
         "step_not_map": "name: x\nsteps: [1, 2]\n",
         "bad_escape": 'name: "\\q"\n',
+        "step_named_slurm": "name: x\nsteps:\n  - {name: slurm, meltlab: [simulate]}\n",
         "slurm_bad_mem": "name: x\nslurm: {mem: lots}\nsteps:\n  - {name: a, meltlab: [simulate]}\n",
         "slurm_bad_time": "name: x\nsteps:\n  - {name: a, meltlab: [simulate], slurm: {time: soon}}\n",
         "slurm_unknown_key": "name: x\nslurm: {gpus: 2}\nsteps:\n  - {name: a, meltlab: [simulate]}\n",

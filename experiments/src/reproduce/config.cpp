@@ -142,6 +142,8 @@ ReproduceStep read_step(const ConfigValue& item, const Vars& vars, const fs::pat
   step.name = s.require<std::string>("name");
   if (!valid_name(step.name) || !step_names.insert(step.name).second)
     s.fail_at("name", fmt::format("step name '{}' must be [a-z0-9_]+ and unique", step.name));
+  if (step.name == "logs" || step.name == "slurm")  // the folders of the run's logs and Slurm records
+    s.fail_at("name", fmt::format("step name '{}' is reserved", step.name));
   if (s.has("meltlab") == s.has("python"))
     s.fail(fmt::format("step '{}' needs exactly one of 'meltlab' and 'python'", step.name));
   step.kind = s.has("meltlab") ? "meltlab" : "python";

@@ -96,7 +96,10 @@ json plan_json(const ReproduceOptions& o, const ReproduceExperiment& e, const st
                      {"argv", spec.argv},
                      {"search_path", spec.search_path},
                      {"stdout", spec.stdout_file->string()},
-                     {"stderr", spec.stderr_file->string()}});
+                     {"stderr", spec.stderr_file->string()},
+                     // what a job removes before its step runs: a job that Slurm requeues (a node
+                     // failed) starts on a clean slate, as a local step does in a fresh folder
+                     {"clear", {(e.out_dir / e.steps[k].name).string(), spec.stdout_file->string()}}});
   }
   json js = json::array();
   for (const auto& j : jobs) {
@@ -185,7 +188,7 @@ std::vector<Job> submit_experiment(const ReproduceOptions& o, const ReproduceExp
       r.array_size = j.array ? static_cast<int>(steps.size()) : 0;
       r.log = slurm / "logs" /
               (j.array ? fmt::format("job-{}_%a.log", j.wave_index) : fmt::format("job-{}.log", j.wave_index));
-      r.workdir = e.out_dir;
+      r.workdir = fs::current_path();  // as a local step: relative paths mean the same
       r.exclusive = e.exclusive;
       r.extra_args = o.slurm.sbatch_args;
       r.script = slurm / fmt::format("job-{}.sh", j.wave_index);
@@ -500,6 +503,9 @@ int run_slurm_job(const fs::path& plan_path, std::size_t job_index, const std::v
   spec.stdin_file = kNullDevice;
   spec.stdout_file = step->at("stdout").get<std::string>();
   spec.stderr_file = step->at("stderr").get<std::string>();
+  std::error_code ec;
+  fs::remove(record_file(plan_path.parent_path(), name), ec);
+  for (const auto& p : step->value("clear", json::array())) fs::remove_all(p.get<std::string>(), ec);
   fs::create_directories(spec.stdout_file->parent_path());
   fs::create_directories(spec.stderr_file->parent_path());
   const double started = unix_now();
