@@ -175,6 +175,7 @@ std::vector<Job> submit_experiment(const ReproduceOptions& o, const ReproduceExp
   }
   std::vector<Job> jobs;
   std::vector<slurm::JobRequest> requests;
+  if (todo.empty()) return jobs;
   for (const auto& [wave, by_resources] : groups)
     for (const auto& [res, steps] : by_resources) {
       Job j;
@@ -426,6 +427,9 @@ void run_on_slurm(const ReproduceOptions& o, const std::vector<ReproduceExperime
       }
       out.status = "submitted";
       ++counters.running;
+      // every step already has its record (a failure reported before a slow file system showed
+      // the last records): nothing to submit, collect it now
+      if (t.jobs.empty()) update(o, t, {}, counters, say);
       tracked.push_back(std::move(t));
     } catch (const std::exception& ex) {
       out.status = "failed";
