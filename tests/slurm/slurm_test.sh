@@ -64,7 +64,10 @@ grep -Eq "^2 ran, 0 reused, 1 failed" s.out || fail "Slurm summary: $(cat s.out)
 grep -q "tab_2_3: submitted 8 step(s) as Slurm job(s)" s.err || fail "no submission line: $(head -5 s.err)"
 grep -q "tab_2_3: submitted 8 step(s) as Slurm job(s) [0-9]* (array of 7), [0-9]*$" s.err ||
   fail "tab_2_3's seven independent steps are not one job array before the report: $(grep submitted s.err)"
-grep -q "tiny_melt: step 1/3 run: RUNNING (Slurm job" s.err || fail "no RUNNING progress line"
+# (a step shorter than one poll may go from PENDING to COMPLETED without being seen RUNNING)
+grep -Eq "tiny_melt: step 1/3 run: (RUNNING|COMPLETED) \(Slurm job [0-9]+" s.err || fail "no progress line of tiny_melt"
+grep -q "tiny_melt: step 3/3 report: COMPLETED (Slurm job [0-9]* on $(hostname))" s.err ||
+  fail "no COMPLETED line naming the host: $(grep tiny_melt s.err)"
 grep -q "always_fails: FAILED on Slurm" s.err || fail "no FAILED line: $(tail -5 s.err)"
 $PY - <<'PY' || fail "summary, the failure report, done.json"
 import json, os
