@@ -8,7 +8,8 @@ Files that record when, where and how long something ran are not compared bitwis
 done.json, summary.json, provenance records, timing CSVs. JSON files that differ bitwise are
 compared as parsed values, with the provenance-like keys left out (time stamps, durations,
 hardware, command lines, content-hash identifiers) and the two tree roots made equal; CSV
-files likewise without their timing columns (`ms`, `*_ms`, `*_seconds`). Both are reported as
+files likewise without their timing columns (`ms`, `*_ms`, `* ms`, `*_seconds`). Run records present
+in one tree only (a Slurm run's slurm/ folders) are not reported either. Both are reported as
 "same values" when nothing else differs. Exit 0 when nothing else differs.
 """
 import argparse
@@ -22,7 +23,9 @@ import sys
 
 # Records of the run itself (time stamps, durations, host, command line): expected to differ.
 RUN_RECORDS = ["*/logs/*", "logs/*", "*done.json", "summary.json", "*provenance*.json", "*.err", "*.out",
-               "*timing*", "*timings*", "*bench*.json", "*bench*.csv"]
+               "*timing*", "*timings*", "*bench*.json", "*bench*.csv",
+               # the Slurm executor's plan, batch scripts, job logs and step records (docs/cluster.md)
+               "slurm/*", "*/slurm/*"]
 # Keys of a JSON file that describe the run rather than its result.
 RUN_KEYS = {"meltlab", "meltlab_version", "provenance", "hardware", "command", "command_line", "timing", "timings",
             "seconds", "finished", "started", "started_utc", "finished_utc", "wall_seconds", "elapsed_seconds", "host",
@@ -31,7 +34,7 @@ RUN_KEYS = {"meltlab", "meltlab_version", "provenance", "hardware", "command", "
 HASH_KEY = re.compile(r"(^|_)hash$")
 # Dataset files carry a content hash in their name (giraffe-95f6a320.off).
 HASHED_NAME = re.compile(r"-[0-9a-f]{8}\.(off|ply|obj|stl)")
-TIMING_COLUMN = re.compile(r"(^ms$|_ms$|_seconds$|^seconds$)")
+TIMING_COLUMN = re.compile(r"(^ms$|_ms$| ms$|_seconds$|^seconds$)")
 
 
 def strip(value, roots):
@@ -74,9 +77,14 @@ def main():
     a_files, b_files = set(files(args.a)), set(files(args.b))
     counts = {"identical": 0, "same values": 0, "ignored": 0}
     roots = [os.path.abspath(args.a), os.path.abspath(args.b)] + [os.path.abspath(p) for p in args.sources]
-    differ, only_a, only_b = [], sorted(a_files - b_files), sorted(b_files - a_files)
+    def ignored(rel):
+        return any(fnmatch.fnmatch(rel, g) for g in ignore)
+
+    differ = []
+    only_a = sorted(r for r in a_files - b_files if not ignored(r))
+    only_b = sorted(r for r in b_files - a_files if not ignored(r))
     for rel in sorted(a_files & b_files):
-        if any(fnmatch.fnmatch(rel, g) for g in ignore):
+        if ignored(rel):
             counts["ignored"] += 1
             continue
         pa, pb = os.path.join(args.a, rel), os.path.join(args.b, rel)

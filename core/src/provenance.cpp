@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <thread>
 
@@ -23,6 +24,21 @@ HardwareInfo probe_hardware() {
   char host[256] = {0};
   if (::gethostname(host, sizeof host - 1) == 0) h.host = host;
   return h;
+}
+
+nlohmann::json probe_batch_job() {
+  const auto env = [](const char* name) -> nlohmann::json {
+    const char* v = std::getenv(name);
+    return v && *v ? nlohmann::json(v) : nlohmann::json();
+  };
+  const nlohmann::json job_id = env("SLURM_JOB_ID");
+  if (job_id.is_null()) return nullptr;
+  return {{"scheduler", "slurm"},
+          {"job_id", job_id},
+          {"array_job_id", env("SLURM_ARRAY_JOB_ID")},
+          {"array_task_id", env("SLURM_ARRAY_TASK_ID")},
+          {"node", env("SLURMD_NODENAME")},
+          {"cluster", env("SLURM_CLUSTER_NAME")}};
 }
 
 void Provenance::start() {
@@ -47,7 +63,8 @@ nlohmann::json Provenance::to_json() const {
           {"command_line", command_line},
           {"started_utc", utc_timestamp_iso8601(started)},
           {"finished_utc", utc_timestamp_iso8601(finished)},
-          {"timings_s", timings}};
+          {"timings_s", timings},
+          {"batch_job", batch_job}};
 }
 
 }  // namespace meltlab

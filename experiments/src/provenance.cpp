@@ -27,6 +27,7 @@ Provenance start_provenance(const std::string& subcommand, const std::vector<std
     caches["L" + l + (t == "Data" ? "d" : t == "Instruction" ? "i" : "")] = sz;
   }
   if (!caches.empty()) p.hardware.extra["caches"] = caches;
+  p.batch_job = probe_batch_job();
   p.command_line = command_line;
   p.start();
   return p;

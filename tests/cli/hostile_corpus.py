@@ -321,9 +321,56 @@ def reproduce_cases():
         "unknown_variable": "name: x\nsteps:\n  - {name: a, meltlab: [simulate, --out, '${nope}']}\n",
         "step_not_map": "name: x\nsteps: [1, 2]\n",
         "bad_escape": 'name: "\\q"\n',
+        "step_named_slurm": "name: x\nsteps:\n  - {name: slurm, meltlab: [simulate]}\n",
+        "slurm_bad_mem": "name: x\nslurm: {mem: lots}\nsteps:\n  - {name: a, meltlab: [simulate]}\n",
+        "slurm_bad_time": "name: x\nsteps:\n  - {name: a, meltlab: [simulate], slurm: {time: soon}}\n",
+        "slurm_unknown_key": "name: x\nslurm: {gpus: 2}\nsteps:\n  - {name: a, meltlab: [simulate]}\n",
+        "slurm_cpus_zero": "name: x\nslurm: {cpus: 0}\nsteps:\n  - {name: a, meltlab: [simulate]}\n",
     }
-    return [Case(f"reproduce/{n}", ["reproduce", "--configs", "{d}", "--out", "{out}"], {"cfg/e.yaml": t}, names=["e.yaml"])
-            for n, t in bad.items()]
+    cases = [Case(f"reproduce/{n}", ["reproduce", "--configs", "{d}", "--out", "{out}"], {"cfg/e.yaml": t},
+                  names=["e.yaml"]) for n, t in bad.items()]
+    ok = {"cfg/e.yaml": "name: x\nsteps:\n  - {name: a, meltlab: [mesh-info, cube_triangles]}\n"}
+    for n, opts, name in (("executor_unknown", ["--executor", "pbs"], "--executor"),
+                          ("mem_text", ["--executor", "slurm", "--mem", "lots"], "--mem"),
+                          ("time_text", ["--executor", "slurm", "--time", "soon"], "--time"),
+                          ("cpus_zero", ["--executor", "slurm", "--cpus", "0"], "--cpus"),
+                          ("partition_spaces", ["--executor", "slurm", "--partition", "a b"], "--partition"),
+                          ("poll_zero", ["--executor", "slurm", "--poll-seconds", "0"], "--poll-seconds")):
+        cases.append(Case(f"reproduce/option_{n}", ["reproduce", "--configs", "{d}", "--out", "{out}"] + opts, ok,
+                          names=[name]))
+    return cases
+
+
+def sweep_cases():
+    m = "measures: [{name: v, file: run.json, json: final.volume}]\n"
+    bad = {
+        "yaml_syntax": "name: s\ngrid: [\n",
+        "no_points": "name: s\ncommand: simulate\n" + m,
+        "no_measures": "name: s\ncommand: simulate\ngrid: {--kg: [1]}\n",
+        "option_without_dashes": "name: s\ncommand: simulate\ngrid: {kg: [1]}\n" + m,
+        "out_swept": "name: s\ncommand: simulate\ngrid: {--out: [a]}\n" + m,
+        "out_in_args": "name: s\ncommand: simulate\nargs: [--out, x]\ngrid: {--kg: [1]}\n" + m,
+        "empty_values": "name: s\ncommand: simulate\ngrid: {--kg: []}\n" + m,
+        "nested_value": "name: s\ncommand: simulate\ngrid: {--kg: [[1, 2]]}\n" + m,
+        "points_differ": "name: s\ncommand: simulate\npoints: [{--kg: 1}, {--kr: 2}]\n" + m,
+        "swept_and_fixed": "name: s\ncommand: simulate\nargs: [--kg, '1']\ngrid: {--kg: [1]}\n" + m,
+        "command_sweep": "name: s\ncommand: sweep\ngrid: {--kg: [1]}\n" + m,
+        "measure_both": "name: s\ncommand: simulate\ngrid: {--kg: [1]}\n"
+                        "measures: [{name: v, file: a.csv, json: x, column: y}]\n",
+        "measure_outside": "name: s\ncommand: simulate\ngrid: {--kg: [1]}\n"
+                           "measures: [{name: v, file: ../../etc/passwd, json: x}]\n",
+        "x_not_swept": "name: s\ncommand: simulate\ngrid: {--kg: [1]}\nx: --kr\n" + m,
+        "too_many_points": "name: s\ncommand: simulate\ngrid: {--kg: [" + ",".join(map(str, range(200))) +
+                           "], --kr: [" + ",".join(map(str, range(200))) + "]}\n" + m,
+        "unknown_key": "name: s\ncommand: simulate\ngrid: {--kg: [1]}\nmesaures: []\n" + m,
+        "bad_slurm": "name: s\ncommand: simulate\ngrid: {--kg: [1]}\nslurm: {mem: x}\n" + m,
+    }
+    cases = [Case(f"sweep/{n}", ["sweep", "--config", "{f}", "--out", "{out}"], {"s.yaml": t}) for n, t in bad.items()]
+    cases.append(Case("sweep/config_missing", ["sweep", "--config", "nowhere.yaml", "--out", "{out}"],
+                      names=["nowhere.yaml"]))
+    cases.append(Case("sweep/no_out", ["sweep", "--config", "{f}"],
+                      {"s.yaml": "name: s\ncommand: simulate\ngrid: {--kg: [1]}\n" + m}, names=["--out"]))
+    return cases
 
 
 def option_cases():
@@ -513,8 +560,8 @@ def main():
     ap.add_argument("--only", default="")
     ap.add_argument("--list", action="store_true")
     a = ap.parse_args()
-    cases = (mesh_cases() + manifest_cases() + kl_cases() + scene_cases() + reproduce_cases() + option_cases() +
-             volume_cases())
+    cases = (mesh_cases() + manifest_cases() + kl_cases() + scene_cases() + reproduce_cases() + sweep_cases() +
+             option_cases() + volume_cases())
     cases = [c for c in cases if a.only in c.name]
     if a.list:
         for c in cases:

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_files.h"
+
 #include <thread>
 
 namespace meltlab {
@@ -21,8 +23,9 @@ TEST(Provenance, HasTheOneShape) {
   const nlohmann::json j = p.to_json();
   std::vector<std::string> keys;
   for (const auto& [k, v] : j.items()) keys.push_back(k);
-  EXPECT_EQ(keys, (std::vector<std::string>{"command_line", "finished_utc", "hardware", "meltlab", "started_utc",
-                                            "subcommand", "timings_s"}));
+  EXPECT_EQ(keys, (std::vector<std::string>{"batch_job", "command_line", "finished_utc", "hardware", "meltlab",
+                                            "started_utc", "subcommand", "timings_s"}));
+  EXPECT_TRUE(j["batch_job"].is_null());
   EXPECT_EQ(j["subcommand"], "simulate");
   EXPECT_EQ(j["meltlab"], (nlohmann::json{{"version", "1.2.3"}, {"git_revision", "abc123"}}));
   EXPECT_EQ(j["command_line"], (nlohmann::json{"meltlab", "simulate", "--mesh", "a b.off"}));
@@ -34,6 +37,29 @@ TEST(Provenance, HasTheOneShape) {
   EXPECT_GE(j["timings_s"]["total"].get<double>(), 0.0);
   EXPECT_LE(j["started_utc"].get<std::string>(), j["finished_utc"].get<std::string>());
   EXPECT_EQ(j["started_utc"].get<std::string>().size(), 20u);
+}
+
+TEST(Provenance, BatchJobFromTheSlurmEnvironment) {
+  {
+    const test::ScopedEnv job("SLURM_JOB_ID", std::nullopt);
+    EXPECT_TRUE(probe_batch_job().is_null());
+  }
+  // A task of an array job: its own job id, the array's id and its index, the node.
+  const test::ScopedEnv job("SLURM_JOB_ID", std::string("125"));
+  const test::ScopedEnv array("SLURM_ARRAY_JOB_ID", std::string("120"));
+  const test::ScopedEnv task("SLURM_ARRAY_TASK_ID", std::string("5"));
+  const test::ScopedEnv node("SLURMD_NODENAME", std::string("n01"));
+  const test::ScopedEnv cluster("SLURM_CLUSTER_NAME", std::nullopt);
+  const nlohmann::json j = probe_batch_job();
+  EXPECT_EQ(j, (nlohmann::json{{"scheduler", "slurm"},
+                               {"job_id", "125"},
+                               {"array_job_id", "120"},
+                               {"array_task_id", "5"},
+                               {"node", "n01"},
+                               {"cluster", nullptr}}));
+  Provenance p;
+  p.batch_job = j;
+  EXPECT_EQ(p.to_json()["batch_job"], j);
 }
 
 TEST(Provenance, ProbesTheCpuModelWithoutLeadingBlanks) {

@@ -115,16 +115,35 @@ Vars read_vars(const ConfigSection& root, const fs::path& config, const std::str
   return vars;
 }
 
+/// A `slurm:` mapping (experiment or step level): partition, time, cpus, mem.
+SlurmResources read_slurm(const ConfigSection& s) {
+  SlurmResources r;
+  static const std::regex partition_re("[A-Za-z0-9_.,-]+"), time_re("[0-9]+([-:][0-9]+)*"), mem_re("[0-9]+[KMGT]?");
+  r.partition = s.get<std::string>("partition", "");
+  if (s.has("partition") && !std::regex_match(r.partition, partition_re))
+    s.fail_at("partition", fmt::format("'{}' is not a Slurm partition name", r.partition));
+  r.time = s.get<std::string>("time", "");
+  if (s.has("time") && !std::regex_match(r.time, time_re))
+    s.fail_at("time", fmt::format("'{}' is not a Slurm time limit (minutes, H:MM:SS or D-HH:MM:SS)", r.time));
+  r.cpus = s.get_in_range("cpus", 0, 1, 4096);
+  r.mem = s.get<std::string>("mem", "");
+  if (s.has("mem") && !std::regex_match(r.mem, mem_re))
+    s.fail_at("mem", fmt::format("'{}' is not a Slurm memory size (a number with K, M, G or T)", r.mem));
+  return r;
+}
+
 /// One entry of `steps:`; adds the files it names (script, its sibling modules, file
 /// arguments outside the output folder) to e.hashed_files.
 ReproduceStep read_step(const ConfigValue& item, const Vars& vars, const fs::path& config, const ReproduceOptions& o,
-                        std::set<std::string>& step_names, ReproduceExperiment& e) {
+                        const SlurmResources& e_slurm, std::set<std::string>& step_names, ReproduceExperiment& e) {
   const ConfigSection s = item.section();
   ReproduceStep step;
   if (!s.has("name")) s.fail("every step needs a 'name'");
   step.name = s.require<std::string>("name");
   if (!valid_name(step.name) || !step_names.insert(step.name).second)
     s.fail_at("name", fmt::format("step name '{}' must be [a-z0-9_]+ and unique", step.name));
+  if (step.name == "logs" || step.name == "slurm")  // the folders of the run's logs and Slurm records
+    s.fail_at("name", fmt::format("step name '{}' is reserved", step.name));
   if (s.has("meltlab") == s.has("python"))
     s.fail(fmt::format("step '{}' needs exactly one of 'meltlab' and 'python'", step.name));
   step.kind = s.has("meltlab") ? "meltlab" : "python";
@@ -143,6 +162,8 @@ ReproduceStep read_step(const ConfigValue& item, const Vars& vars, const fs::pat
     for (const fs::path& module : python_modules_beside(step.args[0])) e.hashed_files.push_back(module);
   }
   if (const auto out = s.optional<std::string>("stdout")) step.stdout_file = substitute(*out, step_vars, config);
+  const auto slurm = s.optional_section("slurm");
+  step.slurm = e_slurm.overridden_by(slurm ? read_slurm(*slurm) : SlurmResources{});
   // Files named by the arguments (a mesh, a kl field, a script) are inputs too; what lies
   // under the output folder is not.
   for (const auto& a : step.args) {
@@ -154,6 +175,53 @@ ReproduceStep read_step(const ConfigValue& item, const Vars& vars, const fs::pat
     e.hashed_files.push_back(p);
   }
   return step;
+}
+
+/// Whether `p` is `dir` or lies inside it (both lexically normal, absolute).
+bool within(const fs::path& p, const fs::path& dir) {
+  auto d = dir.begin();
+  for (auto it = p.begin(); d != dir.end(); ++it, ++d)
+    if (it == p.end() || *it != *d) return false;
+  return true;
+}
+
+/// The step dependencies and waves (rules in reproduce.h).
+void assign_waves(ReproduceExperiment& e) {
+  const fs::path out = e.out_dir.lexically_normal();
+  const std::string out_text = out.string();
+  for (std::size_t k = 0; k < e.steps.size(); ++k) {
+    ReproduceStep& s = e.steps[k];
+    std::set<std::size_t> deps;
+    auto all_before = [&] {
+      for (std::size_t j = 0; j < k; ++j) deps.insert(j);
+    };
+    if (s.kind == "python") all_before();
+    std::vector<std::string> texts = s.args;
+    if (!s.stdout_file.empty()) texts.push_back(s.stdout_file.string());
+    for (const std::string& a : texts)
+      for (auto pos = a.find(out_text); pos != std::string::npos; pos = a.find(out_text, pos + 1)) {
+        // the path from the folder's name to the end of the argument ("--x=${out}/a" too)
+        const fs::path p = fs::path(a.substr(pos)).lexically_normal();
+        if (!within(p, out)) continue;  // a longer name that starts alike (${out}_b)
+        if (within(p, out / s.name)) continue;
+        if (!s.stdout_file.empty() && p == s.stdout_file.lexically_normal() && a == s.stdout_file.string()) continue;
+        bool known = false;
+        for (std::size_t j = 0; j < k; ++j) {
+          const ReproduceStep& o = e.steps[j];
+          const fs::path folder = out / o.name;
+          const fs::path file = o.stdout_file.empty() ? fs::path() : o.stdout_file.lexically_normal();
+          if (within(p, folder) || within(folder, p) || (!file.empty() && (p == file || within(file, p)))) {
+            deps.insert(j);
+            known = true;
+          }
+        }
+        // under ${out} but nobody's: it may be anything an earlier step wrote
+        if (!known) all_before();
+      }
+    s.depends_on.assign(deps.begin(), deps.end());
+    s.wave = 0;
+    for (const std::size_t j : s.depends_on) s.wave = std::max(s.wave, e.steps[j].wave + 1);
+  }
 }
 
 /// The content hash that decides whether a finished folder is reused: config text, mode,
@@ -197,17 +265,49 @@ ReproduceExperiment load_one(const fs::path& config, const ReproduceOptions& o) 
       if (!fs::is_regular_file(p)) in.fail(fmt::format("input '{}' does not exist", p.string()));
       e.hashed_files.push_back(p);
     }
+  const auto slurm = root.optional_section("slurm");
+  const SlurmResources e_slurm = slurm ? read_slurm(*slurm) : SlurmResources{};
+  if (root.has("sweep")) {
+    // the experiment is a sweep (meltlab/experiments/sweep.h): its points, collect and figures
+    if (root.has("steps")) root.fail("has both 'steps' and 'sweep' (a sweep brings its own steps)");
+    const fs::path file = resolve(substitute(root.require<std::string>("sweep"), vars, config), o);
+    if (!fs::is_regular_file(file)) root.fail_at("sweep", fmt::format("sweep '{}' does not exist", file.string()));
+    reproduce_detail::add_sweep_steps(load_sweep(file), o, e);
+    for (auto& step : e.steps) step.slurm = e_slurm.overridden_by(step.slurm);
+    root.finish();
+    assign_waves(e);
+    e.hash = experiment_hash(e, text, mode);
+    return e;
+  }
   if (!root.has("steps")) root.fail("missing key 'steps' (a non-empty list)");
   const std::vector<ConfigValue> steps = root.value("steps").items();
   if (steps.empty()) root.fail_at("steps", "'steps' must be a non-empty list");
   std::set<std::string> step_names;
-  for (const ConfigValue& item : steps) e.steps.push_back(read_step(item, vars, config, o, step_names, e));
+  for (const ConfigValue& item : steps) e.steps.push_back(read_step(item, vars, config, o, e_slurm, step_names, e));
   root.finish();
+  assign_waves(e);
   e.hash = experiment_hash(e, text, mode);
   return e;
 }
 
 }  // namespace
+
+namespace reproduce_detail {
+std::string content_hash(const ReproduceExperiment& e, const std::string& config_text, const std::string& mode) {
+  return experiment_hash(e, config_text, mode);
+}
+void find_waves(ReproduceExperiment& e) { assign_waves(e); }
+SlurmResources slurm_section(const ConfigSection& s) { return read_slurm(s); }
+}  // namespace reproduce_detail
+
+SlurmResources SlurmResources::overridden_by(const SlurmResources& over) const {
+  SlurmResources r = *this;
+  if (!over.partition.empty()) r.partition = over.partition;
+  if (!over.time.empty()) r.time = over.time;
+  if (over.cpus > 0) r.cpus = over.cpus;
+  if (!over.mem.empty()) r.mem = over.mem;
+  return r;
+}
 
 std::vector<ReproduceExperiment> load_reproduce_experiments(const ReproduceOptions& o) {
   std::vector<fs::path> files;

@@ -5,6 +5,7 @@
 #include "stages.h"
 
 #include <meltlab/core/atomic_file.h>
+#include <meltlab/core/input_file.h>
 #include <meltlab/core/process.h>
 #include <meltlab/core/time.h>
 #include <meltlab/version.h>
@@ -39,6 +40,20 @@ void add_kept(const ReproduceOptions& o, ReproduceResult& result) {
   }
 }
 
+/// Whether the folder of `e` holds a Slurm submission of this hash that no run has collected
+/// or reported (its jobs may still be writing into the folder).
+bool submitted_to_slurm(const ReproduceExperiment& e) {
+  const fs::path plan = e.out_dir / "slurm" / "plan.json";
+  std::error_code ec;
+  if (!fs::is_regular_file(plan, ec)) return false;
+  try {
+    const json p = json::parse(read_text_file(plan, "Slurm plan"));
+    return p.value("hash", "") == e.hash && !p.value("reported", false);
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
 json summary_json(const ReproduceOptions& o, const ReproduceResult& result,
                   const std::vector<const ReproduceExperiment*>& listed, int jobs) {
   json ex = json::array();
@@ -61,6 +76,7 @@ json summary_json(const ReproduceOptions& o, const ReproduceResult& result,
   return json{{"meltlab", {{"version", kVersion}, {"git_revision", kGitRevision}}},
               {"mode", o.quick ? "quick" : "full"},
               {"jobs", jobs},
+              {"executor", o.executor},
               {"finished", utc_timestamp_iso8601_now()},
               {"seconds", result.seconds},
               {"interrupted", result.interrupted},
@@ -96,7 +112,8 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
   fs::create_directories(o.out_dir);
   const auto t0 = Clock::now();
   std::mutex mu;
-  std::size_t finished = 0, failed = 0, running = 0;
+  Counters counters;
+  std::size_t &finished = counters.finished, &failed = counters.failed, &running = counters.running;
   ReproduceResult result;
   result.experiments.resize(experiments.size());
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
@@ -116,6 +133,17 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
         out.status = "reused";
         return;
       }
+    }
+    if (!o.force && submitted_to_slurm(e)) {
+      out.name = e.name;
+      out.title = e.title;
+      out.hash = e.hash;
+      out.status = "failed";
+      out.error = fmt::format(
+          "its steps were submitted to Slurm ({}) and not collected: run with --executor slurm to collect them, or "
+          "--force to run it here (after scancel of its jobs)",
+          (e.out_dir / "slurm" / "plan.json").string());
+      return;
     }
     run_experiment(o, e, out, say, stop);
   };
@@ -153,12 +181,16 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
     }
   };
   const int jobs = std::max(1, std::min<int>(o.jobs, static_cast<int>(std::max<std::size_t>(1, experiments.size()))));
-  worker();  // the exclusive ones, on this thread
-  next = 0;
-  queue = &shared;
-  std::vector<std::thread> pool;
-  for (int j = 0; j < jobs; ++j) pool.emplace_back(worker);
-  for (auto& t : pool) t.join();
+  if (o.executor == "slurm") {
+    run_on_slurm(o, experiments, result.experiments, counters, say, stop);
+  } else {
+    worker();  // the exclusive ones, on this thread
+    next = 0;
+    queue = &shared;
+    std::vector<std::thread> pool;
+    for (int j = 0; j < jobs; ++j) pool.emplace_back(worker);
+    for (auto& t : pool) t.join();
+  }
   for (std::size_t i = 0; i < experiments.size(); ++i)
     if (result.experiments[i].status.empty()) {
       result.experiments[i].name = experiments[i].name;
@@ -176,7 +208,10 @@ ReproduceResult run_reproduce(const ReproduceOptions& o, const std::vector<Repro
   write_text_atomically(o.out_dir / "summary.json", summary_json(o, result, listed, jobs).dump(2) + "\n");
 
   result.report_status = "skipped";
-  if (o.report && !result.interrupted) result.report_status = build_report(o, say, result.report_file);
+  const bool waiting = std::any_of(result.experiments.begin(), result.experiments.end(),
+                                   [](const ExperimentOutcome& r) { return r.status == "submitted"; });
+  if (waiting) result.report_status = "skipped (experiments still on Slurm: run again to collect them)";
+  if (o.report && !result.interrupted && !waiting) result.report_status = build_report(o, say, result.report_file);
   return result;
 }
 

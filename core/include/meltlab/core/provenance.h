@@ -7,7 +7,10 @@
 //    "hardware": {"cpu": "...", "threads": 8, "host": "...", ...},
 //    "command_line": ["meltlab", "simulate", ...],
 //    "started_utc": "2026-11-25T12:04:44Z", "finished_utc": "...",
-//    "timings_s": {"total": 12.5, ...}}
+//    "timings_s": {"total": 12.5, ...},
+//    "batch_job": null}        (in a Slurm job: {"scheduler": "slurm", "job_id": "125",
+//                               "array_job_id": "120", "array_task_id": "5", "node": "n01",
+//                               "cluster": "..."}; the host is hardware.host)
 // core knows neither the CLI nor the build: the caller (experiments) fills in the version, the
 // git revision, the command line and any hardware facts beyond those core probes.
 
@@ -30,10 +33,16 @@ struct HardwareInfo {
 /// The machine this process runs on.
 HardwareInfo probe_hardware();
 
+/// The batch job this process runs in, from the environment the scheduler sets (Slurm:
+/// SLURM_JOB_ID, SLURM_ARRAY_JOB_ID, SLURM_ARRAY_TASK_ID, SLURMD_NODENAME, SLURM_CLUSTER_NAME):
+/// the object described above, or null outside a job. Array fields are null for a plain job.
+nlohmann::json probe_batch_job();
+
 struct Provenance {
   std::string subcommand;  ///< "simulate", "compare", ...
   std::string version, git_revision;
   HardwareInfo hardware;
+  nlohmann::json batch_job;               ///< probe_batch_job() (null outside a batch job)
   std::vector<std::string> command_line;  ///< argv as given
   std::chrono::system_clock::time_point started{}, finished{};
   /// Wall-clock phases in seconds, in the order recorded. "total" (started to finished, on the

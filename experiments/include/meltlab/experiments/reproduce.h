@@ -25,8 +25,22 @@
 //     - name: report
 //       python: [report/experiment_report.py, cycle_time, "${out}"]   # script relative to the repository
 //       stdout: "${out}/x.json"           # optional: the step's stdout goes to this file
+//       slurm: {time: "4:00:00"}          # optional: this step's Slurm resources (below)
+//   sweep: experiments/sweeps/x.yaml      # instead of steps: the experiment is that sweep (its
+//                                         # points, collect, figures; meltlab/experiments/sweep.h)
+//   slurm: {partition: batch, time: "1:00:00", cpus: 2, mem: 4G}   # optional: every step's
+//                                         # (--executor slurm; each key optional, defaults below)
 //
 // Each step's stdout/stderr go to ${out}/logs/<step>.out|.err (unless stdout is redirected).
+//
+// Dependencies between steps (for the Slurm executor, which runs independent steps at once):
+// a step depends on an earlier one when one of its arguments (or its stdout file), read as a
+// path, lies in the earlier step's folder ${out}/<name>, is the earlier step's stdout file, or
+// is a folder that holds either (${out} itself); a path under ${out} that belongs to no other
+// step, and every python step, depend on all earlier steps. A step's "wave" is 0 without
+// dependencies, else one more than the latest wave it depends on; the steps of one wave run
+// as one Slurm job array, each wave after the one before it (sbatch --dependency=afterok).
+// The local executor runs the steps in the file's order.
 
 #include <atomic>
 #include <filesystem>
@@ -37,11 +51,28 @@
 
 namespace meltlab::experiments {
 
+/// The Slurm resources of a step (sbatch --partition, --time, --cpus-per-task, --mem). Empty
+/// strings and 0: not set at this level (the next level down decides; see SlurmOptions).
+struct SlurmResources {
+  std::string partition;  ///< empty: the cluster's default partition
+  std::string time;       ///< sbatch --time ("60", "1:00:00", "1-12:00:00")
+  int cpus = 0;           ///< --cpus-per-task
+  std::string mem;        ///< --mem ("4G", "500M")
+  /// `over`'s set fields replace these.
+  SlurmResources overridden_by(const SlurmResources& over) const;
+};
+
+/// The defaults when neither the config nor the command line sets a resource.
+inline SlurmResources default_slurm_resources() { return {"", "2:00:00", 2, "4G"}; }
+
 struct ReproduceStep {
   std::string name;
-  std::string kind;                   ///< "meltlab" or "python"
-  std::vector<std::string> args;      ///< after variable substitution (python: script first, absolute)
-  std::filesystem::path stdout_file;  ///< empty: ${out}/logs/<name>.out
+  std::string kind;                     ///< "meltlab" or "python"
+  std::vector<std::string> args;        ///< after variable substitution (python: script first, absolute)
+  std::filesystem::path stdout_file;    ///< empty: ${out}/logs/<name>.out
+  std::vector<std::size_t> depends_on;  ///< indices of the earlier steps it needs (rules above)
+  int wave = 0;                         ///< 0 without dependencies, else 1 + the latest wave it needs
+  SlurmResources slurm;                 ///< the config's (experiment, then step); unset fields empty
 };
 
 struct ReproduceExperiment {
@@ -58,6 +89,14 @@ struct ReproduceExperiment {
   bool in_mode = true;                              ///< runs in the mode of this invocation
 };
 
+/// How the steps run: child processes of this program (local) or Slurm jobs.
+struct SlurmOptions {
+  SlurmResources resources;              ///< the command line's: replace the config's
+  std::vector<std::string> sbatch_args;  ///< extra sbatch arguments (--account=x, --qos=y)
+  bool detach = false;                   ///< submit and return; a later run collects
+  double poll_seconds = 10;              ///< squeue/sacct polling interval while waiting
+};
+
 struct ReproduceOptions {
   std::vector<std::filesystem::path> config_dirs;  ///< every *.yaml in them is an experiment
   std::filesystem::path out_dir;
@@ -67,8 +106,11 @@ struct ReproduceOptions {
   bool quick = false;
   std::vector<std::string> only;  ///< empty: all
   int jobs = 2;
-  bool force = false;  ///< run even if a finished folder with the same hash exists
-  bool report = true;  ///< run report/build_report.py at the end
+  bool force = false;              ///< run even if a finished folder with the same hash exists
+  bool report = true;              ///< run report/build_report.py at the end
+  std::string executor = "local";  ///< "local" or "slurm"
+  SlurmOptions slurm;
+  bool parallel_steps = false;  ///< local: the steps of one wave share the --jobs workers (sweeps)
 };
 
 /// Loads and validates the configs of `options.config_dirs` (and `only`), substitutes the
@@ -84,7 +126,9 @@ struct StepOutcome {
 struct ExperimentOutcome {
   std::string name;
   std::string title;
-  std::string status;  ///< "ran", "reused", "failed", "not run" (interrupted), "kept" (not selected, finished earlier)
+  /// "ran", "reused", "failed", "not run" (interrupted), "kept" (not selected, finished
+  /// earlier), "submitted" (Slurm, --detach or interrupted while waiting: a later run collects)
+  std::string status;
   std::string error;
   double seconds = 0;           ///< this invocation
   double original_seconds = 0;  ///< reused: the run that made the folder
@@ -103,7 +147,16 @@ struct ReproduceResult {
 
 /// Runs the experiments (reusing finished ones), writes <out>/summary.json and, if asked,
 /// builds the report. `log` receives one progress line per event (thread-safe calls).
+/// With options.executor "slurm" the steps are submitted as Slurm jobs (see slurm.h) and
+/// waited for, or with slurm.detach left running; a later run collects them.
 ReproduceResult run_reproduce(const ReproduceOptions& options, const std::vector<ReproduceExperiment>& experiments,
                               const std::function<void(const std::string&)>& log, const std::atomic<bool>* stop);
+
+/// `meltlab run-job`: runs the step of job `job_index` of a Slurm plan (slurm/plan.json of an
+/// experiment folder; in an array job the task SLURM_ARRAY_TASK_ID), then writes its record
+/// slurm/steps/<step>.json atomically (exit code, times, provenance with the host, job id and
+/// array index). Returns the step's exit status (0 or 1..255).
+int run_slurm_job(const std::filesystem::path& plan, std::size_t job_index,
+                  const std::vector<std::string>& command_line);
 
 }  // namespace meltlab::experiments
