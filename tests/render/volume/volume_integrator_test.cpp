@@ -271,6 +271,30 @@ TEST(VolumeIntegrator, UnshadowedSingleScatterMatchesItsClosedForm) {
   }
 }
 
+TEST(VolumeIntegrator, AmbientInScatterMatchesItsClosedForm) {
+  // A uniform ambient radiance A in-scattered with ∫ p dω = 1, unshadowed, κ in the BRDF:
+  // I = a A (1 - e^{-σ ℓ}) through a homogeneous slab; the exponential rule is exact for it.
+  const double f0 = 0.7, kappa = 0.5, a = 0.85;
+  const Volume v = constant_volume(box_2_3_6(), f0);
+  VolumeRenderSettings s = plain(OpticalModel::kHG, 53);
+  s.kappa = kappa;
+  s.albedo = a;
+  s.emission = Rgb::Zero();
+  VolumeLight dark;
+  dark.type = LightType::kDirectional;
+  dark.intensity = Rgb::Zero();
+  s.lights = {dark};
+  s.ambient = Rgb(0.2, 0.4, 0.8);
+  s.kappa_in_brdf = true;
+  s.quadrature = Quadrature::kExponential;
+  s.include_last_partial = true;
+  const VolumeFrame f = render_volume(v, one_ray(Vec3(-10, 0, 0), Vec3(0, 0, 0)), s);
+  for (int ch = 0; ch < 3; ++ch) {
+    const double expected = a * s.ambient[ch] * (1 - std::exp(-kappa * f0 * 2.0));
+    EXPECT_NEAR(centre_value(f, ch), expected, kFloatTolerance * expected) << ch;
+  }
+}
+
 // A point light near a homogeneous slab: the phase angle and the inverse-square falloff change
 // along the ray. The exponential rule with a midpoint sample per step against Gauss–Kronrod
 // quadrature of the same integral, written independently:
