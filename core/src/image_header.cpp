@@ -121,8 +121,8 @@ std::optional<DeclaredImageSize> exr_size(const std::string& b, std::int64_t fil
       while (c < end && b[c] != '\0') {
         const std::size_t ce = b.find('\0', c);
         if (ce == std::string::npos || ce + 17 > end) break;
-        const std::uint32_t type = le32(p + ce + 1);
-        bytes_per_pixel += type == 1 ? 2 : 4;
+        const std::uint32_t pixel_type = le32(p + ce + 1);
+        bytes_per_pixel += pixel_type == 1 ? 2 : 4;
         c = ce + 17;
       }
     }
