@@ -1,6 +1,7 @@
 // The volume integrator (see integrator/volume_integrator.h).
 
 #include <meltlab/render/integrator/volume_integrator.h>
+#include <meltlab/render/integrator/fast_exp.h>
 
 #include <meltlab/core/error.h>
 
@@ -14,6 +15,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
 
@@ -456,17 +458,17 @@ struct Kernel {
             // volume); 1 - e^{-x} as -expm1 so a thin step keeps its digits.
             if constexpr (Q == Quadrature::kInclusive) {
               ext += w == h ? e : e * (w / h);
-              T = double(std::exp(float(-kappa_h * ext)));
+              T = double(exp_nonpositive(float(-kappa_h * ext)));
               k = T * g_step;
             } else if constexpr (Q == Quadrature::kExclusive) {
               k = T * g_step;
               ext += e * w;
-              T = double(std::exp(float(-s.kappa * ext)));
+              T = double(exp_nonpositive(float(-s.kappa * ext)));
             } else {
               const double sigma = s.kappa * e;
               k = T * (sigma > 0 ? double(-std::expm1(float(-sigma * w))) / sigma : w);
               ext += e * w;
-              T = double(std::exp(float(-s.kappa * ext)));
+              T = double(exp_nonpositive(float(-s.kappa * ext)));
             }
             if constexpr (emits) Ir += gr * k, Ig += gg * k, Ib += gb * k;
             if (T < s.ert_transmittance) {
