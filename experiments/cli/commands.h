@@ -18,6 +18,7 @@ Run add_compare(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_synth_sequence(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_fit(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_manufacture(CLI::App& app, const std::vector<std::string>& command_line);
+Run add_predict(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_render(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_reproduce(CLI::App& app);
 
