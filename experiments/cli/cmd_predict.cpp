@@ -37,8 +37,7 @@ Run add_predict(CLI::App& app, const std::vector<std::string>& command_line) {
   sub->add_option("--air-C", ph.air_temperature_C, "Air temperature")->default_val(30.0);
   sub->add_option("--ground-C", ph.ground_temperature_C, "Ground temperature")->default_val(30.0);
   sub->add_option("--ice-C", ph.initial_temperature_C, "Initial ice temperature (<= 0)")->default_val(-10.0);
-  sub->add_option("--lamp-W-m2", ph.lamp_irradiance_W_m2, "Lamp irradiance from above (0 = no lamp)")
-      ->default_val(0.0);
+  sub->add_option("--lamp-W-m2", ph.lamp_irradiance_W_m2, "Lamp irradiance from above (0 = no lamp)")->default_val(0.0);
   sub->add_option("--ground-contact-W-m2K", ph.ground_conductance_W_m2K,
                   "Contact conductance between ice and ground (an assumed order of magnitude; 0 = insulated)")
       ->default_val(30.0);
@@ -78,9 +77,11 @@ Run add_predict(CLI::App& app, const std::vector<std::string>& command_line) {
                                    num(j["prediction"]["time_to_melt_s"], "{:.0f}"));
     if (!j["series_comparison"].is_null()) {
       const auto& c = j["series_comparison"];
-      what += fmt::format("; against the series: RMSE {:.3g} g, max error {:.3g} g, melted observed at {} s",
-                          c["rmse_g"].get<double>(), c["max_abs_error_g"].get<double>(),
-                          num(c["time_to_melt_s"]["observed"], "{:.0f}"));
+      const auto& observed = c["time_to_melt_s"]["observed"];
+      what += fmt::format("; against the series: RMSE {:.3g} g, max error {:.3g} g, {}", c["rmse_g"].get<double>(),
+                          c["max_abs_error_g"].get<double>(),
+                          observed.is_null() ? std::string("the readings end before it melted")
+                                             : fmt::format("melted at {:.0f} s observed", observed.get<double>()));
     }
     if (!j["photos"].is_null())
       what += fmt::format("; photos: P mean {}, max {}", num(j["photos"]["summary"]["P_mean"], "{:.4f}"),

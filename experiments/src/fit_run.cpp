@@ -271,6 +271,7 @@ json estimates_json(const verify::FitResult& fit) {
                    {"standard_error", optional_json(e.standard_error)},
                    {"standard_error_clustered", optional_json(e.standard_error_clustered)}};
     if (fit.cluster_kind == "photo") est[e.name]["segmentation_bias"] = optional_json(e.segmentation_bias);
+    est[e.name]["standard_error_total"] = optional_json(e.standard_error_total);
   }
   return est;
 }
@@ -290,8 +291,12 @@ json uncertainty_json(const verify::FitResult& fit) {
   u["correlation_clustered"] = fit.correlation_clustered;
   if (photos) {
     u["segmentation_bias"] =
-        "a systematic error, in neither standard error: the estimate minus the estimate from contours at the level "
-        "half-way between ice and ground next to each contour (one Gauss-Newton step from the optimum)";
+        "a systematic error, in neither standard error above: the estimate minus the estimate from contours at the "
+        "level half-way between ice and ground next to each contour (one Gauss-Newton step from the optimum). Its "
+        "size is that of the error the segmentation's level makes; its sign is no reliable correction.";
+    u["standard_error_total"] =
+        "sqrt(standard_error_clustered² + segmentation_bias²): the error bar to quote (statistical and segmentation "
+        "errors together; the fit_coverage experiment measures how often ±1.96 of it holds the truth)";
     json off = nullptr;
     if (!fit.segmentation_offset_px.empty()) {
       double sum = 0, lo = fit.segmentation_offset_px.front(), hi = lo;
@@ -299,6 +304,8 @@ json uncertainty_json(const verify::FitResult& fit) {
       off = {{"mean", sum / static_cast<double>(fit.segmentation_offset_px.size())}, {"min", lo}, {"max", hi}};
     }
     u["segmentation_offset_px"] = off;
+  } else {
+    u["standard_error_total"] = "the clustered error (a series has no segmentation)";
   }
   return u;
 }
@@ -372,7 +379,7 @@ json fit_json(const verify::ObservationSequence& obs, const FitRunOptions& o, co
 }
 
 /// The fitted model's mass curve: one point per cycle from t = 0 (cycle first_cycle) until it
-/// has fallen below 1 % of the initial mass after `t_end` (or max_cycles).
+/// has fallen below 1 % of the initial mass after `t_end`, or at 3 t_end (or max_cycles).
 verify::MassCurve fitted_mass_curve(verify::FitModel& model, const verify::FitResult& fit, double mass0_g,
                                     double first_cycle, double t_end, std::int64_t max_cycles) {
   std::map<std::string, double> values;
@@ -398,7 +405,7 @@ verify::MassCurve fitted_mass_curve(verify::FitModel& model, const verify::FitRe
     }
     curve.time_s.push_back((static_cast<double>(c) - first_cycle) * S);
     curve.mass_g.push_back(mass0_g * v / v0);
-    if (curve.time_s.back() > t_end && curve.mass_g.back() < 0.01 * mass0_g) break;
+    if (curve.time_s.back() > t_end && (curve.mass_g.back() < 0.01 * mass0_g || curve.time_s.back() > 3 * t_end)) break;
     previous = v;
   }
   return curve;

@@ -83,7 +83,8 @@ sim::IndexedMesh shape_mesh(const std::string& shape) {
     need(1, "sphere:D");
     return datasets::icosphere(4, mm[0] / 2000.0);
   }
-  throw InputError(fmt::format("--shape: unknown shape '{}' (box:WxDxH, cylinder:DxH or sphere:D, millimetres)", shape));
+  throw InputError(
+      fmt::format("--shape: unknown shape '{}' (box:WxDxH, cylinder:DxH or sphere:D, millimetres)", shape));
 }
 
 }  // namespace meltlab::experiments

@@ -28,9 +28,10 @@ double initial_mass_g(const verify::MeltSeries& s, const std::optional<double>& 
     return *mass_g;
   }
   if (s.time_s.front() != 0)
-    throw InputError(fmt::format("{}:{}: the first reading is at t = {} s, not 0: give the mass of the ice at t = 0 "
-                                 "with --mass-g",
-                                 s.file.string(), s.line.front(), s.time_s.front()));
+    throw InputError(
+        fmt::format("{}:{}: the first reading is at t = {} s, not 0: give the mass of the ice at t = 0 "
+                    "with --mass-g",
+                    s.file.string(), s.line.front(), s.time_s.front()));
   from = fmt::format("the reading at t = 0 ({}:{})", s.file.filename().string(), s.line.front());
   return s.mass_g.front();
 }
@@ -55,7 +56,8 @@ json series_comparison_json(const verify::SeriesComparison& c, const std::string
           {"max_error_time_s", c.max_error_time_s},
           {"mean_error_g", c.mean_error_g},
           {"initial_g", c.initial_g},
-          {"half_mass_time_s", {{"observed", opt(c.half_mass_time_observed_s)}, {model, opt(c.half_mass_time_predicted_s)}}},
+          {"half_mass_time_s",
+           {{"observed", opt(c.half_mass_time_observed_s)}, {model, opt(c.half_mass_time_predicted_s)}}},
           {"time_to_melt_s",
            {{"observed", opt(c.time_to_melt_observed_s)},
             {model, opt(c.time_to_melt_predicted_s)},

@@ -428,6 +428,24 @@ TEST(FitParameters, TableRolesAndDefaults) {
   ASSERT_EQ(k.name, "cycles_per_photo");
   EXPECT_EQ(k.initial, kDefaultCyclesPerPhoto);
 
+  // A mass series alone: the time scale in seconds per cycle (5 % of its start as the
+  // scale), no registration, no cycles per photo.
+  EXPECT_EQ(fit_parameter_role("seconds_per_cycle"), FitParameterRole::kTimeScale);
+  FitParameterContext series;
+  series.series_only = true;
+  series.seconds_per_cycle = 6.0;
+  std::vector<std::string> series_names;
+  for (const auto& spec : fit_parameter_table(series)) {
+    series_names.push_back(spec.name);
+    if (spec.name == "seconds_per_cycle") {
+      EXPECT_EQ(spec.initial, 6.0);
+      EXPECT_DOUBLE_EQ(spec.scale, 0.3);
+    }
+  }
+  EXPECT_EQ(series_names, (std::vector<std::string>{"kg", "kn", "seconds_per_cycle"}));
+  EXPECT_NE(fit_parameter_names(true).find("seconds_per_cycle"), std::string::npos);
+  EXPECT_EQ(fit_parameter_names(true).find("reg"), std::string::npos);
+
   const FitParameterSpec neg = kl_fit_parameter("kl.offset", -2.0);
   EXPECT_EQ(neg.role, FitParameterRole::kKlField);
   EXPECT_TRUE(std::isinf(neg.lower));

@@ -306,6 +306,8 @@ std::vector<FitEstimate> estimates(const std::vector<FitParameter>& params, cons
     if (!e.fixed && std::isfinite(se[j])) e.standard_error = se[j];
     if (!e.fixed && std::isfinite(se_clustered[j])) e.standard_error_clustered = se_clustered[j];
     if (!e.fixed && std::isfinite(segmentation[j])) e.segmentation_bias = segmentation[j];
+    if (e.standard_error_clustered)
+      e.standard_error_total = std::hypot(*e.standard_error_clustered, e.segmentation_bias.value_or(0.0));
     const double tol = 1e-9 * params[j].scale;
     e.at_bound = !e.fixed && (std::abs(e.value - params[j].lower) < tol || std::abs(e.value - params[j].upper) < tol);
     out.push_back(e);

@@ -95,9 +95,10 @@ MeltSeries check_melt_series(const TimeSeries& ts, const MeltSeriesOptions& o) {
 
   for (std::size_t i = 0; i < n; ++i)
     if (g[i] < -tol)
-      throw InputError(fmt::format("{}: {:.6g} g{} is below zero by more than the noise of the readings (±{:.3g} g): a "
-                                   "wrong tare?",
-                                   at(i), g[i], as_mass, tol));
+      throw InputError(
+          fmt::format("{}: {:.6g} g{} is below zero by more than the noise of the readings (±{:.3g} g): a "
+                      "wrong tare?",
+                      at(i), g[i], as_mass, tol));
 
   // Readings that jump away from their neighbours: from the line through the nearest kept
   // neighbours on both sides, and (where there are two) from the lines through the two
@@ -139,19 +140,20 @@ MeltSeries check_melt_series(const TimeSeries& ts, const MeltSeriesOptions& o) {
   }
   const int allowed = std::max(1, static_cast<int>(std::floor(o.max_outlier_fraction * static_cast<double>(n))));
   if (dropped > allowed)
-    throw InputError(fmt::format("{}: {} of {} readings jump away from their neighbours by more than the noise (±{:.3g} "
-                                 "g), the first at line {}: too many to leave out (at most {})",
-                                 file, dropped, n, tol, ts.line.empty() ? 0 : ts.line[first_dropped], allowed));
+    throw InputError(
+        fmt::format("{}: {} of {} readings jump away from their neighbours by more than the noise (±{:.3g} "
+                    "g), the first at line {}: too many to leave out (at most {})",
+                    file, dropped, n, tol, ts.line.empty() ? 0 : ts.line[first_dropped], allowed));
 
   // Ice only loses mass: a kept reading above an earlier kept one by more than the noise.
   std::size_t lowest = 0;
   for (std::size_t i = 0; i < n; ++i) {
     if (!kept[i]) continue;
     if (g[i] > g[lowest] + tol)
-      throw InputError(fmt::format("{}: the mass rises to {:.6g} g, {:.3g} g above the reading at line {} (noise ±{:.3g} "
-                                   "g){}: ice only loses mass (is the meltwater weighed too?)",
-                                   at(i), g[i], g[i] - g[lowest], ts.line.empty() ? 0 : ts.line[lowest], tol,
-                                   as_mass));
+      throw InputError(
+          fmt::format("{}: the mass rises to {:.6g} g, {:.3g} g above the reading at line {} (noise ±{:.3g} "
+                      "g){}: ice only loses mass (is the meltwater weighed too?)",
+                      at(i), g[i], g[i] - g[lowest], ts.line.empty() ? 0 : ts.line[lowest], tol, as_mass));
     if (g[i] < g[lowest]) lowest = i;
   }
 
@@ -193,8 +195,7 @@ std::optional<double> time_to_fall_to(const MassCurve& c, double level) {
 
 SeriesComparison compare_series(const MassCurve& observed, const MassCurve& predicted, double initial_g,
                                 double melted_fraction, std::size_t first_scored) {
-  if (observed.time_s.empty() || predicted.time_s.empty())
-    throw InvariantError("compare_series: an empty curve");
+  if (observed.time_s.empty() || predicted.time_s.empty()) throw InvariantError("compare_series: an empty curve");
   if (predicted.time_s.back() < observed.time_s.back() || predicted.time_s.front() > observed.time_s.front())
     throw InvariantError("compare_series: the prediction does not cover the observed times");
   if (first_scored >= observed.time_s.size()) throw InvariantError("compare_series: no reading to score");

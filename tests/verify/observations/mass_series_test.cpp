@@ -182,7 +182,7 @@ TEST(SeriesComparison, KnownErrorsAndTimes) {
   // Observed: 50 g is crossed between 500 s (50.5 g) and 600 s (39.5 g): 500 + 100 * 0.5 / 11.
   EXPECT_NEAR(*c.half_mass_time_observed_s, 500 + 100 * 0.5 / 11, 1e-9);
   EXPECT_NEAR(*c.time_to_melt_predicted_s, 980.0, 1e-9);  // 2 g
-  EXPECT_FALSE(c.time_to_melt_observed_s.has_value());     // the readings stop at 20.5 g
+  EXPECT_FALSE(c.time_to_melt_observed_s.has_value());    // the readings stop at 20.5 g
   // Scoring the first reading too: one more sample with error 0.
   EXPECT_NEAR(compare_series(obs, model, 100.0).rmse_g, std::sqrt(8 * 0.25 / 9), 1e-12);
 }

@@ -44,9 +44,9 @@ struct PredictOptions {
   double voxel_mm = 2.5;                ///< solver grid spacing
   sim::physics::IceMeltParams physics;  ///< air 30 °C, ice -10 °C, ground 30 °C, ...
   std::filesystem::path observations;   ///< optional manifest (a mass series and/or photos)
-  double every_s = 0;         ///< spacing of the predicted curve after the observations (0: theirs, or 60 s)
-  double max_time_s = 86400;  ///< the prediction stops here if the ice has not melted
-  double melted_fraction = 0.02;  ///< "melted": at or below this fraction of the initial mass
+  double every_s = 0;                   ///< spacing of the predicted curve after the observations (0: theirs, or 60 s)
+  double max_time_s = 86400;            ///< the prediction stops here if the ice has not melted
+  double melted_fraction = 0.02;        ///< "melted": at or below this fraction of the initial mass
   verify::RegistrationMode registration = verify::RegistrationMode::kFirstFrame;
   int overlay_every = 0;
   std::filesystem::path out_dir;

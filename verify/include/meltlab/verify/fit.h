@@ -35,8 +35,12 @@
 // contours. FitEstimate::segmentation_bias estimates that separately: every photo segmented
 // again with the threshold half-way between the levels of the ice and the ground next to its
 // contour (where a blurred edge crosses), and the change of the estimate to first order
-// (Gauss-Newton from the optimum, no new simulation). It is a systematic error estimate, not
-// part of either standard error.
+// (Gauss-Newton from the optimum). It is a systematic error estimate, not part of either
+// standard error; its sign is not a reliable correction (the fit_coverage experiment: the
+// estimate minus it was not closer to the truth), its size is the size of the error that
+// the choice of the segmentation's level makes. FitEstimate::standard_error_total combines
+// the two, sqrt(clustered² + bias²) (the GUM's way with a known but uncorrected systematic
+// effect): the error bar whose coverage the fit_coverage experiment checks.
 //
 // The simulation depends on every parameter, so all residual blocks of one parameter vector
 // come from one simulation; evaluations are cached by parameter vector and shared by the
@@ -120,7 +124,10 @@ struct FitEstimate {
   double initial = 0;
   std::optional<double> standard_error;            ///< Ceres' covariance (independent residuals)
   std::optional<double> standard_error_clustered;  ///< cluster-robust: a photo (run of readings) per cluster
-  std::optional<double> segmentation_bias;         ///< estimated systematic shift (photos), not in the errors
+  std::optional<double> segmentation_bias;         ///< estimated systematic shift (photos), not in the errors above
+  /// The error bar to quote: hypot(clustered, segmentation_bias), or the clustered error
+  /// where there is no segmentation (a series) or no estimate of its bias.
+  std::optional<double> standard_error_total;
   bool fixed = false;
   bool at_bound = false;
 };
