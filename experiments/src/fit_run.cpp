@@ -327,6 +327,7 @@ json fit_json(const verify::ObservationSequence& obs, const FitRunOptions& o, co
   j["correlation"] = fit.correlation;
   j["cost"] = {{"initial", fit.initial_cost}, {"final", fit.final_cost}, {"residual_sigma_px", fit.residual_sigma_px}};
   j["uncertainty"] = uncertainty_json(fit);
+  j["warnings"] = fit.warnings;
   j["iterations"] = fit.iterations;
   j["simulations"] = fit.simulations;
   j["uncertainty_simulations"] = fit.uncertainty_evaluations;

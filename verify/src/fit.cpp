@@ -644,6 +644,33 @@ std::vector<double> segmentation_bias(const ObservationSequence& obs, Evaluator&
   return bias;
 }
 
+/// A fitted model that falls into pieces while the segmentation keeps only the largest
+/// component of each photo: the photos then lack the other pieces and every estimate is
+/// biased towards a faster melt. One warning naming the photos and the setting.
+void check_pieces(const ObservationSequence& obs, Evaluator& ev, const ScaledParameters& sp, FitResult& result,
+                  const std::function<void(const std::string&)>& log) {
+  if (!obs.segmentation.largest_component || ev.targets().empty()) return;
+  // Pieces the segmentation would keep if it kept all: above its minimum component size.
+  const std::vector<int> pieces =
+      ev.rendered_pieces(sp.values(ev.params(), sp.u), std::max(obs.segmentation.min_component_px, 1.0));
+  int first = -1, last = -1, most = 1;
+  for (std::size_t t = 0; t < pieces.size(); ++t) {
+    if (pieces[t] <= 1) continue;
+    const int frame = ev.targets()[t].frame + 1;
+    if (first < 0) first = frame;
+    last = frame;
+    most = std::max(most, pieces[t]);
+  }
+  if (first < 0) return;
+  const std::string w = fmt::format(
+      "photos {}-{}: the fitted model shows up to {} separate pieces but the segmentation keeps only the largest "
+      "component of each photo (segmentation.largest_component: true), so those photos lack the rest and the "
+      "estimates are biased; set largest_component: false in the manifest",
+      first, last, most);
+  result.warnings.push_back(w);
+  log("warning: " + w);
+}
+
 /// Two free parameters a series cannot tell apart: refused after the fit, naming them.
 void check_series_identifiable(const FitResult& result) {
   const std::size_t f = result.free_names.size();
@@ -767,6 +794,7 @@ FitResult fit_sequence(const ObservationSequence& obs, FitModel& model, const st
     if (!series_only && o.segmentation_bias)
       segmentation = segmentation_bias(obs, ev, sp, free, o, clusters, result, log);
   }
+  if (!series_only) check_pieces(obs, ev, sp, result, log);
   result.uncertainty_evaluations = ev.simulations() + start_simulations - result.simulations;
   result.estimates = estimates(params, sp.u, se, se_clustered, segmentation);
   if (series_only) {

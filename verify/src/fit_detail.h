@@ -93,6 +93,9 @@ class Evaluator {
   /// against the renders at x: the photos segmented another way, same model.
   std::vector<std::vector<double>> residuals_against(const std::vector<double>& x,
                                                      const std::vector<PhotoTarget>& others);
+  /// Per target: how many separate pieces of at least `min_area_px` the rendered silhouette
+  /// at x has (of the nearer of the two cycles a photo blends).
+  std::vector<int> rendered_pieces(const std::vector<double>& x, double min_area_px);
 
  private:
   /// The rendered contours (render pixel coordinates) every photo needs, for one set of

@@ -144,6 +144,28 @@ std::vector<std::vector<double>> Evaluator::residuals_against(const std::vector<
   return out;
 }
 
+std::vector<int> Evaluator::rendered_pieces(const std::vector<double>& x, double min_area_px) {
+  const std::map<std::string, double> values = values_of(x);
+  std::map<std::string, double> model_values;
+  for (const auto& [k, v] : values)
+    if (is_model_parameter(k)) model_values[k] = v;
+  const double K = values.count("cycles_per_photo") ? values.at("cycles_per_photo") : kDefaultCyclesPerPhoto;
+  const std::optional<double> S =
+      values.count("seconds_per_cycle") ? std::optional<double>(values.at("seconds_per_cycle")) : std::nullopt;
+  const auto rs = renders(model_values, K, S);
+  std::vector<int> pieces(targets_.size(), 0);
+  std::vector<double> weight(targets_.size(), -1.0);
+  for (const auto& n : rs->needs) {
+    if (n.weight <= weight[n.target]) continue;
+    weight[n.target] = n.weight;
+    int count = 0;
+    for (const Polygon& p : n.region)
+      if (region_area(Region{p}) >= min_area_px) ++count;
+    pieces[n.target] = count;
+  }
+  return pieces;
+}
+
 /// The rendered contour of a photo's window (render pixel coordinates of the whole image).
 
 /// The window is the photo's, mapped back through the initial registration and widened by

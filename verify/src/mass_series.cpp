@@ -68,6 +68,9 @@ MeltSeries check_melt_series(const TimeSeries& ts, const MeltSeriesOptions& o) {
       throw InputError(fmt::format("{}: time_s {} is before the start (t = 0 s is the state the model starts from)",
                                    at(i), ts.time_s[i]));
     g[i] = ts.value[i] * unit;
+    if (!std::isfinite(g[i]) || std::abs(g[i]) > 1e12)  // a thousand tonnes: not a block of ice
+      throw InputError(fmt::format("{}: {} {} is not a mass of ice in grams this program can weigh", at(i), ts.value[i],
+                                   ts.quantity));
   }
   const std::string as_mass = ts.quantity.rfind("volume", 0) == 0
                                   ? fmt::format(" (volumes as mass of ice at {} kg/m³)", o.density_kg_m3)

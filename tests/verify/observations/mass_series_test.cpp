@@ -144,6 +144,8 @@ TEST(MeltSeries, BadSeriesAreRefusedNamingTheLine) {
   rows = melt(0.2);
   for (int k = 5; k < 100; k += 8) rows[static_cast<std::size_t>(k)].second += 30;
   EXPECT_THAT(error_of(csv(rows)), HasSubstr("12 of 101 readings jump away"));
+  // Numbers beyond any block of ice (1e308 m³ overflows to infinite grams).
+  EXPECT_THAT(error_of("time_s,volume_m3\n0,1e308\n60,1e307\n120,1e306\n"), HasSubstr("s.csv:2:"));
   // Every message is one line.
   EXPECT_EQ(error_of(csv(rows)).find('\n'), std::string::npos);
 }

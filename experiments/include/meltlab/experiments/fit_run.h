@@ -1,7 +1,9 @@
 #pragma once
 // `meltlab fit`: fits kg, kl parameters, the time scale and the registration of the
 // empirical model to an observation sequence (verify/fit.h) and writes
-//   DIR/fit.json          estimates, standard errors, correlations, costs, iterations,
+//   DIR/fit.json          estimates with three errors each (Ceres', per photo clustered,
+//                         total) and the segmentation bias, "uncertainty" (what they mean),
+//                         "warnings" (what biases the fit), correlations, costs, iterations,
 //                         simulations, time, the kg scan, frames used/refused, hold-out P,
 //                         and (if the manifest's ground truth names them) the true values; provenance
 //   DIR/comparison/       per_frame.csv, overlays/, p_curve.png of the fitted run (all

@@ -159,6 +159,9 @@ struct FitResult {
   int uncertainty_evaluations = 0;  ///< simulations spent after the solve (0 when all were cached)
   /// A series: the fitted model's volume (m³) at every reading, at the estimates.
   std::vector<double> volume_fitted_m3;
+  /// What the fit noticed that biases it, one line each (e.g. a model in several pieces
+  /// where the segmentation keeps only the largest component).
+  std::vector<std::string> warnings;
 
   double value(const std::string& name) const;
   Similarity2D registration() const;
