@@ -261,7 +261,7 @@ verify::CompareResult compare_fitted_run(const verify::ObservationSequence& obs,
 json optional_json(const std::optional<double>& v) { return v ? json(*v) : json(nullptr); }
 
 /// Every parameter: value, start, fixed, at a bound, and its errors (fit.json "estimates").
-json estimates_json(const verify::FitResult& fit) {
+json estimates_json(const verify::FitResult& fit, bool photos) {
   json est = json::object();
   for (const auto& e : fit.estimates) {
     est[e.name] = {{"value", e.value},
@@ -270,19 +270,18 @@ json estimates_json(const verify::FitResult& fit) {
                    {"at_bound", e.at_bound},
                    {"standard_error", optional_json(e.standard_error)},
                    {"standard_error_clustered", optional_json(e.standard_error_clustered)}};
-    if (fit.cluster_kind == "photo") est[e.name]["segmentation_bias"] = optional_json(e.segmentation_bias);
+    if (photos) est[e.name]["segmentation_bias"] = optional_json(e.segmentation_bias);
     est[e.name]["standard_error_total"] = optional_json(e.standard_error_total);
   }
   return est;
 }
 
 /// What the errors of "estimates" mean (fit.json "uncertainty"; verify/fit.h).
-json uncertainty_json(const verify::FitResult& fit) {
-  const bool photos = fit.cluster_kind == "photo";
+json uncertainty_json(const verify::FitResult& fit, bool photos) {
   json u;
   u["standard_error"] =
-      "Ceres' covariance scaled by the residual variance: every residual counted as independent. Too small for photos "
-      "(the contour residuals of one photo move together).";
+      "Ceres' covariance scaled by the residual variance: every residual counted as independent. Not to be trusted "
+      "for photos: the ~50 contour residuals of one photo are not independent (too small or too large).";
   u["standard_error_clustered"] = fmt::format(
       "cluster-robust (sandwich) covariance, one cluster per {}, times G/(G-1): the statistical error, "
       "estimate ± 1.96 of it covers the truth about 95 % of the time when nothing else is wrong",
@@ -321,12 +320,12 @@ json fit_json(const verify::ObservationSequence& obs, const FitRunOptions& o, co
                        {"frames", n_frames},
                        {"object", obs.object}};
   j["simulation"] = options_to_json(o.simulation);
-  const json est = estimates_json(fit);
+  const json est = estimates_json(fit, true);
   j["estimates"] = est;
   j["free"] = fit.free_names;
   j["correlation"] = fit.correlation;
   j["cost"] = {{"initial", fit.initial_cost}, {"final", fit.final_cost}, {"residual_sigma_px", fit.residual_sigma_px}};
-  j["uncertainty"] = uncertainty_json(fit);
+  j["uncertainty"] = uncertainty_json(fit, true);
   j["warnings"] = fit.warnings;
   j["iterations"] = fit.iterations;
   j["simulations"] = fit.simulations;
@@ -478,7 +477,7 @@ json run_series_fit(const FitRunOptions& o, const verify::ObservationSequence& o
                        {"series", series_json(series)}};
   j["initial_mass_g"] = {{"value", m0}, {"from", mass_from}, {"density_kg_m3", o.density_kg_m3}};
   j["simulation"] = options_to_json(o.simulation);
-  j["estimates"] = estimates_json(fit);
+  j["estimates"] = estimates_json(fit, false);
   j["free"] = fit.free_names;
   j["correlation"] = fit.correlation;
   // Residuals are relative masses (model - reading) / initial mass.
@@ -486,7 +485,7 @@ json run_series_fit(const FitRunOptions& o, const verify::ObservationSequence& o
                {"final", fit.final_cost},
                {"residual_sigma_relative", fit.residual_sigma_px},
                {"residual_sigma_g", fit.residual_sigma_px * m0}};
-  j["uncertainty"] = uncertainty_json(fit);
+  j["uncertainty"] = uncertainty_json(fit, false);
   // What a mass curve fixes: the melt per second of the experiment.
   const double kg = fit.value("kg"), sec = fit.value("seconds_per_cycle");
   j["kg_per_second_per_cycle"] = kg / sec;
