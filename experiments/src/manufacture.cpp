@@ -28,10 +28,6 @@ using nlohmann::json;
 
 namespace {
 
-void require(bool ok, const std::string& message) {
-  if (!ok) throw InputError(message);
-}
-
 double signed_volume(const sim::IndexedMesh& m) {
   double v = 0;
   for (const auto& t : m.F) v += m.V[t[0]].dot(m.V[t[1]].cross(m.V[t[2]])) / 6.0;

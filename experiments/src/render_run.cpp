@@ -26,10 +26,6 @@ using nlohmann::json;
 
 namespace {
 
-void require(bool ok, const std::string& what) {
-  if (!ok) throw InputError(what);
-}
-
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());

@@ -48,10 +48,6 @@ double percentile(std::vector<double> v, double q) {
   return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
 }
 
-void require(bool ok, const std::string& what) {
-  if (!ok) throw InputError(what);
-}
-
 }  // namespace
 
 namespace {

@@ -26,10 +26,6 @@ using nlohmann::json;
 
 namespace {
 
-void require(bool ok, const std::string& message) {
-  if (!ok) throw InputError(message);
-}
-
 /// Smooth random texture in [-1, 1]: white noise blurred at `scale_px`, normalised.
 cv::Mat smooth_noise(cv::Size size, double scale_px, cv::RNG& rng) {
   cv::Mat n(size, CV_32FC1);
