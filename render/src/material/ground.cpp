@@ -164,8 +164,8 @@ Rgb WetGround::shade(const Vector3d& q, const Vector3d& d, const Differential* d
   Rgb tdiff(1, 1, 1);
   if (g.textured) {
     // The footprint in periods: that of q over the tile (x, y components).
-    const Differential2 dst = dq ? Differential2{(dq->dx / g.tile).head<2>(), (dq->dy / g.tile).head<2>()}
-                                 : Differential2{};
+    const Differential2 dst =
+        dq ? Differential2{(dq->dx / g.tile).head<2>(), (dq->dy / g.tile).head<2>()} : Differential2{};
     tdiff = tdiff_.lookup(Eigen::Vector2d(s, t), dq ? &dst : nullptr);
   }
   // Phong with N* (Eq. 2.13, 7.17), darkened by the liquid, and the water's reflection.

@@ -71,8 +71,8 @@ TEST(MonographIce, LitPointIsAmbientDiffuseTimesTextureAndSpecular) {
   m.cd = 0.3;
   m.cs = 0.6;
   m.n_spec = 2;
-  m.cr = m.ct = 0;         // no environment terms
-  m.texture_tile = 1;      // (the renderer resolves the size-relative 0)
+  m.cr = m.ct = 0;     // no environment terms
+  m.texture_tile = 1;  // (the renderer resolves the size-relative 0)
   std::vector<std::string> skipped;
   const IcePlan plan = plan_ice(m, true, skipped);
   ASSERT_FALSE(plan.fresnel);
@@ -180,7 +180,7 @@ TEST(LiquidFilm, WetWindowsChangeNoOutcome) {
     wet += fa.w > 0;
     tilted += fa.n != Vector3d::UnitZ();
   }
-  EXPECT_GT(wet, 1000);  // the comparison saw the puddle ...
+  EXPECT_GT(wet, 1000);    // the comparison saw the puddle ...
   EXPECT_GT(tilted, 100);  // ... and its rim
 }
 

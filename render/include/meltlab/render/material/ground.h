@@ -61,7 +61,7 @@ GroundPlan plan_ground(const GroundMaterial& ground, bool lit, const sim::Liquid
 class LiquidFilm {
  public:
   struct At {
-    double w = 0;                                ///< step(p, mask) (Eq. 7.7)
+    double w = 0;                                  ///< step(p, mask) (Eq. 7.7)
     Eigen::Vector3d n = Eigen::Vector3d(0, 0, 1);  ///< N* (Eq. 7.3); +z without `rim`
   };
   /// `mask` must outlive the film. `rim`: compute N* (else the ground stays flat).

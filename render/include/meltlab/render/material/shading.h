@@ -47,8 +47,7 @@ class IceSurroundings {
   /// The radiance arriving at o along the secondary ray o + t·d from the scene outside the ice
   /// (ground or environment; the ice itself, if the ray meets it again, gives its environment
   /// value: no further recursion). `rd`: the ray's footprint or nullptr.
-  virtual Rgb radiance_outside(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                               const RayDifferential* rd) const = 0;
+  virtual Rgb radiance_outside(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const RayDifferential* rd) const = 0;
 };
 
 /// max(0, x)^e (e >= 0; 0^0 = 1 as std::pow), without calling pow for the many non-positive
