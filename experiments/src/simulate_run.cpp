@@ -327,6 +327,32 @@ json parameters_json(const PreparedSimulation& p) {
   };
 }
 
+// run.json without the error and the provenance.
+template <class Real>
+json run_record(const PreparedSimulation& p, const SimulateResult& result, const sim::TriMesh<Real>& final_mesh,
+                int threads, sim::Execution exec, std::int64_t inverted_removed, const CycleTimes& times,
+                double total_s, const RunChecks& checks, const std::vector<std::string>& snapshots) {
+  const SimulateOptions& o = p.opt;
+  return {
+      {"options", options_to_json(p.opt)},
+      {"status", result.status},
+      {"mesh", p.mesh_json},
+      {"parameters", parameters_json(p)},
+      {"precision", std::is_same_v<Real, float> ? "float" : "double"},
+      {"threads", threads},
+      {"execution", exec == sim::Execution::kSerial ? "serial" : "parallel"},
+      {"cycles_requested", o.cycles},
+      {"cycles_run", result.cycles_run},
+      {"empty_at_cycle", result.empty_at_cycle},
+      {"final", {{"vertices", final_mesh.live_vertex_count()}, {"triangles", final_mesh.live_triangle_count()}}},
+      {"inverted_parts_removed", inverted_removed},
+      {"timing", times.to_json(total_s)},
+      {"checks", checks.to_json(o)},
+      {"outputs", {{"stats", "stats.csv"}, {"snapshots", snapshots}}},
+      {"stats_every", o.stats_every},
+  };
+}
+
 template <class Real>
 SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const SimulateProgress&)>& progress,
                          const std::atomic<bool>* stop) {
@@ -423,25 +449,8 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
   if (progress) progress({c, o.cycles, last.live_triangles, 0.0});
   const double total_s = std::chrono::duration<double>(Clock::now() - t_start).count();
   provenance.timings_s.emplace_back("cycles", total_s);
-  json run = {
-      {"options", options_to_json(p.opt)},
-      {"status", result.status},
-      {"mesh", p.mesh_json},
-      {"parameters", parameters_json(p)},
-      {"precision", std::is_same_v<Real, float> ? "float" : "double"},
-      {"threads", threads},
-      {"execution", exec == sim::Execution::kSerial ? "serial" : "parallel"},
-      {"cycles_requested", o.cycles},
-      {"cycles_run", c},
-      {"empty_at_cycle", result.empty_at_cycle},
-      {"final",
-       {{"vertices", simulator.mesh().live_vertex_count()}, {"triangles", simulator.mesh().live_triangle_count()}}},
-      {"inverted_parts_removed", inverted_removed},
-      {"timing", times.to_json(total_s)},
-      {"checks", checks.to_json(o)},
-      {"outputs", {{"stats", "stats.csv"}, {"snapshots", snapshots}}},
-      {"stats_every", o.stats_every},
-  };
+  json run =
+      run_record(p, result, simulator.mesh(), threads, exec, inverted_removed, times, total_s, checks, snapshots);
   if (!result.error.empty()) run["error"] = result.error;
   run["provenance"] = finish_provenance(provenance);
   write_text_atomically(dir / "run.json", run.dump(2) + "\n");
