@@ -168,7 +168,8 @@ Rgb WetGround::shade(const Vector3d& q, const Vector3d& d, const Differential* d
         dq ? Differential2{(dq->dx / g.tile).head<2>(), (dq->dy / g.tile).head<2>()} : Differential2{};
     tdiff = tdiff_.lookup(Eigen::Vector2d(s, t), dq ? &dst : nullptr);
   }
-  // Phong with N* (Eq. 2.13, 7.17), darkened by the liquid, and the water's reflection.
+  // Eq. 7.17: ((ca + Σ Izr·cd·max(0, N*·L))·t*diff + Σ Izr·cs·max(0, Rs·V)^n)^(1 + a·w) + cr·tenv(R*e)·w
+  // (plain Phong, Eq. 2.13, where w = 0).
   const Vector3d ns = g.rs_uses_n_star ? n : Vector3d(0, 0, 1);
   Rgb diffuse = Rgb::Constant(g.ca), spec = Rgb::Zero();
   for (const Light& light : lights_) {

@@ -97,7 +97,7 @@ Rgb MonographIce::shade(const SurfaceHit& hit, const Vector3d& d, const RayDiffe
   Differential dN;
   const Vector3d N = facing_normal(hit, V, rd ? &rd->o : nullptr, &dN);
   Rgb I = Rgb::Zero();
-  // Ambient, diffuse (× tdiff) and specular.
+  // Eq. 6.11's Phong part: (ca + Σ Izr·cd·max(0, N·L))·tdiff + Σ Izr·cs·max(0, Rs·V)^n.
   if (plan_.ice_texture || plan_.ice_specular) {
     Rgb diffuse = Rgb::Constant(m.ca), spec = Rgb::Zero();
     for (const Light& light : lights_) {
@@ -114,7 +114,8 @@ Rgb MonographIce::shade(const SurfaceHit& hit, const Vector3d& d, const RayDiffe
     I += spec;
   }
   if (!plan_.fresnel) return I;
-  // The environment reflected (Eq. 6.3) and seen through the ice (Eq. 6.7, 6.8), Fresnel-weighted.
+  // Eq. 6.11's environment part: cr·F·tenv(Re) + ct·(1 - F)·tenv(T), Re by Eq. 6.3, T by Eq. 6.7
+  // (per channel, Eq. 6.8), F by Eq. 6.9 or 6.10.
   const EnvironmentTexture& env = *textures_.environment;
   const double cos_i = std::clamp(N.dot(V), 0.0, 1.0);
   const double eta_ice = plan_.dispersion ? m.eta_rgb[1] : m.eta;
