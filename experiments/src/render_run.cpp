@@ -247,10 +247,7 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   }
   result.median_trace_ms = median(trace_ms);
   json j = run_record(o, *prepared, lift, last, result, mask.get(), renderer.get(), threads);
-  j["provenance"] = finish_provenance(provenance);
-  result.run_json = j;
-  write_text_atomically(dir / "render.json", j.dump(2) + "\n");
-  folder.commit();
+  result.run_json = commit_run(folder, std::move(j), provenance);
   return result;
 }
 

@@ -443,9 +443,7 @@ void run_volume_bench(const VolumeBenchOptions& o) {
     run.at(s)(o, folder.path(), record);
     record["study_seconds"][s] = ms_since(t0) / 1000;
   }
-  record["provenance"] = finish_provenance(provenance);
-  write_text_atomically(folder.path() / "bench.json", record.dump(2) + "\n");
-  folder.commit();
+  commit_run(folder, std::move(record), provenance);
 }
 
 }  // namespace meltlab::experiments

@@ -222,10 +222,7 @@ VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
                                    ? scene.background_image.string()
                                    : fmt::format("[{}, {}, {}]", scene.settings.background.x(),
                                                  scene.settings.background.y(), scene.settings.background.z())}};
-  j["provenance"] = finish_provenance(provenance);
-  result.run_json = j;
-  write_text_atomically(dir / "render.json", j.dump(2) + "\n");
-  folder.commit();
+  result.run_json = commit_run(folder, std::move(j), provenance);
   return result;
 }
 
