@@ -40,7 +40,8 @@ BrickedVolume BrickedVolume::allocate(const std::array<int, 3>& dims, int side, 
     if (d < 2)
       throw InputError(fmt::format("{}: a volume of node samples needs at least 2 voxels per axis (got {} x {} x {})",
                                    what, dims[0], dims[1], dims[2]));
-  if (side < 2 || side > 255) throw InputError(fmt::format("{}: the block side must be in [2, 255] (got {})", what, side));
+  if (side < 2 || side > 255)
+    throw InputError(fmt::format("{}: the block side must be in [2, 255] (got {})", what, side));
   const std::int64_t voxels = checked_mul(checked_mul(dims[0], dims[1]), dims[2]);
   check_count(what, "voxels", voxels, input_limits().volume_samples, "volume_samples");
   const std::int64_t stored = stored_samples(dims, side);
@@ -96,7 +97,8 @@ BrickedVolume BrickedVolume::from_volume(const Volume& src, int side) {
     const std::int64_t b3 = std::int64_t(B) * B * B;
     tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, out.block_count()), [&](const auto& r) {
       for (std::int64_t b = r.begin(); b < r.end(); ++b) {
-        const int bz = int(b % out.nb_[2]), by = int((b / out.nb_[2]) % out.nb_[1]), bx = int(b / out.nb_[2] / out.nb_[1]);
+        const int bz = int(b % out.nb_[2]), by = int((b / out.nb_[2]) % out.nb_[1]),
+                  bx = int(b / out.nb_[2] / out.nb_[1]);
         T* block = dst + b * b3;
         for (int lx = 0; lx < B; ++lx)
           for (int ly = 0; ly < B; ++ly)

@@ -44,7 +44,8 @@ std::uint64_t Xoshiro256::next() {
 std::int64_t Xoshiro256::uniform(std::int64_t lo, std::int64_t hi) {
   const std::uint64_t range = std::uint64_t(hi - lo) + 1;  // hi >= lo
   if (range == 0) return std::int64_t(next());             // the whole 64-bit range
-  const std::uint64_t limit = std::numeric_limits<std::uint64_t>::max() - std::numeric_limits<std::uint64_t>::max() % range;
+  const std::uint64_t limit =
+      std::numeric_limits<std::uint64_t>::max() - std::numeric_limits<std::uint64_t>::max() % range;
   std::uint64_t x;
   do x = next();
   while (x >= limit);
@@ -69,7 +70,8 @@ ShapesVolume::ShapesVolume(const ShapesOptions& o) : o_(o) {
     Shape sh;
     sh.sphere = (rng.next() >> 63) != 0;
     for (int a = 0; a < 3; ++a) sh.size[std::size_t(a)] = int(rng.uniform(s - spread, s + spread));
-    for (int a = 0; a < 3; ++a) sh.lo[std::size_t(a)] = int(rng.uniform(0, o.dims[std::size_t(a)] - sh.size[std::size_t(a)]));
+    for (int a = 0; a < 3; ++a)
+      sh.lo[std::size_t(a)] = int(rng.uniform(0, o.dims[std::size_t(a)] - sh.size[std::size_t(a)]));
     sh.value = std::uint8_t(rng.uniform(o.sample - 10, o.sample + 10));
     shapes_.push_back(sh);
   }
@@ -112,8 +114,8 @@ void ShapesVolume::fill(const VoxelCoord* c, std::size_t n, std::uint8_t* out) c
     const int x = c[i].x, y = c[i].y, z = c[i].z;
     std::uint8_t v = 0;
     for (const Shape* s : near)
-      if (x >= s->lo[0] && x < s->lo[0] + s->size[0] && y >= s->lo[1] && y < s->lo[1] + s->size[1] &&
-          z >= s->lo[2] && z < s->lo[2] + s->size[2]) {
+      if (x >= s->lo[0] && x < s->lo[0] + s->size[0] && y >= s->lo[1] && y < s->lo[1] + s->size[1] && z >= s->lo[2] &&
+          z < s->lo[2] + s->size[2]) {
         v = value_of(*s, x, y, z);
         break;
       }
@@ -148,10 +150,10 @@ std::uint8_t SkullPhantom::value(int x, int y, int z) const {
   };
   const double orbit_r = 0.09 * n_[0];
   if (ball(-0.16 * n_[0], 0.38 * n_[1], 0, orbit_r) || ball(0.16 * n_[0], 0.38 * n_[1], 0, orbit_r))
-    return clamp8(18 + 4 * noise);  // orbital fat
+    return clamp8(18 + 4 * noise);                                                      // orbital fat
   if (ball(0, 0.42 * n_[1], 0.12 * n_[2], 0.05 * n_[0])) return clamp8(5 + 4 * noise);  // sinus air
-  const double t = 0.025 * std::min(ax, ay) * 2.0;  // layer unit (about 5 voxels for 256²)
-  if (depth < 1.2 * t) return clamp8(25 + 5 * noise);   // scalp
+  const double t = 0.025 * std::min(ax, ay) * 2.0;       // layer unit (about 5 voxels for 256²)
+  if (depth < 1.2 * t) return clamp8(25 + 5 * noise);    // scalp
   if (depth < 1.8 * t) return clamp8(200 + 15 * noise);  // outer table
   if (depth < 2.6 * t) return clamp8(120 + 20 * noise);  // diploë
   if (depth < 3.2 * t) return clamp8(200 + 15 * noise);  // inner table

@@ -95,9 +95,7 @@ bool TransferFunction::visible_in(double lo, double hi) const {
 }
 
 void parse_tf_bounds(const std::string& text, TfRange& r, const std::string& what) {
-  auto bad = [&] {
-    throw InputError(fmt::format("{}: '{}' is not a value range like \"(85, 95]\"", what, text));
-  };
+  auto bad = [&] { throw InputError(fmt::format("{}: '{}' is not a value range like \"(85, 95]\"", what, text)); };
   std::string t;
   for (char c : text)
     if (!std::isspace(static_cast<unsigned char>(c))) t += c;

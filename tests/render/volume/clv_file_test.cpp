@@ -224,7 +224,8 @@ TEST(ClvFile, TheOrderGeneratorVisitsEveryVoxelOnceInFileOrder) {
     VoxelOrder o({7, 9, 11}, order, 4);
     std::vector<VoxelCoord> all;
     std::vector<VoxelCoord> batch(5);
-    while (std::size_t n = o.next(batch.data(), batch.size())) all.insert(all.end(), batch.begin(), batch.begin() + long(n));
+    while (std::size_t n = o.next(batch.data(), batch.size()))
+      all.insert(all.end(), batch.begin(), batch.begin() + long(n));
     ASSERT_EQ(std::int64_t(all.size()), o.total());
     std::set<std::tuple<int, int, int>> inside;
     for (const auto& c : all)
@@ -365,7 +366,7 @@ TEST(TransferFunction, TheSpecsTablesAndTheirCharacteristic) {
   EXPECT_EQ(tf.find(100.0), 1);
   EXPECT_EQ(tf.find(114.999), 2);
   EXPECT_EQ(tf.find(115.0), -1);
-  EXPECT_FALSE(tf.visible_in(0, 85));    // (85, 95] starts after 85
+  EXPECT_FALSE(tf.visible_in(0, 85));  // (85, 95] starts after 85
   EXPECT_TRUE(tf.visible_in(0, 85.01));
   EXPECT_FALSE(tf.visible_in(115, 255));  // (100, 115) ends before 115
   EXPECT_TRUE(tf.visible_in(114.5, 255));

@@ -69,8 +69,8 @@ VolumeRenderSettings tf_settings(double step = 0.5) {
 }
 
 Camera orbit(int px, const Vec3& centre, double radius, double azimuth, double elevation) {
-  const Vec3 eye = centre + radius * Vec3(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
-                                          std::sin(elevation));
+  const Vec3 eye = centre + radius * Vec3(std::cos(elevation) * std::cos(azimuth),
+                                          std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
   return Pinhole::look_at(px, px, 0.5 * px / std::tan(30 * std::numbers::pi / 180), eye, centre, Vec3::UnitZ());
 }
 

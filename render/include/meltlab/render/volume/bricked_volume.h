@@ -27,10 +27,10 @@ namespace meltlab::render {
 template <class T>
 struct BrickSamples {
   const T* data = nullptr;
-  int n[3] = {0, 0, 0};     ///< voxels per axis
-  int nb[3] = {0, 0, 0};    ///< blocks per axis
-  int side = 0;             ///< B
-  int stride = 0;           ///< B - 1
+  int n[3] = {0, 0, 0};          ///< voxels per axis
+  int nb[3] = {0, 0, 0};         ///< blocks per axis
+  int side = 0;                  ///< B
+  int stride = 0;                ///< B - 1
   std::int64_t block_elems = 0;  ///< B³
   float scale = 1.0f;
 

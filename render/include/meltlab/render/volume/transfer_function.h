@@ -27,9 +27,7 @@ struct TfRange {
   Eigen::Vector3d rgb = Eigen::Vector3d::Zero();  ///< colour, 0-255 units
   double alpha = 0;                               ///< opacity for the reference step, [0, 1]
 
-  bool contains(double v) const {
-    return (lo_closed ? v >= lo : v > lo) && (hi_closed ? v <= hi : v < hi);
-  }
+  bool contains(double v) const { return (lo_closed ? v >= lo : v > lo) && (hi_closed ? v <= hi : v < hi); }
   /// "(85, 95]".
   std::string bounds_text() const;
 };
@@ -40,7 +38,8 @@ class TransferFunction {
   TransferFunction() = default;
   /// Throws InputError (naming `what`) for a range with lo > hi, an empty range, α outside [0, 1],
   /// a colour outside [0, 255] or not finite, or two ranges that overlap. Ranges are kept sorted.
-  TransferFunction(std::vector<TfRange> ranges, std::string name = "custom", const std::string& what = "transfer function");
+  TransferFunction(std::vector<TfRange> ranges, std::string name = "custom",
+                   const std::string& what = "transfer function");
 
   /// The spec's tables (§3).
   static TransferFunction shapes();
