@@ -325,7 +325,8 @@ void study_tables(const VolumeBenchOptions& o, const fs::path& dir, json& record
       const Timed t = time_frames(tracer, cam, 0, 1);
       row("5.1", "skull 256x256x68", 700, m, "ram", "uint8", t);
       write_counts(dir / "counts" / fmt::format("skull_{}.png", m.name), t.frame);
-      if (m.name == "ert_ess") write_image(dir / "skull.png", render::tf_output_image(t.frame, render::TfOutput::kPremultiplied));
+      if (m.name == "ert_ess")
+        write_image(dir / "skull.png", render::tf_output_image(t.frame, render::TfOutput::kPremultiplied));
     }
   }
   // Table 5.2 (and 5.1's counts on the shapes): single thread, RAM and mmap; Table 5.4: float32.
@@ -356,10 +357,10 @@ void study_tables(const VolumeBenchOptions& o, const fs::path& dir, json& record
         const bool slow = !m.ess;
         const Timed t = time_frames(tracer, cam, slow ? warm_slow : warm_fast, slow ? rep_slow : rep_fast);
         row("5.2", vol, c.px, m, memory_name(mem), "uint8", t);
-        if (s.record_sample_counts)
-          write_counts(dir / "counts" / fmt::format("shapes{}_{}.png", c.n, m.name), t.frame);
+        if (s.record_sample_counts) write_counts(dir / "counts" / fmt::format("shapes{}_{}.png", c.n, m.name), t.frame);
         if (m.name == "ert_ess_ml" && mem == ClvMemory::kRam)
-          write_image(dir / fmt::format("shapes{}.png", c.n), render::tf_output_image(t.frame, render::TfOutput::kPremultiplied));
+          write_image(dir / fmt::format("shapes{}.png", c.n),
+                      render::tf_output_image(t.frame, render::TfOutput::kPremultiplied));
       }
       if (mem == ClvMemory::kMmap) {
         // Target 9's cold first frame: the file's pages dropped, a fresh map, the index given (so
@@ -395,7 +396,8 @@ void study_tables(const VolumeBenchOptions& o, const fs::path& dir, json& record
       {"tf", "shapes (skull for Table 5.1)"},
       {"step", 0.2},
       {"camera", "orbit pose 0 (azimuth 30, elevation 25, the bounding sphere filling a 60 degree field of view)"},
-      {"ess", "source: one-level 4^3 cells, per-voxel test (S+1), one step per empty sample; ml: multi-level, range test"},
+      {"ess",
+       "source: one-level 4^3 cells, per-voxel test (S+1), one step per empty sample; ml: multi-level, range test"},
       {"repeats", {{"slow (no ESS)", rep_slow}, {"fast", rep_fast}, {"warmup_fast", warm_fast}}},
       {"single_thread", true}};
 }
@@ -406,8 +408,9 @@ void study_large(const VolumeBenchOptions& o, const fs::path& dir, json& record)
   const int n = o.large_size;
   const int px = o.quick ? 350 : 700;
   const fs::path lin = cached_shapes(n, ClvOrder::kLinear), blk = cached_shapes(n, ClvOrder::kBlocked);
-  Csv csv("row,volume,pixels,method,memory,threads,repeats,wall_ms,wall_sd_ms,cpu_ms,samples,terminated,blocks_visible,"
-          "block_tasks,queue_empty_fraction,load_ms,index_ms,load_average");
+  Csv csv(
+      "row,volume,pixels,method,memory,threads,repeats,wall_ms,wall_sd_ms,cpu_ms,samples,terminated,blocks_visible,"
+      "block_tasks,queue_empty_fraction,load_ms,index_ms,load_average");
   auto row = [&](const std::string& name, const Method& m, const std::string& mem, int threads, const Timed& t,
                  double load_ms, double index_ms) {
     const auto& st = t.frame.stats;
@@ -466,8 +469,9 @@ void study_sweeps(const VolumeBenchOptions& o, const fs::path& dir, json& record
   const int repeats = o.quick ? 3 : 5;
   const Load l = load(cached_shapes(n, ClvOrder::kLinear), ClvMemory::kRam);
   const render::Camera cam = orbit_pose(l.clv.linear.domain(), 700, 0);
-  Csv csv("sweep,value,tile,block_side,threads,wall_ms,wall_sd_ms,cpu_ms,block_tasks,queue_empty_fraction,busy_fraction,"
-          "samples,load_average");
+  Csv csv(
+      "sweep,value,tile,block_side,threads,wall_ms,wall_sd_ms,cpu_ms,block_tasks,queue_empty_fraction,busy_fraction,"
+      "samples,load_average");
   auto measure = [&](const std::string& sweep, int value, const BrickedVolume& b,
                      const std::shared_ptr<const render::VolumeRangeIndex>& ranges, int tile, int threads) {
     auto s = settings_for(methods()[5], render::TransferFunction::shapes());
@@ -583,8 +587,9 @@ void study_peer(const VolumeBenchOptions& o, const fs::path& dir, json& record) 
                     {"openvdb_convert_ms", convert_ms},
                     {"meltlab_index_bytes", ranges->memory_bytes()},
                     {"meltlab_index_ms", ranges->build_ms()},
-                    {"physics", "opacity only (shading off): OpenVDB's grid holds sigma = -ln(1 - alpha) of the TF at "
-                                "each voxel (classified, then interpolated); meltlab interpolates, then classifies"}};
+                    {"physics",
+                     "opacity only (shading off): OpenVDB's grid holds sigma = -ln(1 - alpha) of the TF at "
+                     "each voxel (classified, then interpolated); meltlab interpolates, then classifies"}};
 }
 
 // ---- Fig. 5.2: step 0.2 against 0.9 -------------------------------------------------------------------------
@@ -634,8 +639,8 @@ void study_ess(const VolumeBenchOptions& o, const fs::path& dir, json& record) {
       const Method& m = methods()[std::size_t(mi)];
       const VolumeTracer tracer(v, settings_for(m, render::TransferFunction::shapes()), ranges);
       const Timed t = time_frames(tracer, cam, 0, o.quick ? 1 : 3);
-      csv.row("{},{},{:.3f},{:.3f},{},{},{},{:.2f}", pose, m.name, t.cpu_median(), t.wall_median(), t.frame.stats.samples,
-              t.frame.stats.skipped, t.frame.stats.terminated, load_average());
+      csv.row("{},{},{:.3f},{:.3f},{},{},{},{:.2f}", pose, m.name, t.cpu_median(), t.wall_median(),
+              t.frame.stats.samples, t.frame.stats.skipped, t.frame.stats.terminated, load_average());
     }
     progress(fmt::format("ESS pose {} done", pose));
   }

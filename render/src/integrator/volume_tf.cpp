@@ -100,9 +100,7 @@ struct Store {
   T stored(int i, int j, int k) const {
     return data[off[0][std::size_t(i)] + off[1][std::size_t(j)] + off[2][std::size_t(k)]];
   }
-  float value_of(T stored_number) const {
-    return unit_scale ? float(stored_number) : float(stored_number) * scale;
-  }
+  float value_of(T stored_number) const { return unit_scale ? float(stored_number) : float(stored_number) * scale; }
 };
 
 template <class T>
@@ -175,7 +173,8 @@ class RangeIndex final : public VolumeRangeIndex {
 /// cells, each voxel read once per column (twice on the planes that columns share).
 template <class T, class V, class Map, class Merge>
 std::vector<V> reduce_cells(const Store<T>& st, const int n0[3], V init, const Map& map, const Merge& merge) {
-  std::vector<V> out(static_cast<std::size_t>(n0[0]) * static_cast<std::size_t>(n0[1]) * static_cast<std::size_t>(n0[2]), init);
+  std::vector<V> out(
+      static_cast<std::size_t>(n0[0]) * static_cast<std::size_t>(n0[1]) * static_cast<std::size_t>(n0[2]), init);
   const int nx = st.n[0], ny = st.n[1], nz = st.n[2];
   tbb::parallel_for(tbb::blocked_range<int>(0, n0[0]), [&](const tbb::blocked_range<int>& r) {
     std::vector<V> row(static_cast<std::size_t>(n0[2]));
@@ -197,7 +196,8 @@ std::vector<V> reduce_cells(const Store<T>& st, const int n0[3], V init, const M
             if (cy < 0 || cy >= n0[1]) continue;
             V* dst = &out[std::size_t(cx) + std::size_t(n0[0]) * std::size_t(cy)];
             const std::size_t zstride = std::size_t(n0[0]) * std::size_t(n0[1]);
-            for (int cz = 0; cz < n0[2]; ++cz) dst[std::size_t(cz) * zstride] = merge(dst[std::size_t(cz) * zstride], row[std::size_t(cz)]);
+            for (int cz = 0; cz < n0[2]; ++cz)
+              dst[std::size_t(cz) * zstride] = merge(dst[std::size_t(cz) * zstride], row[std::size_t(cz)]);
           }
         }
     }
@@ -215,8 +215,13 @@ std::shared_ptr<RangeIndex<T>> build_cell_ranges(const Store<T>& st) {
   };
   const MinMax init{std::numeric_limits<T>::max(), std::numeric_limits<T>::lowest()};
   const auto mm = reduce_cells(
-      st, ix->n0, init, [](T v) { return MinMax{v, v}; },
-      [](const MinMax& a, const MinMax& b) { return MinMax{std::min(a.lo, b.lo), std::max(a.hi, b.hi)}; });
+      st, ix->n0, init,
+      [](T v) {
+        return MinMax{v, v};
+      },
+      [](const MinMax& a, const MinMax& b) {
+        return MinMax{std::min(a.lo, b.lo), std::max(a.hi, b.hi)};
+      });
   ix->cell_min.resize(mm.size());
   ix->cell_max.resize(mm.size());
   for (std::size_t i = 0; i < mm.size(); ++i) ix->cell_min[i] = mm[i].lo, ix->cell_max[i] = mm[i].hi;
@@ -251,8 +256,8 @@ struct EmptySpace {
 
   bool cell_live(const Loc& L) const {
     return live0[std::size_t(L.i[0] >> kCellShift) +
-                 std::size_t(n0[0]) * (std::size_t(L.i[1] >> kCellShift) +
-                                       std::size_t(n0[1]) * std::size_t(L.i[2] >> kCellShift))] != 0;
+                 std::size_t(n0[0]) *
+                     (std::size_t(L.i[1] >> kCellShift) + std::size_t(n0[1]) * std::size_t(L.i[2] >> kCellShift))] != 0;
   }
   bool region_live(const Loc& L) const {
     return live1[std::size_t(L.i[0] >> kRegionShift) +
@@ -309,7 +314,8 @@ EmptySpace build_empty_space(const Store<T>& st, const RangeIndex<T>& ix, const 
     for (int cy = 0; cy < e.n0[1]; ++cy)
       for (int cx = 0; cx < e.n0[0]; ++cx)
         if (e.live0[ix.cell(cx, cy, cz)])
-          e.live1[std::size_t(cx / f) + std::size_t(e.n1[0]) * (std::size_t(cy / f) + std::size_t(e.n1[1]) * std::size_t(cz / f))] = 1;
+          e.live1[std::size_t(cx / f) +
+                  std::size_t(e.n1[0]) * (std::size_t(cy / f) + std::size_t(e.n1[1]) * std::size_t(cz / f))] = 1;
   if (bricked) {
     e.block_live.resize(std::size_t(bricked->block_count()));
     const BrickSamples<T> b = bricked->samples<T>();
@@ -412,6 +418,7 @@ struct TfKernel {
   float grad_threshold2 = 4;
   float light[3] = {0, 0, 0};  // L (propagation)
   float ka = 0.16f, ks = 120, q = 128;
+  int q_whole = 128;  // q as a whole number (<= 4096), or -1
   float inv_spacing[3] = {1, 1, 1};
 
   [[gnu::always_inline]] int find(float f) const {
@@ -423,25 +430,51 @@ struct TfKernel {
     return -1;
   }
 
-  float value_at(double gx, double gy, double gz) const {
-    const double g[3] = {gx, gy, gz};
-    return store.fetch(locate(g, store.n));
+  /// The gradient at a located sample (value per voxel): central differences at offset 1 of the
+  /// trilinear interpolant, (P(x + 1) - P(x - 1)) / 2 per axis, or the repo's one-sided P(x) - P(x + 1);
+  /// voxel indices clamped to the volume. The shifted lookups share the sample's weights, so they
+  /// read the 32 voxels around its cell through the offset tables (any layout) and blend them.
+  void gradient(const Loc& L, float f, float grad[3]) const {
+    std::int64_t o[3][4];
+    for (int a = 0; a < 3; ++a)
+      for (int d = 0; d < 4; ++d) o[a][d] = store.off[a][std::size_t(std::clamp(L.i[a] - 1 + d, 0, store.n[a] - 1))];
+    const T* p = store.data;
+    auto v = [&](int x, int y, int z) { return static_cast<float>(p[o[0][x] + o[1][y] + o[2][z]]); };
+    // The blend with the cell's lower corner at (x, y, z) of the 4-wide index sets (1 = the sample's own).
+    auto P = [&](int x, int y, int z) {
+      const float c00 = lerp(v(x, y, z), v(x + 1, y, z), L.t[0]);
+      const float c10 = lerp(v(x, y + 1, z), v(x + 1, y + 1, z), L.t[0]);
+      const float c01 = lerp(v(x, y, z + 1), v(x + 1, y, z + 1), L.t[0]);
+      const float c11 = lerp(v(x, y + 1, z + 1), v(x + 1, y + 1, z + 1), L.t[0]);
+      const float r = lerp(lerp(c00, c10, L.t[1]), lerp(c01, c11, L.t[1]), L.t[2]);
+      return store.unit_scale ? r : r * store.scale;
+    };
+    if (central) {
+      grad[0] = (P(2, 1, 1) - P(0, 1, 1)) * 0.5f;  // points into dense material
+      grad[1] = (P(1, 2, 1) - P(1, 0, 1)) * 0.5f;
+      grad[2] = (P(1, 1, 2) - P(1, 1, 0)) * 0.5f;
+    } else {
+      grad[0] = f - P(2, 1, 1);  // the repo: already outward
+      grad[1] = f - P(1, 2, 1);
+      grad[2] = f - P(1, 1, 2);
+    }
+  }
+
+  /// x^q: by squaring for a whole q (the repo's 128: seven multiplications), else powf.
+  float power(float x) const {
+    if (q_whole < 0) return std::pow(x, q);
+    float r = 1, b = x;
+    for (int e = q_whole; e > 0; e >>= 1) {
+      if (e & 1) r *= b;
+      b *= b;
+    }
+    return r;
   }
 
   /// Phong: c' = c (max(n̂ · -L, 0) + ka) + ks max(r · v₋, 0)^q where |∇f| > threshold.
-  void shade_colour(const double g[3], float f, const RayGrid& ray, float c[3]) const {
+  void shade_colour(const Loc& L, float f, const RayGrid& ray, float c[3]) const {
     float grad[3];
-    for (int a = 0; a < 3; ++a) {
-      double p[3] = {g[0], g[1], g[2]};
-      p[a] += 1.0;
-      const float fp = value_at(p[0], p[1], p[2]);
-      if (central) {
-        p[a] -= 2.0;
-        grad[a] = (fp - value_at(p[0], p[1], p[2])) * 0.5f;  // points into dense material
-      } else {
-        grad[a] = f - fp;  // the repo: already outward
-      }
-    }
+    gradient(L, f, grad);
     const float g2 = grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2];
     if (!(g2 > grad_threshold2)) return;
     // The outward normal in world space (the gradient per scene unit).
@@ -454,19 +487,19 @@ struct TfKernel {
     const float diffuse = std::max(-nl, 0.0f);
     float rv = 0;
     for (int a = 0; a < 3; ++a) rv += (light[a] - 2 * nl * nrm[a]) * ray.view[a];
-    const float spec = rv > 0 ? ks * std::pow(rv, q) : 0.0f;
+    const float spec = rv > 0 ? ks * power(rv) : 0.0f;
     for (int a = 0; a < 3; ++a) c[a] = c[a] * (diffuse + ka) + spec;
   }
 
   /// One located sample composited into acc; false when the ray terminates.
-  [[gnu::always_inline]] bool sample(const Loc& L, const double g[3], const RayGrid& ray, Acc& acc) const {
+  [[gnu::always_inline]] bool sample(const Loc& L, const RayGrid& ray, Acc& acc) const {
     const float f = store.fetch(L);
     const int r = find(f);
     if (r < 0) return true;
     const Range& R = ranges[std::size_t(r)];
     if (!(R.alpha > 0)) return true;
     float c[3] = {R.rgb[0], R.rgb[1], R.rgb[2]};
-    if (shade) shade_colour(g, f, ray, c);
+    if (shade) shade_colour(L, f, ray, c);
     const float w = R.alpha * (1.0f - acc.A);
     acc.C[0] += c[0] * w;
     acc.C[1] += c[1] * w;
@@ -484,7 +517,7 @@ struct TfKernel {
       for (; k < k_end; ++k) {
         ray.at(k, g);
         ++cnt.taken;
-        if (!sample(locate(g, n), g, ray, acc)) {
+        if (!sample(locate(g, n), ray, acc)) {
           cnt.terminated = true;
           return cnt;
         }
@@ -499,7 +532,7 @@ struct TfKernel {
           continue;
         }
         ++cnt.taken;
-        if (!sample(L, g, ray, acc)) {
+        if (!sample(L, ray, acc)) {
           cnt.terminated = true;
           return cnt;
         }
@@ -512,7 +545,8 @@ struct TfKernel {
         Loc L = locate(g, n);
         if (!ess->region_live(L)) {
           const int c[3] = {L.i[0] >> kRegionShift, L.i[1] >> kRegionShift, L.i[2] >> kRegionShift};
-          const std::int64_t k2 = verified_skip(ray, k, region_exit(ray, k, k_end, c, kRegionShift, n), c, kRegionShift, n);
+          const std::int64_t k2 =
+              verified_skip(ray, k, region_exit(ray, k, k_end, c, kRegionShift, n), c, kRegionShift, n);
           cnt.skipped += k2 - k;
           k = k2;
           continue;
@@ -527,7 +561,7 @@ struct TfKernel {
         const std::int64_t run_end = region_exit(ray, k, k_end, c, kCellShift, n);
         for (;;) {
           ++cnt.taken;
-          if (!sample(L, g, ray, acc)) {
+          if (!sample(L, ray, acc)) {
             cnt.terminated = true;
             return cnt;
           }
@@ -581,6 +615,7 @@ class TfState final : public TracerState {
     k_.ka = float(s.tf.shading.ka);
     k_.ks = float(s.tf.shading.ks);
     k_.q = float(s.tf.shading.q);
+    k_.q_whole = s.tf.shading.q == std::floor(s.tf.shading.q) && s.tf.shading.q <= 4096 ? int(s.tf.shading.q) : -1;
     // Empty space: the flags of this TF from the (shared) ranges.
     if (s.skip_empty) {
       const auto t0 = std::chrono::steady_clock::now();
@@ -854,16 +889,17 @@ class TfState final : public TracerState {
         for (int bz = 0; bz < nb[2]; ++bz) {
           const std::uint32_t id = std::uint32_t((std::int64_t(bx) * nb[1] + by) * nb[2] + bz);
           if (k_.ess && !ess_.block_live[id]) continue;  // ESS: invisible blocks are never queued
-          const Vec3 c = geo_.origin + Vec3(bx * stride + 0.5 * stride, by * stride + 0.5 * stride,
-                                            bz * stride + 0.5 * stride)
-                                           .cwiseQuotient(geo_.inv_spacing);
+          const Vec3 c =
+              geo_.origin + Vec3(bx * stride + 0.5 * stride, by * stride + 0.5 * stride, bz * stride + 0.5 * stride)
+                                .cwiseQuotient(geo_.inv_spacing);
           order.push_back({gen.project(c).distance, id});
         }
     tbb::parallel_sort(order.begin(), order.end(), [](const Queued& a, const Queued& b) {
       return a.dist < b.dist || (a.dist == b.dist && a.block < b.block);
     });
     for (const Queued& q : order) {
-      const int bz = int(q.block % std::uint32_t(nb[2])), by = int((q.block / std::uint32_t(nb[2])) % std::uint32_t(nb[1])),
+      const int bz = int(q.block % std::uint32_t(nb[2])),
+                by = int((q.block / std::uint32_t(nb[2])) % std::uint32_t(nb[1])),
                 bx = int(q.block / std::uint32_t(nb[2]) / std::uint32_t(nb[1]));
       // The projected rectangle of the block's box (its owned voxels).
       const int lo[3] = {bx * stride, by * stride, bz * stride};
@@ -904,7 +940,8 @@ class TfState final : public TracerState {
     };
     tbb::enumerable_thread_specific<ThreadStats> tstats;
     std::atomic<std::int64_t> pending{0}, queue_empty{0}, tasks{0};
-    const int threads = s_.render_threads > 0 ? s_.render_threads : int(std::max(1u, std::thread::hardware_concurrency()));
+    const int threads =
+        s_.render_threads > 0 ? s_.render_threads : int(std::max(1u, std::thread::hardware_concurrency()));
     auto render_task = [&](const Task& task) {
       const auto t0 = std::chrono::steady_clock::now();
       pending.fetch_sub(1, std::memory_order_relaxed);
@@ -952,17 +989,16 @@ class TfState final : public TracerState {
     arena.execute([&] {
       tbb::flow::graph g;
       tbb::flow::function_node<Task, Tile*> render_node(g, std::size_t(threads), render_task);
-      tbb::flow::function_node<Tile*, tbb::flow::continue_msg> compositor(
-          g, tbb::flow::serial, [&](Tile* t) {
-            if (t->next < t->blocks.size()) {
-              pending.fetch_add(1, std::memory_order_relaxed);
-              tasks.fetch_add(1, std::memory_order_relaxed);
-              render_node.try_put(Task{t, t->blocks[t->next++]});
-            } else {
-              finish_tile(*t);
-            }
-            return tbb::flow::continue_msg{};
-          });
+      tbb::flow::function_node<Tile*, tbb::flow::continue_msg> compositor(g, tbb::flow::serial, [&](Tile* t) {
+        if (t->next < t->blocks.size()) {
+          pending.fetch_add(1, std::memory_order_relaxed);
+          tasks.fetch_add(1, std::memory_order_relaxed);
+          render_node.try_put(Task{t, t->blocks[t->next++]});
+        } else {
+          finish_tile(*t);
+        }
+        return tbb::flow::continue_msg{};
+      });
       tbb::flow::make_edge(render_node, compositor);
       for (Tile& t : tiles) {
         if (t.blocks.empty()) {
@@ -1021,8 +1057,8 @@ TfGeometry geometry_of(const Box3& domain, const Vec3& origin, const Vec3& spaci
 void check_dims(const std::array<int, 3>& d) {
   if (d[0] < 2 || d[1] < 2 || d[2] < 2)
     throw InputError(fmt::format(
-        "volume render: the transfer_function model needs at least 2 samples per axis (the volume is {} x {} x {})", d[0],
-        d[1], d[2]));
+        "volume render: the transfer_function model needs at least 2 samples per axis (the volume is {} x {} x {})",
+        d[0], d[1], d[2]));
 }
 
 }  // namespace
@@ -1038,7 +1074,8 @@ void validate_tf(const VolumeRenderSettings& s, bool bricked) {
   if (!(s.tf.reference_step >= 0 && std::isfinite(s.tf.reference_step)))
     bad("the TF's reference step must be finite and >= 0 (0: one voxel)");
   const TfShading& sh = s.tf.shading;
-  if (!(sh.threshold >= 0 && std::isfinite(sh.threshold))) bad("the shading's gradient threshold must be finite and >= 0");
+  if (!(sh.threshold >= 0 && std::isfinite(sh.threshold)))
+    bad("the shading's gradient threshold must be finite and >= 0");
   if (!(sh.light_dir.allFinite() && sh.light_dir.norm() > 0)) bad("the shading's light direction must be non-zero");
   if (!(sh.ka >= 0 && sh.ks >= 0 && sh.q >= 0 && std::isfinite(sh.ka) && std::isfinite(sh.ks) && std::isfinite(sh.q)))
     bad("the shading's ka, ks and q must be finite and >= 0");

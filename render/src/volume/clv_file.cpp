@@ -60,7 +60,8 @@ ClvHeader decode_clv_header(const std::uint8_t* b, const std::string& what) {
   if (h.order == ClvOrder::kLinear && side != 0)
     throw InputError(fmt::format("{}: header byte 25 is {}; it must be 0 for the linear order", what, side));
   if (h.order == ClvOrder::kBlocked && side < 2)
-    throw InputError(fmt::format("{}: header byte 25 (block side) is {}; blocks need a side of at least 2", what, side));
+    throw InputError(
+        fmt::format("{}: header byte 25 (block side) is {}; blocks need a side of at least 2", what, side));
   h.block_side = h.order == ClvOrder::kBlocked ? side : 0;
   for (std::uint32_t d : h.dims)
     if (d < 2 || d > 2147483647u)
@@ -269,6 +270,8 @@ ClvWriteStats write_clv_generated(const fs::path& file, const std::array<int, 3>
   const auto header = encode_clv_header(h);
   (void)decode_clv_header(header.data(), file.string());  // the same checks as a reader's
   ClvWriteStats stats;
+  const bool count = o.order == ClvOrder::kLinear;
+  if (count) stats.histogram.assign(256, 0);
   const auto t0 = std::chrono::steady_clock::now();
   write_atomically(file, [&](const fs::path& tmp) {
     const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -284,6 +287,7 @@ ClvWriteStats write_clv_generated(const fs::path& file, const std::array<int, 3>
         while (order.next(&c, 1)) {
           const std::uint8_t v = outside(c) ? 0 : source.value(c.x, c.y, c.z);
           write_all(fd, &v, 1, file);
+          if (count) ++stats.histogram[v];
           ++stats.batches;
           if (o.progress && (order.done() & 0xFFFFF) == 0) o.progress(order.done(), order.total());
         }
@@ -298,32 +302,33 @@ ClvWriteStats write_clv_generated(const fs::path& file, const std::array<int, 3>
         std::vector<Batch> pool(tokens);
         for (auto& b : pool) b.coords.resize(batch), b.values.resize(batch);
         std::size_t next_token = 0;
-        tbb::parallel_pipeline(
-            tokens,
-            tbb::make_filter<void, Batch*>(tbb::filter_mode::serial_in_order,
-                                           [&](tbb::flow_control& fc) -> Batch* {
-                                             Batch* b = &pool[next_token++ % tokens];
-                                             b->n = order.next(b->coords.data(), batch);
-                                             if (b->n == 0) {
-                                               fc.stop();
-                                               return nullptr;
-                                             }
-                                             return b;
-                                           }) &
-                tbb::make_filter<Batch*, Batch*>(
-                    o.parallel ? tbb::filter_mode::parallel : tbb::filter_mode::serial_in_order,
-                    [&](Batch* b) {
-                      source.fill(b->coords.data(), b->n, b->values.data());
-                      if (o.order == ClvOrder::kBlocked)  // clv.layout.block_pad_value = 0
-                        for (std::size_t i = 0; i < b->n; ++i)
-                          if (outside(b->coords[i])) b->values[i] = 0;
-                      return b;
-                    }) &
-                tbb::make_filter<Batch*, void>(tbb::filter_mode::serial_in_order, [&](Batch* b) {
-                  write_all(fd, b->values.data(), b->n, file);
-                  ++stats.batches;
-                  if (o.progress) o.progress(order.done(), order.total());
-                }));
+        tbb::parallel_pipeline(tokens,
+                               tbb::make_filter<void, Batch*>(tbb::filter_mode::serial_in_order,
+                                                              [&](tbb::flow_control& fc) -> Batch* {
+                                                                Batch* b = &pool[next_token++ % tokens];
+                                                                b->n = order.next(b->coords.data(), batch);
+                                                                if (b->n == 0) {
+                                                                  fc.stop();
+                                                                  return nullptr;
+                                                                }
+                                                                return b;
+                                                              }) &
+                                   tbb::make_filter<Batch*, Batch*>(
+                                       o.parallel ? tbb::filter_mode::parallel : tbb::filter_mode::serial_in_order,
+                                       [&](Batch* b) {
+                                         source.fill(b->coords.data(), b->n, b->values.data());
+                                         if (o.order == ClvOrder::kBlocked)  // clv.layout.block_pad_value = 0
+                                           for (std::size_t i = 0; i < b->n; ++i)
+                                             if (outside(b->coords[i])) b->values[i] = 0;
+                                         return b;
+                                       }) &
+                                   tbb::make_filter<Batch*, void>(tbb::filter_mode::serial_in_order, [&](Batch* b) {
+                                     write_all(fd, b->values.data(), b->n, file);
+                                     if (count)
+                                       for (std::size_t i = 0; i < b->n; ++i) ++stats.histogram[b->values[i]];
+                                     ++stats.batches;
+                                     if (o.progress) o.progress(order.done(), order.total());
+                                   }));
       }
     } catch (...) {
       ::close(fd);
@@ -334,6 +339,12 @@ ClvWriteStats write_clv_generated(const fs::path& file, const std::array<int, 3>
   stats.bytes = h.file_bytes();
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;
+}
+
+std::unique_ptr<VoxelSource> voxels_of(const Volume& v) {
+  if (v.type() != SampleType::kUint8)
+    throw InputError(fmt::format("a .clv file holds 8-bit samples (the volume is {})", sample_type_name(v.type())));
+  return std::make_unique<VolumeVoxels>(v);
 }
 
 void write_clv(const fs::path& file, const Volume& v, ClvOrder order, int block_side) {

@@ -31,7 +31,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <string>
+#include <vector>
 
 namespace meltlab::render {
 
@@ -100,6 +102,10 @@ class VoxelSource {
   virtual void fill(const VoxelCoord* coords, std::size_t n, std::uint8_t* out) const;
 };
 
+/// The stored numbers of an 8-bit volume as a sample generator (InputError if it is not 8-bit);
+/// the volume must outlive it.
+std::unique_ptr<VoxelSource> voxels_of(const Volume& volume);
+
 /// The "order generator": voxel coordinates in file order, batch by batch.
 class VoxelOrder {
  public:
@@ -129,8 +135,11 @@ struct ClvWriteOptions {
 
 struct ClvWriteStats {
   double seconds = 0;
-  std::int64_t bytes = 0;    ///< the whole file
+  std::int64_t bytes = 0;  ///< the whole file
   std::int64_t batches = 0;
+  /// Linear order: how many voxels hold each value (the blocked order stores some voxels several
+  /// times and pads; its histogram is left empty).
+  std::vector<std::int64_t> histogram;
 };
 
 /// Streams a generated volume into a .clv file (atomically: a temporary file renamed when complete).
