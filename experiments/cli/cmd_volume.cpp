@@ -39,7 +39,7 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
   gen->add_option("--size", *size, "Samples per axis (seed 000: 64 or 128; seed 001: 800 or 2000)")
       ->check(CLI::Range(1, 100000))
       ->default_val(64);
-  gen->add_option("--dims", *dims, "Samples per axis x,y,z (instead of --size; the skull: 256,256,68)")
+  gen->add_option("--dims", *dims, "Samples per axis x,y,z (instead of --size; the skull's default: 256,256,68)")
       ->delimiter(',')
       ->expected(3)
       ->check(CLI::Range(1, 100000));
@@ -145,6 +145,11 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
     if (gen->parsed()) {
       g->generate.kind = render::parse_volume_kind(*kind, "--kind");
       g->generate.nx = g->generate.ny = g->generate.nz = *size;
+      if (g->generate.kind == render::VolumeKind::kSkull && dims->empty() && !gen->count("--size")) {
+        // Table 5.1's volume: 68 slices of 256 x 256 (z the slice axis).
+        g->generate.nx = g->generate.ny = 256;
+        g->generate.nz = 68;
+      }
       if (!dims->empty()) {
         g->generate.nx = (*dims)[0];
         g->generate.ny = (*dims)[1];
