@@ -336,7 +336,7 @@ void study_tables(const VolumeBenchOptions& o, const fs::path& dir, json& record
   };
   std::vector<Case> cases;
   if (o.quick)
-    cases = {{256, 700, true}, {800, 256, false}};
+    cases = {{256, 350, true}, {800, 192, false}};  // quick: the brute-force renders at fewer pixels
   else
     cases = {{800, 700, true}};
   for (const Case& c : cases) {
@@ -466,9 +466,10 @@ void study_large(const VolumeBenchOptions& o, const fs::path& dir, json& record)
 
 void study_sweeps(const VolumeBenchOptions& o, const fs::path& dir, json& record) {
   const int n = o.quick ? 256 : 800;
-  const int repeats = o.quick ? 3 : 5;
+  const int repeats = o.quick ? 2 : 5;
+  const int px = o.quick ? 350 : 700;
   const Load l = load(cached_shapes(n, ClvOrder::kLinear), ClvMemory::kRam);
-  const render::Camera cam = orbit_pose(l.clv.linear.domain(), 700, 0);
+  const render::Camera cam = orbit_pose(l.clv.linear.domain(), px, 0);
   Csv csv(
       "sweep,value,tile,block_side,threads,wall_ms,wall_sd_ms,cpu_ms,block_tasks,queue_empty_fraction,busy_fraction,"
       "samples,load_average");
@@ -501,7 +502,7 @@ void study_sweeps(const VolumeBenchOptions& o, const fs::path& dir, json& record
   }
   csv.write(dir / "sweeps.csv");
   record["sweeps"] = {{"volume", fmt::format("shapes {}^3 in RAM, converted to blocks of each side", n)},
-                      {"pixels", 700},
+                      {"pixels", px},
                       {"renderer", "object order, ERT + ESS (block visibility, multi-level cells)"},
                       {"hardware_threads", hw},
                       {"repeats", repeats}};
@@ -512,9 +513,10 @@ void study_sweeps(const VolumeBenchOptions& o, const fs::path& dir, json& record
 void study_peer(const VolumeBenchOptions& o, const fs::path& dir, json& record) {
   const int n = o.quick ? 256 : 800;
   const int repeats = o.quick ? 3 : 5;
+  const int px = o.quick ? 350 : 700;
   const Load l = load(cached_shapes(n, ClvOrder::kLinear), ClvMemory::kRam);
   const Volume& v = l.clv.linear;
-  const render::Camera cam = orbit_pose(v.domain(), 700, 0);
+  const render::Camera cam = orbit_pose(v.domain(), px, 0);
   const render::TransferFunction tf = render::TransferFunction::shapes();
   // The same TF as extinction per voxel: σ = -ln(1 - α(value)) (an α of 1 as a large σ).
   const auto t0 = std::chrono::steady_clock::now();
@@ -581,7 +583,7 @@ void study_peer(const VolumeBenchOptions& o, const fs::path& dir, json& record) 
   progress(fmt::format("peer {}³: OpenVDB {:.0f} ms, meltlab {:.0f} ms (image order) {:.0f} ms (object order)", n,
                        median(wall), ours.wall_median(), ours_oo.wall_median()));
   record["peer"] = {{"volume", fmt::format("shapes {}^3", n)},
-                    {"pixels", 700},
+                    {"pixels", px},
                     {"openvdb_active_voxels", peer.active_voxels()},
                     {"openvdb_memory_bytes", peer.memory_bytes()},
                     {"openvdb_convert_ms", convert_ms},
@@ -596,9 +598,10 @@ void study_peer(const VolumeBenchOptions& o, const fs::path& dir, json& record) 
 
 void study_steps(const VolumeBenchOptions& o, const fs::path& dir, json& record) {
   const int n = o.quick ? 256 : 800;
+  const int px = o.quick ? 350 : 700;
   const Load l = load(cached_shapes(n, ClvOrder::kLinear), ClvMemory::kRam);
   const Volume& v = l.clv.linear;
-  const render::Camera cam = orbit_pose(v.domain(), 700, 0);
+  const render::Camera cam = orbit_pose(v.domain(), px, 0);
   const auto ranges = render::VolumeRangeIndex::build(v);
   auto render_step = [&](double step, int repeats) {
     auto s = settings_for(methods()[5], render::TransferFunction::shapes(), step);
@@ -620,6 +623,7 @@ void study_steps(const VolumeBenchOptions& o, const fs::path& dir, json& record)
   }
   csv.write(dir / "steps.csv");
   record["steps"] = {{"volume", fmt::format("shapes {}^3", n)},
+                     {"pixels", px},
                      {"reference", "step 0.05 voxel"},
                      {"difference", "8-bit levels of the premultiplied image"}};
 }
