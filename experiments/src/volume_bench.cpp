@@ -2,6 +2,8 @@
 
 #include <meltlab/experiments/volume_bench.h>
 
+#include "volume_bench_clv.h"
+
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
 #include <meltlab/core/image.h>
@@ -18,6 +20,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <map>
 #include <numbers>
@@ -128,6 +131,13 @@ class Csv {
 };
 
 void progress(const std::string& what) { std::fprintf(stderr, "meltlab: volume bench: %s\n", what.c_str()); }
+
+/// The 1-, 5- and 15-minute load averages (the machine is shared: timings beside them).
+json load_average_now() {
+  double l[3] = {-1, -1, -1};
+  ::getloadavg(l, 3);
+  return {l[0], l[1], l[2]};
+}
 
 const char* model_key(OpticalModel m, render::ShadowMethod sh) {
   switch (m) {
@@ -423,11 +433,28 @@ void study_peer(const VolumeBenchOptions& o, const fs::path& dir, json& record) 
 
 }  // namespace
 
-void run_volume_bench(const VolumeBenchOptions& o) {
-  const std::vector<std::string> known{"tables", "scaling", "pareto", "peer"};
+void run_volume_bench(const VolumeBenchOptions& options) {
+  VolumeBenchOptions o = options;
+  if (o.large_size == 0) o.large_size = o.quick ? 800 : 2000;
+  if (o.large_size < 16 || o.large_size > 4096) throw InputError("--large-size must be in [16, 4096]");
+  const std::map<std::string, std::function<void(const VolumeBenchOptions&, const fs::path&, json&)>> run{
+      {"tables", study_tables},
+      {"scaling", study_scaling},
+      {"pareto", study_pareto},
+      {"peer", study_peer},
+      {"seed001-generate", clv_bench::study_generate},
+      {"seed001-tables", clv_bench::study_tables},
+      {"seed001-large", clv_bench::study_large},
+      {"seed001-sweeps", clv_bench::study_sweeps},
+      {"seed001-peer", clv_bench::study_peer},
+      {"seed001-steps", clv_bench::study_steps},
+      {"seed001-ess", clv_bench::study_ess}};
   for (const auto& s : o.studies)
-    if (std::find(known.begin(), known.end(), s) == known.end())
-      throw InputError(fmt::format("--study: unknown study '{}' (tables, scaling, pareto, peer)", s));
+    if (!run.count(s)) {
+      std::string names;
+      for (const auto& [k, v] : run) names += (names.empty() ? "" : ", ") + k;
+      throw InputError(fmt::format("--study: unknown study '{}' ({})", s, names));
+    }
   if (o.repeats < 1 || o.warmup < 0) throw InputError("--repeats must be >= 1 and --warmup >= 0");
   RunFolder folder(o.out_dir, RunFolderOptions{"--out", "bench.json", "volume bench", o.overwrite});
   Provenance provenance = start_provenance("volume bench", o.command_line);
@@ -436,13 +463,13 @@ void run_volume_bench(const VolumeBenchOptions& o) {
   record["warmup_frames"] = o.warmup;
   record["timed_frames"] = o.repeats;
   record["studies"] = o.studies;
-  const std::map<std::string, std::function<void(const VolumeBenchOptions&, const fs::path&, json&)>> run{
-      {"tables", study_tables}, {"scaling", study_scaling}, {"pareto", study_pareto}, {"peer", study_peer}};
+  record["load_average_start"] = load_average_now();
   for (const auto& s : o.studies) {
     const auto t0 = std::chrono::steady_clock::now();
     run.at(s)(o, folder.path(), record);
     record["study_seconds"][s] = ms_since(t0) / 1000;
   }
+  record["load_average_end"] = load_average_now();
   commit_run(folder, std::move(record), provenance);
 }
 

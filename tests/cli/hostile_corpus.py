@@ -554,6 +554,79 @@ def volume_cases():
     return cases
 
 
+def clv_header(dims, order=1, side=0, cell=(1.0, 1.0, 1.0)):
+    return struct.pack("<3I3fBB", *dims, *cell, order, side)
+
+
+def clv_cases():
+    """Seed 001's .clv volume files (26-byte header, then 8-bit samples) and transfer-function
+    scenes: short files, lying headers, wrong order bytes, zero and overflowing dimensions; each
+    refused from the header and the file's size before anything is mapped or allocated."""
+    cam = "camera: {type: pinhole, width: 8, height: 8, fov_deg: 40, eye: [40, -30, 20], target: [2, 2, 2]}\n"
+    files = {
+        "clv_empty": b"",
+        "clv_header_cut": clv_header((4, 4, 4))[:20],
+        "clv_samples_short": clv_header((4, 4, 4)) + b"\1" * 63,
+        "clv_samples_long": clv_header((4, 4, 4)) + b"\1" * 65,
+        "clv_order_byte_3": clv_header((4, 4, 4), order=3) + b"\1" * 64,
+        "clv_order_byte_0": clv_header((4, 4, 4), order=0) + b"\1" * 64,
+        "clv_linear_with_side": clv_header((4, 4, 4), order=1, side=16) + b"\1" * 64,
+        "clv_blocked_side_1": clv_header((4, 4, 4), order=2, side=1) + b"\1" * 64,
+        "clv_blocked_short": clv_header((4, 4, 4), order=2, side=3) + b"\1" * 64,  # needs 2^3 blocks of 3^3
+        "clv_dims_zero": clv_header((0, 4, 4)),
+        "clv_dims_one": clv_header((1, 4, 4)) + b"\1" * 16,
+        "clv_dims_overflow": clv_header((0xFFFFFFFF, 0xFFFFFFFF, 0xFFFFFFFF)) + b"\1" * 64,
+        "clv_dims_product_overflows_int64": clv_header((2147483647, 2147483647, 2147483647)) + b"\1" * 64,
+        "clv_dims_claim_terabytes": clv_header((65535, 65535, 65535)) + b"\1" * 64,
+        "clv_cell_nan": clv_header((2, 2, 2), cell=(1.0, float("nan"), 1.0)) + b"\1" * 8,
+        "clv_cell_negative": clv_header((2, 2, 2), cell=(1.0, -1.0, 1.0)) + b"\1" * 8,
+        "clv_text": b"this is not a volume, just some text pretending to be one\n",
+    }
+    cases = []
+    for n, data in files.items():
+        cases.append(Case(f"volume/{n}/info", ["volume", "info", "{f}"], {"v.clv": data}, names=["v.clv"]))
+        for memory in ("mmap", "ram"):
+            scene = ("model: transfer_function\nvolume: {file: v.clv, memory: %s}\n" % memory + cam +
+                     "sampling: {ds_rule: fixed_step, step: 0.2}\n")
+            cases.append(Case(f"volume/{n}/render_{memory}", ["volume", "render", "--scene", "{f}", "--out", "{out}"],
+                              {"s.yaml": scene, "v.clv": data}, names=["v.clv"]))
+    good = clv_header((4, 4, 4)) + bytes(range(64))
+    tf = "model: transfer_function\nvolume: {file: v.clv}\n" + cam
+    scenes = {
+        "tf_table_unknown": tf + "transfer_function: {table: bones}\n",
+        "tf_range_unclosed": tf + 'transfer_function: {table: [{range: "(85, 95", rgb: [1, 2, 3], alpha: 0.5}]}\n',
+        "tf_range_reversed": tf + 'transfer_function: {table: [{range: "(95, 85]", rgb: [1, 2, 3], alpha: 0.5}]}\n',
+        "tf_alpha_two": tf + 'transfer_function: {table: [{range: "(85, 95]", rgb: [1, 2, 3], alpha: 2}]}\n',
+        "tf_for_hg": "model: hg\nvolume: {file: v.clv}\n" + cam + "transfer_function: {table: shapes}\n",
+        "tf_exponent_unknown": tf + "transfer_function: {opacity_exponent: s_times_s0}\n",
+        "tf_light_zero": tf + "transfer_function: {shading: {light_dir: [0, 0, 0]}}\n",
+        "tf_fixed_step_zero": tf + "sampling: {ds_rule: fixed_step, step: 0}\n",
+        "tf_tile_zero": tf + "traversal: {method: object_order, tile: 0}\n",
+        "object_order_for_hg": "model: hg\nvolume: {file: v.clv}\n" + cam + "traversal: {method: object_order}\n",
+        "tf_block_side_one": tf.replace("{file: v.clv}", "{file: v.clv, layout: blocked, block_side: 1}"),
+        "tf_memory_unknown": tf.replace("{file: v.clv}", "{file: v.clv, memory: swap}"),
+    }
+    for n, t in scenes.items():
+        cases.append(Case(f"volume/{n}", ["volume", "render", "--scene", "{f}", "--out", "{out}"],
+                          {"s.yaml": t, "v.clv": good}, names=["s.yaml"]))
+    o = ["volume", "generate", "--kind", "shapes"]
+    cases += [
+        Case("volume/generate_shapes_dims_zero", o + ["--dims", "0,4,4", "--out", "{out}.clv"], names=["--dims"]),
+        Case("volume/generate_shapes_dims_two", o + ["--dims", "4,4", "--out", "{out}.clv"], names=["--dims"]),
+        Case("volume/generate_shapes_block_side_1", o + ["--size", "8", "--layout", "blocked", "--block-side", "1",
+                                                         "--out", "{out}.clv"], names=["--block-side"]),
+        Case("volume/generate_shapes_layout", o + ["--size", "8", "--layout", "zigzag", "--out", "{out}.clv"],
+             names=["--layout"]),
+        Case("volume/generate_shapes_sample_300", o + ["--size", "8", "--sample", "300", "--out", "{out}.clv"],
+             names=["--sample"]),
+        Case("volume/generate_shapes_size_one", o + ["--size", "1", "--object-size", "1", "--out", "{out}.clv"], names=["out.clv"]),
+        Case("volume/generate_shapes_huge_json", o + ["--size", "2000", "--out", "{out}.json"], names=["--out"]),
+        Case("volume/bench_unknown_study", ["volume", "bench", "--study", "seed001-everything", "--out", "{out}"],
+             names=["--study"]),
+    ]
+    return cases
+
+
 def run_case(meltlab, case, root, fixtures, asan):
     work = tempfile.mkdtemp(prefix="case-", dir=root)
     first = None
@@ -627,7 +700,7 @@ def main():
     ap.add_argument("--list", action="store_true")
     a = ap.parse_args()
     cases = (mesh_cases() + manifest_cases() + kl_cases() + scene_cases() + reproduce_cases() + sweep_cases() +
-             option_cases() + volume_cases())
+             option_cases() + volume_cases() + clv_cases())
     cases = [c for c in cases if a.only in c.name]
     if a.list:
         for c in cases:

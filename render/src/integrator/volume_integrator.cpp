@@ -6,6 +6,8 @@
 #include <meltlab/core/error.h>
 #include <meltlab/core/hash.h>
 
+#include "volume_tracer_state.h"
+
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/blocked_range2d.h>
@@ -22,6 +24,9 @@
 
 namespace meltlab::render {
 
+using detail::SampleGrid;
+using detail::TracerState;
+
 namespace {
 
 using Vec3 = Eigen::Vector3d;
@@ -32,12 +37,25 @@ double ms_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
 }
 
+void validate_settings(const VolumeRenderSettings& s);
+
 void validate(const Volume& volume, const VolumeRenderSettings& s) {
   if (volume.empty()) throw InputError("volume render: the volume is empty");
+  validate_settings(s);
+  if (s.model == OpticalModel::kTransferFunction)
+    detail::validate_tf(s, false);
+  else if (s.traversal == Traversal::kObjectOrder)
+    throw InputError(
+        "volume render: the object-order traversal renders the transfer_function model of a bricked volume");
+}
+
+void validate_settings(const VolumeRenderSettings& s) {
   auto bad = [](const std::string& what) { throw InputError("volume render: " + what); };
   if (s.samples < 1) bad(fmt::format("vlr.sampling.n must be >= 1 (got {})", s.samples));
   if (s.step_rule == StepRule::kFitSegment && !(s.step > 0 && std::isfinite(s.step)))
     bad("the fit_segment step rule needs sampling.step > 0");
+  if (s.step_rule == StepRule::kFixedStep && !(s.step > 0 && std::isfinite(s.step)))
+    bad("the fixed_step rule needs sampling.step > 0");
   if (!(s.kappa >= 0 && std::isfinite(s.kappa))) bad(fmt::format("kappa must be finite and >= 0 (got {})", s.kappa));
   if (!(s.gamma > 0 && std::isfinite(s.gamma))) bad(fmt::format("gamma must be finite and > 0 (got {})", s.gamma));
   if (!(s.hg_c > -1 && s.hg_c < 1)) bad(fmt::format("vlr.hg.c must be in (-1, 1) (got {})", s.hg_c));
@@ -290,6 +308,8 @@ struct Kernel {
         return trace_quad<OpticalModel::kHG>(o, v, t0, t1, pixel_id, I, st);
       case OpticalModel::kHGAttenuated:
         return trace_quad<OpticalModel::kHGAttenuated>(o, v, t0, t1, pixel_id, I, st);
+      case OpticalModel::kTransferFunction:  // its own state (volume_tf.cpp)
+        break;
     }
     return 1.0;
   }
@@ -315,30 +335,9 @@ struct Kernel {
     constexpr bool emits = M != OpticalModel::kAbsorption;
     constexpr bool scatter = M == OpticalModel::kHG || M == OpticalModel::kHGAttenuated;
     constexpr bool attenuated = M == OpticalModel::kHGAttenuated;
-    double h = ds;
-    std::int64_t n_max;
-    double offset_fraction = 0;
-    switch (s.first_offset) {
-      case FirstOffset::kZero:
-        offset_fraction = 0;
-        break;
-      case FirstOffset::kHalf:
-        offset_fraction = 0.5;
-        break;
-      case FirstOffset::kJitter:
-        offset_fraction = unit_from_bits(splitmix64(s.jitter_seed ^ splitmix64(pixel_id)));
-        break;
-    }
-    const double length = t1 - t0;
-    if (s.step_rule == StepRule::kFitSegment) {
-      n_max = std::max<std::int64_t>(1, std::int64_t(std::ceil(length / ds)));
-      h = length / double(n_max);
-    } else {
-      // Samples t0 + (φ + i) h < t1.
-      const double q = (length / h) - offset_fraction;
-      n_max = q > 0 ? std::int64_t(std::ceil(q)) : 0;
-    }
-    const double a = t0 + offset_fraction * h;
+    const SampleGrid grid = detail::sample_grid(s, ds, t0, t1, pixel_id);
+    const double h = grid.h, a = grid.a;
+    const std::int64_t n_max = grid.n;
     const double kappa_h = s.kappa * h;
     const double source_step = s.emission_scale_by_ds ? h : 1.0;
     const double emission_k = s.kappa_in_source ? s.kappa : 1.0;
@@ -658,18 +657,8 @@ ShadowCache build_cache_impl(const Kernel<S>& k, const LightTerm& l, const Volum
   return c;
 }
 
-/// The tracer's state behind a virtual interface (one dispatch per ray): the volume and the settings
-/// it owns (the kernel refers to them), the kernel, and the shadow caches.
-struct TracerState {
-  virtual ~TracerState() = default;
-  virtual double trace(const Vec3& o, const Vec3& v, double t0, double t1, std::uint64_t pixel, Rgb& I,
-                       VolumeRenderStats& st) const = 0;
-  virtual double optical_depth(const Vec3& x, const Vec3& d, double max_distance, std::int64_t& samples) const = 0;
-  Box3 box;
-  double cache_ms = 0;
-  std::int64_t cache_samples = 0;
-};
-
+/// The state of seed 000's models: the volume and the settings it owns (the kernel refers to them),
+/// the kernel, and the shadow caches.
 template <class S>
 struct TypedTracerState final : TracerState {
   Volume volume;
@@ -756,8 +745,43 @@ std::optional<RayInterval> intersect_box(const Box3& box, const Vec3& o, const V
 }
 
 double primary_step(const Volume& volume, const VolumeRenderSettings& s) {
-  if (s.step_rule == StepRule::kFitSegment) return s.step;
+  if (s.step_rule == StepRule::kFitSegment || s.step_rule == StepRule::kFixedStep) return s.step;
   return volume.domain().diagonal() / s.samples;
+}
+
+SampleGrid detail::sample_grid(const VolumeRenderSettings& s, double ds, double t0, double t1, std::uint64_t pixel_id) {
+  SampleGrid g;
+  double h = ds;
+  std::int64_t n_max;
+  double offset_fraction = 0;
+  switch (s.first_offset) {
+    case FirstOffset::kZero:
+      offset_fraction = 0;
+      break;
+    case FirstOffset::kHalf:
+      offset_fraction = 0.5;
+      break;
+    case FirstOffset::kJitter:
+      offset_fraction = unit_from_bits(splitmix64(s.jitter_seed ^ splitmix64(pixel_id)));
+      break;
+  }
+  const double length = t1 - t0;
+  if (s.step_rule == StepRule::kFitSegment) {
+    n_max = std::max<std::int64_t>(1, std::int64_t(std::ceil(length / ds)));
+    h = length / double(n_max);
+  } else if (s.step_rule == StepRule::kFixedStep) {
+    // Seed 001: floor(length / s) whole steps from the entry, each sampled φ of the way in.
+    const double q = std::floor(length / h);
+    n_max = q > 0 ? std::int64_t(q) : 0;
+  } else {
+    // Samples t0 + (φ + i) h < t1.
+    const double q = (length / h) - offset_fraction;
+    n_max = q > 0 ? std::int64_t(std::ceil(q)) : 0;
+  }
+  g.a = t0 + offset_fraction * h;
+  g.h = h;
+  g.n = n_max;
+  return g;
 }
 
 std::vector<VolumeLight> effective_lights(const Volume& volume, const VolumeRenderSettings& s) {
@@ -769,16 +793,49 @@ std::vector<VolumeLight> effective_lights(const Volume& volume, const VolumeRend
 
 struct VolumeTracer::Impl {
   std::unique_ptr<TracerState> state;
+  VolumeRenderSettings settings;
 };
 
 VolumeTracer::VolumeTracer(const Volume& volume, const VolumeRenderSettings& settings,
                            const std::vector<ShadowCache>& caches)
     : impl_(std::make_unique<Impl>()) {
   validate(volume, settings);
+  impl_->settings = settings;
+  if (settings.model == OpticalModel::kTransferFunction) {
+    impl_->state = detail::make_tf_state(volume, settings, nullptr);
+    return;
+  }
   impl_->state = visit_samples(volume, [&](const auto& samples) -> std::unique_ptr<TracerState> {
     using S = typename std::remove_cv_t<std::remove_pointer_t<decltype(samples.data)>>;
     return std::make_unique<TypedTracerState<S>>(volume, settings, caches);
   });
+}
+
+VolumeTracer::VolumeTracer(const Volume& volume, const VolumeRenderSettings& settings,
+                           std::shared_ptr<const VolumeRangeIndex> ranges)
+    : impl_(std::make_unique<Impl>()) {
+  validate(volume, settings);
+  impl_->settings = settings;
+  if (settings.model != OpticalModel::kTransferFunction)
+    throw InputError("volume render: a range index is for the transfer_function model");
+  impl_->state = detail::make_tf_state(volume, settings, std::move(ranges));
+}
+
+VolumeTracer::VolumeTracer(const BrickedVolume& volume, const VolumeRenderSettings& settings,
+                           std::shared_ptr<const VolumeRangeIndex> ranges)
+    : impl_(std::make_unique<Impl>()) {
+  check_volume_render_settings(volume, settings);
+  impl_->settings = settings;
+  impl_->state = detail::make_tf_state(volume, settings, std::move(ranges));
+}
+
+void check_volume_render_settings(const BrickedVolume& volume, const VolumeRenderSettings& s) {
+  if (volume.empty()) throw InputError("volume render: the volume is empty");
+  if (s.model != OpticalModel::kTransferFunction)
+    throw InputError(fmt::format("volume render: a bricked volume renders the transfer_function model only (not {})",
+                                 optical_model_name(s.model)));
+  validate_settings(s);
+  detail::validate_tf(s, true);
 }
 
 VolumeTracer::~VolumeTracer() = default;
@@ -808,6 +865,7 @@ double VolumeTracer::transmittance(const Vec3& x, const Vec3& d, double max_dist
 const Box3& VolumeTracer::box() const { return impl_->state->box; }
 double VolumeTracer::cache_build_ms() const { return impl_->state->cache_ms; }
 std::int64_t VolumeTracer::cache_shadow_samples() const { return impl_->state->cache_samples; }
+double VolumeTracer::index_build_ms() const { return impl_->state->index_ms; }
 
 VolumeFrame render_volume(const Volume& volume, const Camera& camera, const VolumeRenderSettings& settings) {
   return render_volume(volume, camera, settings, {});
@@ -816,7 +874,18 @@ VolumeFrame render_volume(const Volume& volume, const Camera& camera, const Volu
 VolumeFrame render_volume(const Volume& volume, const Camera& camera, const VolumeRenderSettings& s,
                           const std::vector<ShadowCache>& caches) {
   const VolumeTracer tracer(volume, s, caches);
-  const TracerState& k = *tracer.impl_->state;
+  return tracer.render(camera);
+}
+
+VolumeFrame render_volume(const BrickedVolume& volume, const Camera& camera, const VolumeRenderSettings& s) {
+  const VolumeTracer tracer(volume, s);
+  return tracer.render(camera);
+}
+
+VolumeFrame VolumeTracer::render(const Camera& camera) const {
+  const TracerState& k = *impl_->state;
+  if (auto own = k.render(camera)) return std::move(*own);
+  const VolumeRenderSettings& s = impl_->settings;
   VolumeFrame frame;
   frame.stats.shadow_cache_ms = k.cache_ms;
   frame.stats.shadow_samples = k.cache_samples;
@@ -950,9 +1019,17 @@ std::string optical_model_name(OpticalModel m) {
       return "hg";
     case OpticalModel::kHGAttenuated:
       return "hg_attenuated";
+    case OpticalModel::kTransferFunction:
+      return "transfer_function";
   }
   return "emission_absorption";
 }
+
+std::string ess_scheme_name(EmptySpaceScheme e) {
+  return e == EmptySpaceScheme::kOneLevel ? "one_level" : "multi_level";
+}
+
+std::string traversal_name(Traversal t) { return t == Traversal::kObjectOrder ? "object_order" : "image_order"; }
 
 std::string quadrature_name(Quadrature q) {
   switch (q) {

@@ -14,6 +14,18 @@
 //                time per frame, error against a fine reference, and the difference between the two.
 //   bench.json   the scenes, the machine, and the run's provenance.
 // Quick mode uses smaller images for the studies that need a brute-force reference.
+//
+// Seed 001 (CPU rendering of large volumes; the studies named seed001-*, run only when asked):
+//   generate.csv, sizes.csv  the generator's throughput, batched and naive; file sizes against the
+//                            spec's arithmetic; occupancy of the generated volumes
+//   tables.csv, counts/      Tables 5.1, 5.2, 5.4 (samples, single-thread time by method, RAM and
+//                            mmap, float32), per-pixel sample counts (16-bit PNG) for Fig. 5.1
+//   large.csv                Table 5.3 (the 2000³ volume in full mode; 800³ at 350² in quick)
+//   sweeps.csv               tile side, block side, render threads of the object-order renderer
+//   peer.csv                 OpenVDB's VolumeRender with the TF as extinction beside ours
+//   steps.csv                Fig. 5.2: steps 0.1-0.9 against 0.05
+//   ess.csv                  one-level against multi-level empty-space skipping over 8 poses
+// Their volumes are generated once into the data cache (MELTLAB_DATA_DIR/clv).
 
 #include <filesystem>
 #include <string>
@@ -25,6 +37,7 @@ struct VolumeBenchOptions {
   std::vector<std::string> studies{"tables", "scaling", "pareto", "peer"};
   bool quick = true;
   int warmup = 1, repeats = 3;  ///< frames before timing, timed frames (the median is reported)
+  int large_size = 0;           ///< seed001-large: N of the N³ volume (0: 800 quick, 2000 full)
   std::filesystem::path out_dir;
   bool overwrite = false;
   std::vector<std::string> command_line;
