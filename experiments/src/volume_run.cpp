@@ -329,10 +329,7 @@ VolumeRenderRunResult run_tf_render(const VolumeRenderRunOptions& o, render::Vol
                 {"exr", "image.exr"},
                 {"png_output", scene.tf_output == render::TfOutput::kSourceDouble ? "source_double" : "premultiplied"}};
   if (o.sample_counts) j["image"]["sample_counts"] = "samples.png (16-bit: samples per pixel)";
-  j["provenance"] = finish_provenance(provenance);
-  result.run_json = j;
-  write_text_atomically(dir / "render.json", j.dump(2) + "\n");
-  folder.commit();
+  result.run_json = commit_run(folder, std::move(j), provenance);
   return result;
 }
 
