@@ -146,9 +146,30 @@ double march_sum(const fog::FogScene& s, const Vec3& eye, const fog::GBufferPixe
   return sum;
 }
 
+// Table sizes of the studies: N = 16 … 1024 in full mode; quick mode stops at 512 (F, H) and 128 (G):
+// an H table of 1024² takes ~9 s to build and a G table of 256² ~5 s on this machine.
 std::vector<int> table_sizes(bool quick, bool g) {
-  if (g) return quick ? std::vector<int>{16, 32, 64, 128, 256} : std::vector<int>{16, 32, 64, 128, 256, 512, 1024};
-  return {16, 32, 64, 128, 256, 512, 1024};
+  if (!quick) return {16, 32, 64, 128, 256, 512, 1024};
+  return g ? std::vector<int>{16, 32, 64, 128} : std::vector<int>{16, 32, 64, 128, 256, 512};
+}
+
+// The G tables of the studies, each built once (E1 and E3 share them).
+const fog::FogTable& g_tables(int exponent, int n, double* build_ms = nullptr) {
+  struct Entry {
+    fog::FogTable table;
+    double ms = 0;
+  };
+  static std::map<std::pair<int, int>, Entry> cache;
+  auto it = cache.find({exponent, n});
+  if (it == cache.end()) {
+    fog::TableOptions to;
+    to.n = n;
+    const auto t0 = std::chrono::steady_clock::now();
+    fog::FogTable t = fog::g_table(exponent, to);
+    it = cache.emplace(std::make_pair(exponent, n), Entry{std::move(t), ms_since(t0)}).first;
+  }
+  if (build_ms) *build_ms = it->second.ms;
+  return it->second.table;
 }
 
 // ---- E1: lookup error of the tables -----------------------------------------------------------
@@ -170,7 +191,9 @@ void study_tables(const FogBenchOptions& o, const fs::path& dir, json& record) {
                      const std::vector<double>& ref, bool xy_swapped, double build_ms) {
     std::vector<double> val(pts.size());
     for (std::size_t k = 0; k < pts.size(); ++k)
-      val[k] = xy_swapped ? t.lookup(pts[k].second, pts[k].first) : t.lookup(pts[k].first, pts[k].second);
+      val[k] = t.name == "H" ? fog::h_lookup(t, pts[k].first, pts[k].second)
+               : xy_swapped  ? t.lookup(pts[k].second, pts[k].first)
+                             : t.lookup(pts[k].first, pts[k].second);
     const ErrorStats s = relative_errors(val, ref);
     double mean_abs = 0, max_abs = 0;
     for (std::size_t k = 0; k < ref.size(); ++k) {
@@ -197,11 +220,9 @@ void study_tables(const FogBenchOptions& o, const fs::path& dir, json& record) {
     tbb::parallel_for(std::size_t{0}, tt.size(),
                       [&](std::size_t k) { ref[k] = fog::surface_g(exponent, tt[k].first, tt[k].second); });
     for (int n : table_sizes(o.quick, true)) {
-      fog::TableOptions to;
-      to.n = n;
-      const auto t0 = std::chrono::steady_clock::now();
-      const fog::FogTable g = fog::g_table(exponent, to);
-      measure(g, tt, ref, false, ms_since(t0));
+      double ms = 0;
+      const fog::FogTable& g = g_tables(exponent, n, &ms);
+      measure(g, tt, ref, false, ms);
       progress(fmt::format("E1 G{} N = {}", exponent, n));
     }
   }
@@ -297,14 +318,26 @@ void study_e2(const FogBenchOptions& o, const fs::path& dir, json& record) {
   });
   for (char a : acc) rejected += !a;
   total += static_cast<long long>(configs.size());
-  run_case("S4 random rays", ref, [&](const fog::FogFunctions& fn, fog::LookupCounts* counts) {
-    std::vector<double> out(configs.size());
-    for (std::size_t k = 0; k < configs.size(); ++k) {
-      const auto& c = configs[k];
-      out[k] = fog::airlight_unit(c.origin, c.dir, c.m, c.light, c.medium, fn, model, counts);
-    }
-    return out;
-  });
+  // All rays together, then each kind of ray apart (the floor, 1e-4 of the largest value, is per
+  // set: the kinds differ in scale by orders of magnitude, rays near the light the brightest).
+  std::vector<std::string> kinds{"S4 random rays"};
+  for (const auto& c : configs)
+    if (std::find(kinds.begin(), kinds.end(), "S4 " + c.kind) == kinds.end()) kinds.push_back("S4 " + c.kind);
+  for (const std::string& kind : kinds) {
+    std::vector<std::size_t> pick;
+    for (std::size_t k = 0; k < configs.size(); ++k)
+      if (kind == "S4 random rays" || kind == "S4 " + configs[k].kind) pick.push_back(k);
+    std::vector<double> kref(pick.size());
+    for (std::size_t i = 0; i < pick.size(); ++i) kref[i] = ref[pick[i]];
+    run_case(kind, kref, [&](const fog::FogFunctions& fn, fog::LookupCounts* counts) {
+      std::vector<double> out(pick.size());
+      for (std::size_t i = 0; i < pick.size(); ++i) {
+        const auto& c = configs[pick[i]];
+        out[i] = fog::airlight_unit(c.origin, c.dir, c.m, c.light, c.medium, fn, model, counts);
+      }
+      return out;
+    });
+  }
   // The listing's cone logic against the robust one on S4 (spec §6.5: log the share).
   long long differs = 0;
   for (const auto& c : configs) {
@@ -364,10 +397,9 @@ void study_e3(const FogBenchOptions& o, const fs::path& dir, json& record) {
     for (int n : nphi) max_phi = std::max(max_phi, n);
     progress(fmt::format("E3 kt {}: R-surf-model at {} points in {:.0f} ms", kt, pick.size(), ms_since(t0)));
     for (int n : table_sizes(o.quick, true)) {
-      fog::TableOptions to;
-      to.n = n;
-      const fog::FogTableSet t = fog::build_fog_tables(to, fog::TableFunction::kH, 20);
-      const fog::FogFunctions fn = t.functions();
+      fog::FogFunctions fn = airlight_tables(fog::TableFunction::kH, fog::AxisWarp::kSqrt, n).functions();
+      fn.g_diffuse = &g_tables(1, n);
+      fn.g_specular = &g_tables(s.material.n, n);
       std::vector<double> val(pick.size());
       for (std::size_t i = 0; i < pick.size(); ++i) {
         const auto& px = g.pixels[pick[i]];
@@ -506,17 +538,32 @@ void study_cost(const FogBenchOptions& o, const fs::path& dir, json& record) {
     t_lights.push_back(ms);
   }
   progress("cost: lights done");
+  // The four G-buffers first, then their shading timed round-robin (one run of each per round), so
+  // that a change of the machine's load over the study does not masquerade as a trend.
   std::vector<double> shade_tri;
   const fog::FogScene s = fog::scene_sphere(0.1, o.quick ? 320 : 640, o.quick ? 240 : 480);
-  for (int tri : {1000, 10000, 100000, 1000000}) {
+  const std::vector<int> tri_counts{1000, 10000, 100000, 1000000};
+  std::vector<fog::GBuffer> gbuf(tri_counts.size());
+  std::vector<double> vis_ms(tri_counts.size());
+  std::vector<std::size_t> bvh_tris(tri_counts.size());
+  for (std::size_t i = 0; i < tri_counts.size(); ++i) {
     render::MeshBvh bvh;
-    bvh.update(fog::scene_mesh(s, tri));
-    fog::GBuffer g;
-    const double vis = timed_median(o, [&] { g = fog::trace_mesh(bvh, s.camera, s.far_m); });
-    fog::ShadeStats st;
-    const double ms = timed_median(o, [&] { fog::shade_fog(g, s, fn, model, &st); });
-    csv.row("triangles,{},{},{},{},{:.3f},{:.3f}", tri, st.lit_pixels, g.width * g.height, bvh.triangle_count(), vis,
-            ms);
+    bvh.update(fog::scene_mesh(s, tri_counts[i]));
+    bvh_tris[i] = bvh.triangle_count();
+    vis_ms[i] = timed_median(o, [&] { gbuf[i] = fog::trace_mesh(bvh, s.camera, s.far_m); });
+  }
+  std::vector<std::vector<double>> runs(tri_counts.size());
+  std::vector<fog::ShadeStats> tri_stats(tri_counts.size());
+  for (int r = 0; r < o.warmup + o.repeats; ++r)
+    for (std::size_t i = 0; i < tri_counts.size(); ++i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      fog::shade_fog(gbuf[i], s, fn, model, &tri_stats[i]);
+      if (r >= o.warmup) runs[i].push_back(ms_since(t0));
+    }
+  for (std::size_t i = 0; i < tri_counts.size(); ++i) {
+    const double ms = median(runs[i]);
+    csv.row("triangles,{},{},{},{},{:.3f},{:.3f}", tri_counts[i], tri_stats[i].lit_pixels,
+            gbuf[i].width * gbuf[i].height, bvh_tris[i], vis_ms[i], ms);
     shade_tri.push_back(ms);
   }
   progress("cost: triangles done");
@@ -570,9 +617,11 @@ void study_speed(const FogBenchOptions& o, const fs::path& dir, json& record) {
     double last_ns = 0, last_step = 0, last_p99 = 0;
     for (double step = 1.0; step > 1e-4; step *= 0.5) {
       std::vector<double> val;
-      FogBenchOptions once = o;  // marching frames are long: at most 1 warm-up and 3 timed runs
-      once.warmup = std::min(o.warmup, 1);
-      once.repeats = std::min(o.repeats, 3);
+      // Marching frames are long and need no warm-up (no tables): quick mode times one run, full
+      // mode the median of up to 3.
+      FogBenchOptions once = o;
+      once.warmup = 0;
+      once.repeats = o.quick ? 1 : std::min(o.repeats, 3);
       const double ms = timed_median(once, [&] {
         val = per_pixel(g, [&](const fog::GBufferPixel& p) { return march_sum(c.scene, g.eye, p, step); });
       });

@@ -74,8 +74,9 @@ json describe_model(const fog::FogModelOptions& o, const fog::FogTableSet& table
   j["fsa.table.axis_warp"] = fog::axis_warp_name(tables.options.u_warp);
   j["fsa.table.F.domain"] = fmt::format("v in [0, π/2], u in [0, {}]", tables.options.u_max);
   j["fsa.table.G.domain"] = fmt::format("T in [0, {}], θ in [0, π]", tables.options.t_max);
-  j["fsa.table.beyond_domain"] =
-      tables.function == fog::TableFunction::kF ? "clamp, flag" : "H: continued as H(u_max, v) u_max/u, flag";
+  j["fsa.table.beyond_domain"] = tables.function == fog::TableFunction::kF
+                                     ? "clamp, flag"
+                                     : "H: K = H (1 + tan v)(1 + u tan v) continued as K(u_max, v), flag";
   j["fsa.table.function"] = fog::table_function_name(tables.function);
   j["tables"] = tables.describe();
   return j;

@@ -28,15 +28,10 @@ double table_f(const FogTable& t, double u, double v, LookupCounts* counts) {
   return f;
 }
 
-// H at (u, v) from the table; beyond u_max continued as H(u_max, v) u_max/u.
+// H at (u, v) from the table (fog_tables.h's h_lookup: K / h_scale, K continued beyond u_max).
 double table_h(const FogTable& t, double u, double v, LookupCounts* counts) {
   bool clamped = false;
-  const double umax = t.y.hi;
-  double h = t.lookup(v, std::min(u, umax), &clamped);
-  if (u > umax) {
-    h *= umax / u;
-    clamped = true;
-  }
+  const double h = h_lookup(t, u, v, &clamped);
   if (counts) {
     ++counts->lookups;
     if (clamped) ++counts->clamped;

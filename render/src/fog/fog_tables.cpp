@@ -150,9 +150,26 @@ FogTable h_table(const TableOptions& o) {
   t.values = ImageF(o.n, o.n, 1);
   tbb::parallel_for(0, o.n, [&](int j) {
     const double u = t.y.node(j);
-    for (int i = 0; i < o.n; ++i) t.values.at(i, j) = static_cast<float>(airlight_h(u, t.x.node(i)));
+    for (int i = 0; i < o.n; ++i) {
+      const double v = t.x.node(i);
+      // K = H (1 + u tan v); it vanishes at v = π/2 as π/2 - v for every u.
+      const double k = i + 1 == o.n ? 0.0 : airlight_h(u, v) * h_scale(u, v);
+      t.values.at(i, j) = static_cast<float>(k);
+    }
   });
   return t;
+}
+
+double h_scale(double u, double v) { return 1 + u * std::tan(v); }
+
+double h_lookup(const FogTable& t, double u, double v, bool* clamped) {
+  if (v >= 0.5 * kPi) return 0.0;
+  bool c = false;
+  // Beyond u_max K is continued as K(u_max, v): K tends to a function of v alone as u grows.
+  const double k = t.lookup(v, std::min(u, t.y.hi), &c);
+  if (u > t.y.hi) c = true;
+  if (clamped && c) *clamped = true;
+  return k / h_scale(u, v);
 }
 
 double ring_weight(int n, double phi, double theta) {

@@ -165,10 +165,12 @@ TEST(Airlight, PhysicalSanity) {
   EXPECT_LT(curve.back(), 1e-3 * curve[static_cast<std::size_t>(peak)]);
 }
 
-TEST(Airlight, TablesAtN64MeetTheGoalOnS4) {
+TEST(Airlight, TablesAtN64OnS4) {
   // E2 on the S4 rays (spec §6.4, the goal at N = 64: median < 0.5 %, max < 2 %) with
-  // the floor of 1e-4 of the set's maximum, with the harness's table (H, √u axis). The measured
-  // values over N are in `meltlab fog bench`; this guards them.
+  // the floor of 1e-4 of the set's maximum, with the harness's table (H stored as K, √u axis).
+  // The measured values over N are in `meltlab fog bench`; this guards them. The median and the
+  // p99 meet the goal; the maximum does not (about 6 % at rays passing within 1e-3 l of the
+  // light, S4's near_light: bench e2.csv), so it is guarded at 10 %.
   TableOptions o;
   o.n = 64;
   o.u_warp = AxisWarp::kSqrt;
@@ -188,8 +190,8 @@ TEST(Airlight, TablesAtN64MeetTheGoalOnS4) {
   std::printf("S4 E2 at N = 64: median %.3g, p99 %.3g, max %.3g\n", rel[rel.size() / 2], rel[rel.size() * 99 / 100],
               rel.back());
   EXPECT_LT(rel[rel.size() / 2], 0.005);
-  // The tail: rays within 1e-3..1e-2 l of the light (S4's near_light) reach a few per cent.
   EXPECT_LT(rel[rel.size() * 99 / 100], 0.02);
+  EXPECT_LT(rel.back(), 0.10);
 }
 
 }  // namespace

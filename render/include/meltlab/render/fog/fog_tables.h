@@ -77,9 +77,20 @@ struct TableOptions {
 FogTable f_table(const TableOptions& o);
 
 /// The H table (airlight_f.h's airlight_h: the tail of F with e^{-u tan v} factored out) on the
-/// same axes as F (fsa.table.function = H). Beyond u_max it is continued as H(u_max, v)·u_max/u
-/// (H ~ cos² v/u for large u) by the airlight, and the lookup counts as clamped.
+/// same axes as F (fsa.table.function = H). It stores K(u, v) = H(u, v)·h_scale(u, v),
+/// h_scale = 1 + u tan v: H falls to 0 at v = π/2 as π/2 - v for u = 0 but as cos² v/u for
+/// u > 0, where bilinear interpolation of H has a large relative error; K vanishes as π/2 - v
+/// for every u (K = H exactly at u = 0, where H = π/2 - v is linear in v). On the S4 rays this
+/// halves E2's maximum at N = 64 against storing H (0.117 -> 0.058; `meltlab fog bench`).
+/// Read it with h_lookup.
 FogTable h_table(const TableOptions& o);
+
+/// 1 + u tan v, the scale between H and the H table's K.
+double h_scale(double u, double v);
+
+/// H(u, v) from an h_table: K bilinearly, divided by h_scale (0 at v >= π/2). Beyond u_max, K is
+/// continued as K(u_max, v) (K tends to a function of v alone as u grows) and `clamped` is set.
+double h_lookup(const FogTable& t, double u, double v, bool* clamped = nullptr);
 
 /// G_n(T, θ) accurately (a single value; about 1 ms). exponent >= 1 (1 = Lambert's G_0).
 double surface_g(int exponent, double T, double theta);
