@@ -79,6 +79,34 @@ def figures(exp: Path):
     return "figures.png"
 
 
+LAB = [("lab_plain", "plain scene (Fig. 7.8)"), ("lab_kt0", "spotlight, k_t = 0"),
+       ("lab_kt015", "spotlight, k_t = 0.15"), ("lab_kt05", "spotlight, k_t = 0.5")]
+
+
+def lab_figure(exp: Path):
+    """The lab in fog: one row per fog density, one column per rendered frame (the melt running)."""
+    have = [(s, c) for s, c in LAB if (exp / s / "frames").is_dir()]
+    if not have:
+        return None, None
+    frames = sorted(p.name for p in (exp / have[0][0] / "frames").glob("frame_*.png"))
+    fig, axes = plt.subplots(len(have), len(frames), figsize=(3.0 * len(frames), 2.4 * len(have)), squeeze=False)
+    rows = []
+    for r, (step, cap) in enumerate(have):
+        j = json.loads((exp / step / "render.json").read_text())
+        rows.append([cap, len(frames), j.get("median_trace_ms"), json.dumps(j["scene"].get("fog")) != "null"])
+        for c, name in enumerate(frames):
+            ax = axes[r][c]
+            ax.axis("off")
+            if (exp / step / "frames" / name).is_file():
+                ax.imshow(mpimg.imread(exp / step / "frames" / name))
+            ax.set_title(f"{cap}, cycle {int(name[6:12])}", fontsize=7)
+    fig.tight_layout()
+    fig.savefig(exp / "lab_in_fog.png", dpi=100)
+    plt.close(fig)
+    write_csv(exp / "lab_in_fog.csv", ["scene", "frames", "median frame ms (trace + fog pass)", "fog"], rows)
+    return "lab_in_fog.png", "lab_in_fog.csv"
+
+
 def fog_seed002(exp: Path, args):
     bench = exp / "bench"
     record = json.loads((bench / "bench.json").read_text())
@@ -89,6 +117,13 @@ def fog_seed002(exp: Path, args):
     if fig_png:
         figs.append({"caption": "The source's figures as S1-S3 analogues (assets unavailable; spec §4), "
                                 "the harness's defaults (N = 64, H table, √u axis)", "png": fig_png})
+
+    lab_png, lab_csv = lab_figure(exp)
+    if lab_png:
+        figs.append({"caption": "The lab in fog (beyond the source): Fig. 7.8's melting bunny, plain and under a "
+                                "spotlight at three fog densities (rows), the melt running (columns)", "png": lab_png,
+                     "data": lab_csv})
+        tables.append({"caption": "The lab in fog: frame times of the ice renderer with the fog pass", "csv": lab_csv})
 
     # ---- E1: table lookups ----
     t = read(bench / "tables.csv")

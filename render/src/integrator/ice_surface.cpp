@@ -1,6 +1,7 @@
 // Ray tracer of melting ice on a wet ground (integrator/ice_surface.h).
 
 #include <meltlab/render/integrator/ice_surface.h>
+#include <meltlab/render/fog/scene_fog.h>
 #include <meltlab/render/texture/filtered.h>
 #include <meltlab/render/material/optics.h>
 #include <meltlab/core/error.h>
@@ -105,6 +106,8 @@ IceRenderer::IceRenderer(RenderScene scene) : scene_(std::move(scene)) {
                                                      : read_rgb_image(scene_.ice.normal_map_file);
   if (!scene_.ice.texture_file.empty()) ice_tex_ = read_rgb_image(scene_.ice.texture_file);
   if (scene_.camera) camera_ = scene_.camera;
+  if (scene_.fog)
+    fog_ = std::make_unique<fog::FogShader>(*scene_.fog, std::vector<double>{scene_.ice.n_spec, scene_.ground.n_spec});
   if (scene_.texture_filter == TextureFilter::kMipmap) {
     filtered_ = std::make_unique<FilteredTextures>();
     env_id_ = filtered_->add(env_, FilteredTextures::Kind::kLatLongEnvironment, "environment");
@@ -226,6 +229,13 @@ Differential reflected_footprint(const Vector3d& V, const Differential& dd, cons
 }
 
 // Everything a frame needs, read-only while the tiles run.
+// The first surface along a primary ray (the fog pass needs its distance, point and normal).
+struct FirstSurface {
+  bool hit = false, ice = false;
+  double t = 0;
+  Vector3d p = Vector3d::Zero(), n = Vector3d::UnitZ();  ///< n: unit, facing the eye
+};
+
 struct FrameContext {
   const RenderScene& scene;
   const ShadingPlan& plan;
@@ -524,10 +534,21 @@ struct FrameContext {
   }
 
   // Radiance along the primary ray o + t·d (d unit); `rd` its footprint or nullptr.
-  Rgb shade(const Vector3d& o, const Vector3d& d, const RayDifferential* rd) const {
+  // `first` (if given) receives the first surface along the ray: for the fog pass.
+  Rgb shade(const Vector3d& o, const Vector3d& d, const RayDifferential* rd, FirstSurface* first = nullptr) const {
     MeshHit h;
     const double t_ground = (d.z() < 0 && o.z() > ground_z) ? (ground_z - o.z()) / d.z() : kInf;
-    if (bvh.intersect(o, d, 0.0, t_ground, h)) {
+    const bool ice = bvh.intersect(o, d, 0.0, t_ground, h);
+    if (first) {
+      *first = FirstSurface{};
+      if (ice) {
+        const Vector3d n = bvh.shading_normal(h);
+        *first = FirstSurface{true, true, h.t, o + h.t * d, n.dot(d) > 0 ? Vector3d(-n) : n};
+      } else if (t_ground < ground_far) {
+        *first = FirstSurface{true, false, t_ground, o + t_ground * d, Vector3d::UnitZ()};
+      }
+    }
+    if (ice) {
       const Vector3d p = o + h.t * d;
       const RayDifferential at_hit =
           rd ? RayDifferential{plane_footprint(o, d, *rd, p, h.ng, ground_far), rd->d} : RayDifferential{};
@@ -579,12 +600,20 @@ RgbImage IceRenderer::render() {
   const double z_top = std::max(bvh_.upper().z(), ground_z) + object_size_;
   const RayGenerator rays(cam, z_top);
   RgbImage img = rgb_image(w, h);
+  const fog::FogMaterial fog_ice = fog::FogShader::material(scene_.ice.cd, scene_.ice.cs, scene_.ice.n_spec);
+  const fog::FogMaterial fog_ground =
+      fog::FogShader::material(scene_.ground.cd, scene_.ground.cs, scene_.ground.n_spec);
   tbb::parallel_for(tbb::blocked_range2d<int>(0, h, 16, 0, w, 16), [&](const tbb::blocked_range2d<int>& r) {
     for (int j = r.rows().begin(); j < r.rows().end(); ++j)
       for (int i = r.cols().begin(); i < r.cols().end(); ++i) {
         const CameraRay ray = rays.generate_ray(i, j);
         if (!ray.ok) {
           set_rgb(img, i, j, Rgb::Zero());
+        } else if (fog_) {  // the fog pass on the shaded pixel (bilinear lookups)
+          FirstSurface first;
+          const Rgb c = ctx.shade(ray.origin, ray.direction, nullptr, &first);
+          const fog::SurfaceHit hit{first.p, first.n, first.ice ? &fog_ice : &fog_ground};
+          set_rgb(img, i, j, fog_->apply(c, ray.origin, ray.direction, first.t, first.hit ? &hit : nullptr));
         } else if (!ctx.filtered) {
           set_rgb(img, i, j, ctx.shade(ray.origin, ray.direction, nullptr));
         } else {  // the footprint: the rays through the next pixel to the right and below

@@ -33,6 +33,9 @@
 //   Rs and R*e use N* (`rs_uses_n_star`). Without a mask (or with no texel at or above p,
 //   or ground.liquid off) the ground is plain Phong (Eq. 2.13) × tdiff.
 // No shadows and no ice seen through the ground, as in the monograph.
+// Fog (scene `fog:`, seed 002): after a pixel is shaded, fog/scene_fog.h's FogShader attenuates
+// it by e^{-k_t m} (m: the first surface, ice or ground, or the fog's `far`) and adds each
+// spotlight's airlight and surface terms with the hit material's Phong coefficients.
 //
 // Texture lookups (scene `texture_filter`): `bilinear` (default) point-samples the environment,
 // the ground texture and the normal map bilinearly at their finest level, as the monograph's GPU
@@ -64,6 +67,9 @@
 namespace meltlab::render {
 
 class FilteredTextures;
+namespace fog {
+class FogShader;
+}
 
 /// Which terms a frame computes (from the scene's weights and the current mask).
 struct ShadingPlan {
@@ -111,6 +117,7 @@ class IceRenderer {
   const sim::LiquidMask* mask_ = nullptr;
   RgbImage env_, ground_tex_, normal_tex_, ice_tex_;  ///< ice_tex_: empty = the procedural milky ice
   std::unique_ptr<FilteredTextures> filtered_;        ///< texture_filter: mipmap
+  std::unique_ptr<fog::FogShader> fog_;               ///< scene `fog:` (fog/scene_fog.h)
   int env_id_ = -1, ground_id_ = -1, normal_id_ = -1, ice_id_ = -1;
   bool sized_ = false;
   double object_size_ = 1.0;
