@@ -2,6 +2,7 @@
 
 #include <meltlab/render/integrator/ice_photo.h>
 #include <meltlab/core/error.h>
+#include <meltlab/core/hash.h>
 #include <meltlab/core/image.h>
 
 #include <fmt/format.h>
@@ -28,17 +29,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // ---- hashing (counter-based, no shared state) ------------------------------------------
 
-inline std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
 inline std::uint64_t hash3(std::uint64_t a, std::uint64_t b, std::uint64_t c) {
   return splitmix64(splitmix64(splitmix64(a) ^ b) ^ c);
-}
-inline double to_unit(std::uint64_t h) {  // (0, 1)
-  return (static_cast<double>(h >> 11) + 0.5) * (1.0 / 9007199254740992.0);
 }
 
 // ---- ray / box ------------------------------------------------------------------------------
@@ -113,7 +105,7 @@ double ground_texture_impl(double x_m, double y_m, double scale_m, std::uint64_t
     auto fade = [](double t) { return t * t * t * (t * (t * 6 - 15) + 10); };
     const double tx = fade(x - fx), ty = fade(y - fy);
     auto lat = [&](std::int64_t a, std::int64_t b) {
-      return 2.0 * to_unit(hash3(seed * 8 + std::uint64_t(oct), std::uint64_t(a), std::uint64_t(b))) - 1.0;
+      return 2.0 * unit_from_bits(hash3(seed * 8 + std::uint64_t(oct), std::uint64_t(a), std::uint64_t(b))) - 1.0;
     };
     double* l = cache.lat[oct];
     if (cache.valid[oct] && cache.iy[oct] == iy && cache.ix[oct] + 1 == ix) {  // the next cell along x
@@ -305,7 +297,7 @@ cv::Mat develop_photo(const cv::Mat& radiance, const IcePhotoOptions& options) {
           const std::uint64_t id =
               (std::uint64_t(v) * std::uint64_t(lin.cols) + std::uint64_t(u)) * 3 + std::uint64_t(c);
           const std::uint64_t h = hash3(options.seed, id, 0x6e6f697365ull);
-          const double u1 = to_unit(h), u2 = to_unit(splitmix64(h));
+          const double u1 = unit_from_bits(h), u2 = unit_from_bits(splitmix64(h));
           x += options.noise_sigma * std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
         }
         o[u][c] = static_cast<std::uint8_t>(std::clamp(std::lround(x), 0L, 255L));

@@ -1,8 +1,10 @@
 // The volume integrator (see integrator/volume_integrator.h).
 
 #include <meltlab/render/integrator/volume_integrator.h>
+#include <meltlab/render/integrator/fast_exp.h>
 
 #include <meltlab/core/error.h>
+#include <meltlab/core/hash.h>
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -14,6 +16,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
 
@@ -27,13 +30,6 @@ constexpr std::size_t kMaxLights = 16;
 
 double ms_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
 }
 
 void validate(const Volume& volume, const VolumeRenderSettings& s) {
@@ -330,7 +326,7 @@ struct Kernel {
         offset_fraction = 0.5;
         break;
       case FirstOffset::kJitter:
-        offset_fraction = double(splitmix64(s.jitter_seed ^ splitmix64(pixel_id)) >> 11) * (1.0 / 9007199254740992.0);
+        offset_fraction = unit_from_bits(splitmix64(s.jitter_seed ^ splitmix64(pixel_id)));
         break;
     }
     const double length = t1 - t0;
@@ -456,17 +452,17 @@ struct Kernel {
             // volume); 1 - e^{-x} as -expm1 so a thin step keeps its digits.
             if constexpr (Q == Quadrature::kInclusive) {
               ext += w == h ? e : e * (w / h);
-              T = double(std::exp(float(-kappa_h * ext)));
+              T = double(exp_nonpositive(float(-kappa_h * ext)));
               k = T * g_step;
             } else if constexpr (Q == Quadrature::kExclusive) {
               k = T * g_step;
               ext += e * w;
-              T = double(std::exp(float(-s.kappa * ext)));
+              T = double(exp_nonpositive(float(-s.kappa * ext)));
             } else {
               const double sigma = s.kappa * e;
               k = T * (sigma > 0 ? double(-std::expm1(float(-sigma * w))) / sigma : w);
               ext += e * w;
-              T = double(std::exp(float(-s.kappa * ext)));
+              T = double(exp_nonpositive(float(-s.kappa * ext)));
             }
             if constexpr (emits) Ir += gr * k, Ig += gg * k, Ib += gb * k;
             if (T < s.ert_transmittance) {
@@ -881,8 +877,11 @@ VolumeFrame render_volume(const Volume& volume, const Camera& camera, const Volu
   return frame;
 }
 
-ShadowCache build_shadow_cache(const Volume& volume, const VolumeRenderSettings& settings, int light_index,
-                               VolumeRenderStats* stats) {
+namespace {
+
+/// Calls fn(kernel, light) with a kernel for the volume and light `light_index` of the settings.
+template <class Fn>
+auto with_kernel(const Volume& volume, const VolumeRenderSettings& settings, int light_index, const Fn& fn) {
   validate(volume, settings);
   return visit_samples(volume, [&](const auto& samples) {
     Macrocells macro;
@@ -891,8 +890,17 @@ ShadowCache build_shadow_cache(const Volume& volume, const VolumeRenderSettings&
     const auto lights = light_terms(volume, settings);
     if (light_index < 0 || light_index >= int(lights.size()))
       throw InputError(fmt::format("volume render: no light {}", light_index));
+    return fn(k, lights[std::size_t(light_index)]);
+  });
+}
+
+}  // namespace
+
+ShadowCache build_shadow_cache(const Volume& volume, const VolumeRenderSettings& settings, int light_index,
+                               VolumeRenderStats* stats) {
+  return with_kernel(volume, settings, light_index, [&](const auto& k, const LightTerm& l) {
     VolumeRenderStats st;
-    auto c = build_cache_impl(k, lights[std::size_t(light_index)], settings, st);
+    auto c = build_cache_impl(k, l, settings, st);
     if (stats) add_stats(*stats, st);
     return c;
   });
@@ -900,16 +908,9 @@ ShadowCache build_shadow_cache(const Volume& volume, const VolumeRenderSettings&
 
 double shadow_transmittance(const Volume& volume, const VolumeRenderSettings& settings, int light_index,
                             const Vec3& x) {
-  validate(volume, settings);
-  return visit_samples(volume, [&](const auto& samples) {
-    Macrocells macro;
-    if (settings.skip_empty && settings.address == VolumeAddress::kClamp) macro = build_macrocells(volume);
-    Kernel k(volume, settings, samples, std::move(macro));
-    const auto lights = light_terms(volume, settings);
-    if (light_index < 0 || light_index >= int(lights.size()))
-      throw InputError(fmt::format("volume render: no light {}", light_index));
+  return with_kernel(volume, settings, light_index, [&](const auto& k, const LightTerm& l) {
     std::int64_t n = 0;
-    return std::exp(-k.shadow_optical_depth(x, lights[std::size_t(light_index)], n));
+    return std::exp(-k.shadow_optical_depth(x, l, n));
   });
 }
 
