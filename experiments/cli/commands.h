@@ -26,6 +26,7 @@ Run add_predict(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_render(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_reproduce(CLI::App& app);
 Run add_volume(CLI::App& app, const std::vector<std::string>& command_line);
+Run add_fog(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_sweep(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_run_job(CLI::App& app, const std::vector<std::string>& command_line);
 

@@ -349,6 +349,13 @@ def scene_cases():
         "env_png_claims_30000": "environment: {file: env.png}\n",
         "ground_texture_truncated": "ground: {texture: tex.png}\n",
         "deep_nesting": "ice: " + "{a: " * 5000 + "1" + "}" * 5000 + "\n",
+        # The fog section (seed 002, render/fog/scene_fog.h).
+        "fog_no_spotlights": "fog: {kt: 0.1}\n",
+        "fog_spotlights_empty": "fog: {kt: 0.1, spotlights: []}\n",
+        "fog_kt_nan": "fog: {kt: .nan, spotlights: [{position: [0, 0, 3], target: [0, 0, 0]}]}\n",
+        "fog_target_is_position": "fog: {spotlights: [{position: [0, 0, 3], target: [0, 0, 3]}]}\n",
+        "fog_table_n_huge": "fog: {spotlights: [{position: [0, 0, 3], target: [0, 0, 0]}], table: {n: 100000000}}\n",
+        "fog_half_angle_90": "fog: {spotlights: [{position: [0, 0, 3], target: [0, 0, 0], half_angle_deg: 90}]}\n",
     }
     files = {"env.png": png_claiming(30000, 15000), "tex.png": png_claiming(64, 64)[:50]}
     cases = []
