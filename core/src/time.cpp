@@ -17,4 +17,10 @@ std::string utc_timestamp_iso8601(std::chrono::system_clock::time_point t) {
 
 std::string utc_timestamp_iso8601_now() { return utc_timestamp_iso8601(std::chrono::system_clock::now()); }
 
+double process_cpu_ms() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+}
+
 }  // namespace meltlab

@@ -1,5 +1,8 @@
 // `meltlab fog bench` (experiments/fog.h).
 
+#include <meltlab/experiments/csv_table.h>
+#include <meltlab/core/time.h>
+#include <meltlab/core/statistics.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
 #include <meltlab/core/run_folder.h>
@@ -37,30 +40,6 @@ constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180;
 // The relative errors of spec §3 divide by max(|reference|, kFloor × the image's maximum).
 constexpr double kFloor = 1e-4;
-
-double ms_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-class Csv {
- public:
-  explicit Csv(std::string header) : text_(std::move(header) + "\n") {}
-  template <class... A>
-  void row(const std::string& fmt_text, A&&... a) {
-    text_ += fmt::format(fmt::runtime(fmt_text), std::forward<A>(a)...) + "\n";
-  }
-  void write(const fs::path& f) const { write_text_atomically(f, text_); }
-
- private:
-  std::string text_;
-};
 
 void progress(const std::string& what) { std::fprintf(stderr, "meltlab: fog bench: %s\n", what.c_str()); }
 
@@ -175,7 +154,7 @@ const fog::FogTable& g_tables(int exponent, int n, double* build_ms = nullptr) {
 // ---- E1: lookup error of the tables -----------------------------------------------------------
 
 void study_tables(const FogBenchOptions& o, const fs::path& dir, json& record) {
-  Csv csv("table,warp,n,points,mean_rel,max_rel,mean_abs,max_abs,build_ms");
+  CsvTable csv("table,warp,n,points,mean_rel,max_rel,mean_abs,max_abs,build_ms");
   std::mt19937_64 rng(1);
   std::uniform_real_distribution<double> unit(0, 1);
   // F and H: 1e5 random (u, v) over the domain, u drawn √-uniform (dense near 0, the steep corner).
@@ -252,7 +231,7 @@ std::vector<E2Case> e2_cases(bool quick) {
 }
 
 void study_e2(const FogBenchOptions& o, const fs::path& dir, json& record) {
-  Csv csv("case,function,warp,n,lit,median,p99,max,mean,clamped_share");
+  CsvTable csv("case,function,warp,n,lit,median,p99,max,mean,clamped_share");
   const fog::FogModelOptions model;
   long long rejected = 0, total = 0;
   // Every airlight table once (F and H, both warps, every N), shared by the cases.
@@ -367,7 +346,7 @@ void study_e2(const FogBenchOptions& o, const fs::path& dir, json& record) {
 // ---- E3: surface terms against R-surf-model ---------------------------------------------------
 
 void study_e3(const FogBenchOptions& o, const fs::path& dir, json& record) {
-  Csv csv("kt,n,points,median,p99,max,mean");
+  CsvTable csv("kt,n,points,median,p99,max,mean");
   const fog::FogModelOptions model;
   const int points = o.quick ? 24 : 120;
   fog::SurfRefOptions ro;
@@ -422,7 +401,7 @@ void study_e3(const FogBenchOptions& o, const fs::path& dir, json& record) {
 // ---- the model error: L_p (accurate G) against R-surf-true ------------------------------------
 
 void study_model(const FogBenchOptions& o, const fs::path& dir, json& record) {
-  Csv csv("half_angle_deg,kt_l,l,kt,model,true,rel_error,fog_share,n_phi");
+  CsvTable csv("half_angle_deg,kt_l,l,kt,model,true,rel_error,fog_share,n_phi");
   const fog::FogModelOptions model;
   fog::SurfRefOptions ro;
   ro.rel_change = 1e-3;
@@ -507,7 +486,7 @@ double r_squared(const std::vector<double>& x, const std::vector<double>& y) {
 }
 
 void study_cost(const FogBenchOptions& o, const fs::path& dir, json& record) {
-  Csv csv("kind,x,lit_pixels,pixels,triangles,visibility_ms,shading_ms");
+  CsvTable csv("kind,x,lit_pixels,pixels,triangles,visibility_ms,shading_ms");
   const fog::FogModelOptions model;
   fog::TableOptions to;
   to.u_warp = fog::AxisWarp::kSqrt;
@@ -579,7 +558,7 @@ void study_cost(const FogBenchOptions& o, const fs::path& dir, json& record) {
 // ---- speed against ray marching at equal error ------------------------------------------------
 
 void study_speed(const FogBenchOptions& o, const fs::path& dir, json& record) {
-  Csv csv("scene,method,param,pixels,lit,airlight_ms,ns_per_pixel,median,p99,max,mean,steps_per_pixel");
+  CsvTable csv("scene,method,param,pixels,lit,airlight_ms,ns_per_pixel,median,p99,max,mean,steps_per_pixel");
   fog::FogModelOptions model;
   model.surface_direct = model.surface_fog = false;  // airlight only: the term both methods compute
   const int w = o.quick ? 128 : 320, h = o.quick ? 96 : 240;

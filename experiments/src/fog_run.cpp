@@ -1,5 +1,6 @@
 // `meltlab fog render` (experiments/fog.h).
 
+#include <meltlab/core/time.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
 #include <meltlab/core/image.h>
@@ -19,13 +20,7 @@ namespace meltlab::experiments {
 namespace fog = render::fog;
 using nlohmann::json;
 
-namespace {
-
-double ms_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
-
-}  // namespace
+namespace {}  // namespace
 
 fog::FogScene fog_scene_by_name(const std::string& name, double kt, int width, int height, int lights) {
   if (name == "sphere") return fog::scene_sphere(kt, width, height);

@@ -1,5 +1,6 @@
 // `meltlab render` (render_run.h).
 
+#include <meltlab/core/statistics.h>
 #include <meltlab/core/run_folder.h>
 #include <meltlab/experiments/render_run.h>
 #include <meltlab/experiments/render_json.h>
@@ -25,12 +26,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 // A relief texture for the threshold (Fig. 7.7a): smooth value noise mapped to [p/2, 3p/2].
 std::vector<float> relief_threshold(int w, int h, float p) {

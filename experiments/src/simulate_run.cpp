@@ -452,8 +452,7 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
   json run =
       run_record(p, result, simulator.mesh(), threads, exec, inverted_removed, times, total_s, checks, snapshots);
   if (!result.error.empty()) run["error"] = result.error;
-  commit_run(*p.output, std::move(run), provenance);
-  result.run_json = std::move(run);
+  result.run_json = commit_run(*p.output, std::move(run), provenance);
   return result;
 }
 

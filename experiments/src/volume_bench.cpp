@@ -1,5 +1,8 @@
 // `meltlab volume bench` (see volume_bench.h).
 
+#include <meltlab/experiments/csv_table.h>
+#include <meltlab/core/time.h>
+#include <meltlab/core/statistics.h>
 #include <meltlab/experiments/volume_bench.h>
 
 #include "volume_bench_clv.h"
@@ -67,16 +70,6 @@ render::VolumeRenderSettings seed_settings(OpticalModel model, int n) {
   return s;
 }
 
-double ms_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 struct Timed {
   double median_ms = 0, min_ms = 0, max_ms = 0;
   render::VolumeFrame frame;
@@ -117,19 +110,6 @@ double rel_rmse(const ImageF& a, const ImageF& b) {
   return r2 > 0 ? std::sqrt(d2 / r2) : std::sqrt(d2);
 }
 
-class Csv {
- public:
-  explicit Csv(std::string header) : text_(std::move(header) + "\n") {}
-  template <class... A>
-  void row(const std::string& fmt_text, A&&... a) {
-    text_ += fmt::format(fmt::runtime(fmt_text), std::forward<A>(a)...) + "\n";
-  }
-  void write(const fs::path& f) const { write_text_atomically(f, text_); }
-
- private:
-  std::string text_;
-};
-
 void progress(const std::string& what) { std::fprintf(stderr, "meltlab: volume bench: %s\n", what.c_str()); }
 
 /// The 1-, 5- and 15-minute load averages (the machine is shared: timings beside them).
@@ -162,7 +142,7 @@ void study_tables(const VolumeBenchOptions& o, const fs::path& dir, json& record
   };
   const std::vector<Config> configs = {
       {"5.1", 64, 512, {100, 64, 50}}, {"5.2", 64, 256, {100, 64}}, {"5.3", 128, 512, {50}}};
-  Csv csv(
+  CsvTable csv(
       "table,volume,pixels,samples,model,median_ms,min_ms,max_ms,fps,primary_samples,shadow_samples,cache_build_ms");
   std::map<int, render::Volume> volumes;
   for (const auto& c : configs) {
@@ -197,7 +177,7 @@ void study_tables(const VolumeBenchOptions& o, const fs::path& dir, json& record
 // ---- scaling (targets 9, 10, 12) -----------------------------------------------------------------
 
 void study_scaling(const VolumeBenchOptions& o, const fs::path& dir, json&) {
-  Csv csv("kind,model,x,median_ms,primary_samples,shadow_samples");
+  CsvTable csv("kind,model,x,median_ms,primary_samples,shadow_samples");
   const auto v = turbulence(render::VolumeKind::kTurbulenceBox, 64);
   const int side = o.quick ? 128 : 256;
   for (auto [model, sh] : {std::pair{OpticalModel::kEmission, render::ShadowMethod::kMarch},
@@ -261,7 +241,7 @@ void study_pareto(const VolumeBenchOptions& o, const fs::path& dir, json& record
   const double ref_ms = ms_since(t_ref);
   const ImageF ref_img = render::composite_over(ref, render::Rgb::Zero());
   write_image(dir / "pareto_reference.png", ref_img);
-  Csv csv("knob,value,median_ms,rel_rmse,primary_samples,shadow_samples,cache_build_ms,terminated");
+  CsvTable csv("knob,value,median_ms,rel_rmse,primary_samples,shadow_samples,cache_build_ms,terminated");
   auto measure = [&](const std::string& knob, const std::string& value, const render::VolumeRenderSettings& s) {
     const Timed t = time_render(v, cam, s, o.warmup, o.repeats);
     const double err = rel_rmse(render::composite_over(t.frame, render::Rgb::Zero()), ref_img);
@@ -312,7 +292,7 @@ void study_pareto(const VolumeBenchOptions& o, const fs::path& dir, json& record
   {
     auto s = base(100);
     s.shadow = render::ShadowMethod::kCache;
-    Csv cache_csv("cache_scale,build,points,mean_abs_error,max_abs_error,build_ms");
+    CsvTable cache_csv("cache_scale,build,points,mean_abs_error,max_abs_error,build_ms");
     for (auto build : {render::ShadowCacheBuild::kSweep, render::ShadowCacheBuild::kMarch})
       for (double scale : {0.5, 1.0, 2.0}) {
         s.shadow_cache_build = build;
@@ -388,7 +368,7 @@ void study_peer(const VolumeBenchOptions& o, const fs::path& dir, json& record) 
                                             render::Rgb::Zero());
   write_image(dir / "peer_reference.png", ref);
   const render::OpenVdbPeer peer(v);
-  Csv csv("renderer,step_voxels,median_ms,min_ms,rel_rmse_vs_reference,rel_diff_vs_openvdb,cache_build_ms");
+  CsvTable csv("renderer,step_voxels,median_ms,min_ms,rel_rmse_vs_reference,rel_diff_vs_openvdb,cache_build_ms");
   for (double step : {2.0, 1.0, 0.5}) {
     render::OpenVdbRenderSettings ps;
     ps.primary_step_voxels = ps.shadow_step_voxels = step;

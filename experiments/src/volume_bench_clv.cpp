@@ -1,5 +1,8 @@
 // `meltlab volume bench --study seed001-*`: seed 001's tables and studies (see volume_bench.h).
 
+#include <meltlab/experiments/csv_table.h>
+#include <meltlab/core/time.h>
+#include <meltlab/core/statistics.h>
 #include "volume_bench_clv.h"
 
 #include <meltlab/core/atomic_file.h>
@@ -41,23 +44,6 @@ namespace {
 
 void progress(const std::string& what) { std::fprintf(stderr, "meltlab: volume bench: %s\n", what.c_str()); }
 
-double ms_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
-
-double process_cpu_ms() {
-  timespec ts{};
-  ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 double stddev(const std::vector<double>& v) {
   if (v.size() < 2) return 0;
   const double m = std::accumulate(v.begin(), v.end(), 0.0) / double(v.size());
@@ -65,19 +51,6 @@ double stddev(const std::vector<double>& v) {
   for (double x : v) s += (x - m) * (x - m);
   return std::sqrt(s / double(v.size() - 1));
 }
-
-class Csv {
- public:
-  explicit Csv(std::string header) : text_(std::move(header) + "\n") {}
-  template <class... A>
-  void row(const std::string& fmt_text, A&&... a) {
-    text_ += fmt::format(fmt::runtime(fmt_text), std::forward<A>(a)...) + "\n";
-  }
-  void write(const fs::path& f) const { write_text_atomically(f, text_); }
-
- private:
-  std::string text_;
-};
 
 /// The load of the machine (the 1-minute load average), for the record beside every timing.
 double load_average() {
@@ -230,7 +203,7 @@ const char* memory_name(ClvMemory m) { return m == ClvMemory::kMmap ? "mmap" : "
 // ---- target 13: the generator ------------------------------------------------------------------------
 
 void study_generate(const VolumeBenchOptions& o, const fs::path& dir, json& record) {
-  Csv csv("n,layout,writer,batch,threads,seconds,samples,samples_per_second,file_bytes,expected_bytes");
+  CsvTable csv("n,layout,writer,batch,threads,seconds,samples,samples_per_second,file_bytes,expected_bytes");
   const fs::path tmp = dir / "generate.tmp.clv";
   auto run = [&](int n, ClvOrder order, bool naive) {
     const render::ShapesOptions so = shapes_for(n);
@@ -257,7 +230,7 @@ void study_generate(const VolumeBenchOptions& o, const fs::path& dir, json& reco
   for (auto order : {ClvOrder::kLinear, ClvOrder::kBlocked}) run(256, order, false);
   csv.write(dir / "generate.csv");
   // The cached volumes' sizes against the spec's arithmetic, and their statistics.
-  Csv sizes("n,layout,file_bytes,expected_bytes,occupancy,fraction_visible,shapes,object_size");
+  CsvTable sizes("n,layout,file_bytes,expected_bytes,occupancy,fraction_visible,shapes,object_size");
   std::vector<int> ns = {256, 800};
   if (!o.quick) ns.push_back(o.large_size);
   for (int n : ns)
@@ -296,7 +269,7 @@ void study_generate(const VolumeBenchOptions& o, const fs::path& dir, json& reco
 void study_tables(const VolumeBenchOptions& o, const fs::path& dir, json& record) {
   const int warm_fast = o.quick ? 1 : 2, rep_fast = o.quick ? 3 : 10;
   const int warm_slow = 0, rep_slow = o.quick ? 1 : 3;
-  Csv csv(
+  CsvTable csv(
       "table,volume,pixels,method,memory,samples_type,repeats,wall_ms,wall_sd_ms,cpu_ms,cpu_sd_ms,samples,skipped,"
       "terminated,rays,load_average");
   fs::create_directories(dir / "counts");
@@ -408,7 +381,7 @@ void study_large(const VolumeBenchOptions& o, const fs::path& dir, json& record)
   const int n = o.large_size;
   const int px = o.quick ? 350 : 700;
   const fs::path lin = cached_shapes(n, ClvOrder::kLinear), blk = cached_shapes(n, ClvOrder::kBlocked);
-  Csv csv(
+  CsvTable csv(
       "row,volume,pixels,method,memory,threads,repeats,wall_ms,wall_sd_ms,cpu_ms,samples,terminated,blocks_visible,"
       "block_tasks,queue_empty_fraction,load_ms,index_ms,load_average");
   auto row = [&](const std::string& name, const Method& m, const std::string& mem, int threads, const Timed& t,
@@ -470,7 +443,7 @@ void study_sweeps(const VolumeBenchOptions& o, const fs::path& dir, json& record
   const int px = o.quick ? 350 : 700;
   const Load l = load(cached_shapes(n, ClvOrder::kLinear), ClvMemory::kRam);
   const render::Camera cam = orbit_pose(l.clv.linear.domain(), px, 0);
-  Csv csv(
+  CsvTable csv(
       "sweep,value,tile,block_side,threads,wall_ms,wall_sd_ms,cpu_ms,block_tasks,queue_empty_fraction,busy_fraction,"
       "samples,load_average");
   auto measure = [&](const std::string& sweep, int value, const BrickedVolume& b,
@@ -526,7 +499,8 @@ void study_peer(const VolumeBenchOptions& o, const fs::path& dir, json& record) 
     return float(a >= 1 ? 50.0 : -std::log1p(-a));
   });
   const double convert_ms = ms_since(t0);
-  Csv csv("renderer,threads,wall_ms,wall_sd_ms,cpu_ms,samples,mean_abs_alpha_diff,max_abs_alpha_diff,load_average");
+  CsvTable csv(
+      "renderer,threads,wall_ms,wall_sd_ms,cpu_ms,samples,mean_abs_alpha_diff,max_abs_alpha_diff,load_average");
   // Ours: ERT + ESS, shading off (the peer cannot shade), image order and object order.
   auto s = settings_for(methods()[5], tf);
   s.tf.shading.enabled = false;
@@ -612,7 +586,7 @@ void study_steps(const VolumeBenchOptions& o, const fs::path& dir, json& record)
   const Timed ref = render_step(0.05, 1);
   const Image8 ref8 = render::tf_output_image(ref.frame, render::TfOutput::kPremultiplied);
   write_image(dir / "step_0.05.png", ref8);
-  Csv csv("step,wall_ms,samples,mean_abs_diff_levels,max_abs_diff_levels,load_average");
+  CsvTable csv("step,wall_ms,samples,mean_abs_diff_levels,max_abs_diff_levels,load_average");
   for (double step : {0.1, 0.2, 0.5, 0.9}) {
     const Timed t = render_step(step, 3);
     const Image8 img = render::tf_output_image(t.frame, render::TfOutput::kPremultiplied);
@@ -636,7 +610,7 @@ void study_ess(const VolumeBenchOptions& o, const fs::path& dir, json& record) {
   const Load l = load(cached_shapes(n, ClvOrder::kLinear), ClvMemory::kRam);
   const Volume& v = l.clv.linear;
   const auto ranges = render::VolumeRangeIndex::build(v);
-  Csv csv("pose,method,cpu_ms,wall_ms,samples,skipped,terminated,load_average");
+  CsvTable csv("pose,method,cpu_ms,wall_ms,samples,skipped,terminated,load_average");
   for (int pose = 0; pose < 8; ++pose) {
     const render::Camera cam = orbit_pose(v.domain(), px, pose);
     for (int mi : {2, 3, 4, 5}) {

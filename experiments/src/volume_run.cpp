@@ -1,5 +1,7 @@
 // `meltlab volume generate | render | info` (see volume_run.h).
 
+#include <meltlab/core/time.h>
+#include <meltlab/core/statistics.h>
 #include <meltlab/experiments/volume_run.h>
 
 #include <meltlab/core/atomic_file.h>
@@ -77,21 +79,6 @@ render::Camera resized(const render::Camera& c, int width, int height) {
   p.width = w;
   p.height = h;
   return p;
-}
-
-/// CPU time of the process (every thread), ms: on a shared machine a single-threaded frame's CPU
-/// time is steadier than its wall-clock time.
-double process_cpu_ms() {
-  timespec ts{};
-  ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 std::string order_name(render::ClvOrder o) { return o == render::ClvOrder::kBlocked ? "blocked" : "linear"; }

@@ -1,5 +1,6 @@
 // The volume integrator (see integrator/volume_integrator.h).
 
+#include <meltlab/core/time.h>
 #include <meltlab/render/integrator/volume_integrator.h>
 #include <meltlab/render/integrator/fast_exp.h>
 
@@ -32,10 +33,6 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::size_t kMaxLights = 16;
-
-double ms_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
 
 void validate_settings(const VolumeRenderSettings& s);
 

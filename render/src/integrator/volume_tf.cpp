@@ -10,6 +10,7 @@
 // then y, then z as a + (b - a) t. With N ≥ 2 the cell never leaves the volume, and in the blocked
 // layout never leaves its block (local corner ≤ B - 2).
 
+#include <meltlab/core/time.h>
 #include <meltlab/core/error.h>
 
 #include "volume_tracer_state.h"
@@ -47,10 +48,6 @@ using detail::TracerState;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kCellShift = 2;    // clv.ess.cell: 4 voxels
 constexpr int kRegionShift = 5;  // the multi-level index's upper level: 32 voxels (8³ cells)
-
-double ms_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
 
 // ---- storage ----------------------------------------------------------------------------------
 

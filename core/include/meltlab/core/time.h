@@ -1,6 +1,6 @@
 #pragma once
 // Wall-clock timestamps for records (run.json, fit.json, done.json, summary.json): one format
-// everywhere, so records sort and compare as text.
+// everywhere, so records sort and compare as text; and the one stopwatch of timings.
 
 #include <chrono>
 #include <string>
@@ -13,5 +13,14 @@ std::string utc_timestamp_iso8601(std::chrono::system_clock::time_point t);
 
 /// utc_timestamp_iso8601 of now.
 std::string utc_timestamp_iso8601_now();
+
+/// Milliseconds of wall-clock time since `t` (steady clock).
+inline double ms_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+}
+
+/// CPU time of the process (every thread), ms: on a shared machine a single-threaded frame's CPU
+/// time is steadier than its wall-clock time.
+double process_cpu_ms();
 
 }  // namespace meltlab
