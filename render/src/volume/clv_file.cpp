@@ -227,28 +227,35 @@ void write_all(int fd, const void* data, std::size_t n, const fs::path& file) {
   }
 }
 
+/// Block padding reaches past the volume (the writer zeroes it); stored samples end at the volume.
+bool padding(const std::array<int, 3>& n, int x, int y, int z) { return x >= n[0] || y >= n[1] || z >= n[2]; }
+
 class VolumeVoxels final : public VoxelSource {
  public:
   explicit VolumeVoxels(const Volume& v) : v_(v) {}
   std::uint8_t value(int x, int y, int z) const override {
+    if (padding(n_, x, y, z)) return 0;
     return static_cast<const std::uint8_t*>(v_.data())[x * st_[0] + y * st_[1] + z * st_[2]];
   }
 
  private:
   const Volume& v_;
   std::array<std::int64_t, 3> st_ = v_.strides();
+  std::array<int, 3> n_ = v_.dims();
 };
 
 class BrickVoxels final : public VoxelSource {
  public:
-  explicit BrickVoxels(const BrickedVolume& v) : s_(v.samples<std::uint8_t>()) {}
+  explicit BrickVoxels(const BrickedVolume& v) : s_(v.samples<std::uint8_t>()), n_(v.dims()) {}
   std::uint8_t value(int x, int y, int z) const override {
+    if (padding(n_, x, y, z)) return 0;
     const int bx = s_.block_of(x, 0), by = s_.block_of(y, 1), bz = s_.block_of(z, 2);
     return s_.block(bx, by, bz)[s_.local(x - bx * s_.stride, y - by * s_.stride, z - bz * s_.stride)];
   }
 
  private:
   BrickSamples<std::uint8_t> s_;
+  std::array<int, 3> n_;
 };
 
 }  // namespace

@@ -98,7 +98,8 @@ class VoxelSource {
   virtual ~VoxelSource() = default;
   virtual std::uint8_t value(int x, int y, int z) const = 0;
   /// out[i] = value(coords[i]) for a batch (a generator may cull its work by the batch's extent).
-  /// Coordinates of block padding (outside the volume) may be passed; the writer zeroes them.
+  /// Coordinates of block padding (outside the volume) may be passed to both; the writer zeroes
+  /// their values, so a source need only not read past its storage for them.
   virtual void fill(const VoxelCoord* coords, std::size_t n, std::uint8_t* out) const;
 };
 
