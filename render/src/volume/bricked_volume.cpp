@@ -86,10 +86,7 @@ std::array<int, 3> BrickedVolume::block_hi(int bx, int by, int bz) const {
 
 BrickedVolume BrickedVolume::from_volume(const Volume& src, int side) {
   BrickedVolume out = allocate(src.dims(), side, src.type(), "bricked volume");
-  out.origin_ = src.origin();
-  out.spacing_ = src.spacing();
-  out.placement_ = src.placement();
-  out.scale_ = src.value_scale();
+  out.place_like(src);
   const int B = side;
   visit_samples(src, [&](const auto& s) {
     using T = std::remove_cv_t<std::remove_pointer_t<decltype(s.data)>>;
@@ -116,20 +113,14 @@ BrickedVolume BrickedVolume::from_volume(const Volume& src, int side) {
 
 Volume BrickedVolume::to_volume() const {
   Volume v = Volume::allocate(n_[0], n_[1], n_[2], type_, "volume");
-  v.set_origin(origin_);
-  v.set_spacing(spacing_);
-  v.set_placement(placement_);
-  v.set_value_scale(scale_);
+  v.place_like(*this);
   visit_samples(*this, [&](const auto& s) {
     using T = std::remove_cv_t<std::remove_pointer_t<decltype(s.data)>>;
     T* dst = static_cast<T*>(v.mutable_data());
     tbb::parallel_for(0, n_[2], [&](int k) {
       for (int j = 0; j < n_[1]; ++j)
-        for (int i = 0; i < n_[0]; ++i) {
-          const int bx = s.block_of(i, 0), by = s.block_of(j, 1), bz = s.block_of(k, 2);
-          dst[i + std::int64_t(n_[0]) * (j + std::int64_t(n_[1]) * k)] =
-              s.block(bx, by, bz)[s.local(i - bx * s.stride, j - by * s.stride, k - bz * s.stride)];
-        }
+        for (int i = 0; i < n_[0]; ++i)
+          dst[i + std::int64_t(n_[0]) * (j + std::int64_t(n_[1]) * k)] = s.stored(i, j, k);
     });
     return 0;
   });
@@ -138,9 +129,7 @@ Volume BrickedVolume::to_volume() const {
 
 BrickedVolume BrickedVolume::to_float32() const {
   BrickedVolume out = allocate(n_, side_, SampleType::kFloat32, "bricked volume");
-  out.origin_ = origin_;
-  out.spacing_ = spacing_;
-  out.placement_ = placement_;
+  out.place_like(*this);
   out.scale_ = 1.0;
   auto* dst = static_cast<float*>(out.mutable_);
   visit_samples(*this, [&](const auto& s) {
@@ -151,35 +140,6 @@ BrickedVolume BrickedVolume::to_float32() const {
     return 0;
   });
   return out;
-}
-
-void BrickedVolume::fit_to_box(const Box3& box) {
-  const Eigen::Vector3d size = box.size();
-  if (!(size.minCoeff() > 0.0) || !size.allFinite())
-    throw InputError(
-        fmt::format("volume box must have positive, finite sides (got {} x {} x {})", size.x(), size.y(), size.z()));
-  for (int a = 0; a < 3; ++a) {
-    if (placement_ == SamplePlacement::kCellCentred) {
-      spacing_[a] = size[a] / n_[std::size_t(a)];
-      origin_[a] = box.lo[a] + 0.5 * spacing_[a];
-    } else {
-      spacing_[a] = size[a] / (n_[std::size_t(a)] - 1);
-      origin_[a] = box.lo[a];
-    }
-  }
-}
-
-Box3 BrickedVolume::domain() const {
-  Box3 b;
-  const Eigen::Vector3d n(n_[0], n_[1], n_[2]);
-  if (placement_ == SamplePlacement::kCellCentred) {
-    b.lo = origin_ - 0.5 * spacing_;
-    b.hi = origin_ + (n - Eigen::Vector3d::Constant(0.5)).cwiseProduct(spacing_);
-  } else {
-    b.lo = origin_;
-    b.hi = origin_ + (n - Eigen::Vector3d::Ones()).cwiseProduct(spacing_);
-  }
-  return b;
 }
 
 float BrickedVolume::value(int i, int j, int k) const {

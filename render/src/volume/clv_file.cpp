@@ -247,11 +247,7 @@ class VolumeVoxels final : public VoxelSource {
 class BrickVoxels final : public VoxelSource {
  public:
   explicit BrickVoxels(const BrickedVolume& v) : s_(v.samples<std::uint8_t>()), n_(v.dims()) {}
-  std::uint8_t value(int x, int y, int z) const override {
-    if (padding(n_, x, y, z)) return 0;
-    const int bx = s_.block_of(x, 0), by = s_.block_of(y, 1), bz = s_.block_of(z, 2);
-    return s_.block(bx, by, bz)[s_.local(x - bx * s_.stride, y - by * s_.stride, z - bz * s_.stride)];
-  }
+  std::uint8_t value(int x, int y, int z) const override { return padding(n_, x, y, z) ? 0 : s_.stored(x, y, z); }
 
  private:
   BrickSamples<std::uint8_t> s_;

@@ -42,16 +42,18 @@ struct BrickSamples {
   std::int64_t local(int lx, int ly, int lz) const { return (std::int64_t(lx) * side + ly) * side + lz; }
   /// The block holding voxel i on one axis (a voxel on a shared plane: the later block).
   int block_of(int i, int axis) const { return std::min(i / stride, nb[axis] - 1); }
-  /// The stored number of voxel (i, j, k), times the scale.
-  float at(int i, int j, int k) const {
+  /// The stored number of voxel (i, j, k) (inside the volume).
+  T stored(int i, int j, int k) const {
     const int bx = block_of(i, 0), by = block_of(j, 1), bz = block_of(k, 2);
-    return static_cast<float>(block(bx, by, bz)[local(i - bx * stride, j - by * stride, k - bz * stride)]) * scale;
+    return block(bx, by, bz)[local(i - bx * stride, j - by * stride, k - bz * stride)];
   }
+  /// The stored number of voxel (i, j, k), times the scale.
+  float at(int i, int j, int k) const { return static_cast<float>(stored(i, j, k)) * scale; }
 };
 
-class BrickedVolume {
+class BrickedVolume : public PlacedGrid {
  public:
-  BrickedVolume() = default;
+  BrickedVolume() : PlacedGrid(SampleType::kUint8, SamplePlacement::kNodes) {}
 
   /// Blocks per axis for N voxels and block side B: ceil((N - 1)/(B - 1)) (at least 1).
   static int blocks_per_axis(int n, int side);
@@ -72,19 +74,10 @@ class BrickedVolume {
   /// A float32 copy (values, scale 1): seed 001's "float" variant (4x the memory).
   BrickedVolume to_float32() const;
 
-  bool empty() const { return data_ == nullptr; }
-  int nx() const { return n_[0]; }
-  int ny() const { return n_[1]; }
-  int nz() const { return n_[2]; }
-  std::array<int, 3> dims() const { return n_; }
   int side() const { return side_; }
   std::array<int, 3> blocks() const { return nb_; }
   std::int64_t block_count() const { return std::int64_t(nb_[0]) * nb_[1] * nb_[2]; }
-  std::int64_t sample_count() const { return std::int64_t(n_[0]) * n_[1] * n_[2]; }
   std::int64_t stored_count() const { return block_count() * side_ * side_ * side_; }
-  SampleType type() const { return type_; }
-  const void* data() const { return data_; }
-  void* mutable_data() const { return mutable_; }
 
   /// The voxels block (bx, by, bz) stores, clipped to the volume: [lo, hi] per axis (inclusive).
   std::array<int, 3> block_lo(int bx, int by, int bz) const {
@@ -92,19 +85,6 @@ class BrickedVolume {
   }
   std::array<int, 3> block_hi(int bx, int by, int bz) const;
 
-  // --- placement and values (as Volume) ---
-  Eigen::Vector3d origin() const { return origin_; }
-  Eigen::Vector3d spacing() const { return spacing_; }
-  SamplePlacement placement() const { return placement_; }
-  void set_origin(const Eigen::Vector3d& o) { origin_ = o; }
-  void set_spacing(const Eigen::Vector3d& s) { spacing_ = s; }
-  void set_placement(SamplePlacement p) { placement_ = p; }
-  void fit_to_box(const Box3& box);
-  Box3 domain() const;
-  Eigen::Vector3d index_from_world(const Eigen::Vector3d& p) const { return (p - origin_).cwiseQuotient(spacing_); }
-  Eigen::Vector3d world_from_index(const Eigen::Vector3d& g) const { return origin_ + g.cwiseProduct(spacing_); }
-  double value_scale() const { return scale_; }
-  void set_value_scale(double s) { scale_ = s; }
   /// The value of voxel (i, j, k).
   float value(int i, int j, int k) const;
 
@@ -121,15 +101,8 @@ class BrickedVolume {
   }
 
  private:
-  std::shared_ptr<const void> owner_;
-  const void* data_ = nullptr;
-  void* mutable_ = nullptr;
-  SampleType type_ = SampleType::kUint8;
-  std::array<int, 3> n_{0, 0, 0}, nb_{0, 0, 0};
+  std::array<int, 3> nb_{0, 0, 0};
   int side_ = 0;
-  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero(), spacing_ = Eigen::Vector3d::Ones();
-  SamplePlacement placement_ = SamplePlacement::kNodes;
-  double scale_ = 1.0;
 };
 
 /// Calls fn(samples) with the typed view of the bricked volume's stored type.
