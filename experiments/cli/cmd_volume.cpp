@@ -21,7 +21,8 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
   // --- generate ---
   auto* gen = sub->add_subcommand("generate",
                                   "Write a generated volume: Perlin turbulence (box, sphere), fireball, constant; "
-                                  "seed 001's shapes and skull phantom (.clv, streamed)");
+                                  "seed 001's shapes and skull phantom (.clv, streamed); seed 003's CT phantom "
+                                  "(int16 .vlb or .nrrd)");
   auto g = std::make_shared<experiments::VolumeGenerateRunOptions>();
   auto kind = std::make_shared<std::string>("turbulence_box");
   auto size = std::make_shared<int>(64);
@@ -33,13 +34,16 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
   auto dims = std::make_shared<std::vector<int>>();
   auto layout = std::make_shared<std::string>("linear");
   auto quiet = std::make_shared<bool>(false);
-  gen->add_option("--kind", *kind, "turbulence_box, turbulence_sphere, fireball, constant, shapes or skull")
-      ->check(CLI::IsMember({"turbulence_box", "turbulence_sphere", "fireball", "constant", "shapes", "skull"}))
+  gen->add_option("--kind", *kind, "turbulence_box, turbulence_sphere, fireball, constant, shapes, skull or ct_phantom")
+      ->check(CLI::IsMember(
+          {"turbulence_box", "turbulence_sphere", "fireball", "constant", "shapes", "skull", "ct_phantom"}))
       ->default_val("turbulence_box");
   gen->add_option("--size", *size, "Samples per axis (seed 000: 64 or 128; seed 001: 800 or 2000)")
       ->check(CLI::Range(1, 100000))
       ->default_val(64);
-  gen->add_option("--dims", *dims, "Samples per axis x,y,z (instead of --size; the skull's default: 256,256,68)")
+  gen->add_option("--dims", *dims,
+                  "Samples per axis x,y,z (instead of --size; the skull's default: 256,256,68; ct_phantom's: "
+                  "256,256,113)")
       ->delimiter(',')
       ->expected(3)
       ->check(CLI::Range(1, 100000));
@@ -80,13 +84,23 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
       ->check(CLI::IsMember({"linear", "none"}))
       ->default_val("linear");
   gen->add_option("--constant", g->generate.constant, "Value of --kind constant")->default_val(1.0);
+  auto ct_spacing = std::make_shared<std::vector<double>>();
+  gen->add_option("--spacing", *ct_spacing, "ct_phantom: voxel spacing x,y,z (default 1,1,2)")
+      ->delimiter(',')
+      ->expected(3);
+  gen->add_option("--noise-hu", g->generate.ct.noise_sigma_hu, "ct_phantom: Gaussian noise sigma in HU (0: none)")
+      ->check(CLI::Range(0.0, 1e4))
+      ->default_val(20.0);
   gen->add_option("--quantization", *storage, "float32, uint8 or uint16 (vlr.data.quantization)")
       ->check(CLI::IsMember({"float32", "uint8", "uint16"}))
       ->default_val("float32");
   gen->add_option("--box", *box, "World box: cx,cy,cz,sx,sy,sz (default: the unit box [0,1]^3)")
       ->delimiter(',')
       ->expected(6);
-  gen->add_option("--out", g->out, "NAME.json (raw samples in NAME.raw beside it), NAME.vdb or NAME.clv (seed 001)")
+  gen->add_option(
+         "--out", g->out,
+         "NAME.json (raw samples in NAME.raw beside it), NAME.vdb, NAME.clv (seed 001), NAME.vlb, NAME.nrrd or "
+         "NAME.nhdr (seed 003)")
       ->required();
   gen->add_flag("--overwrite", g->overwrite, "Replace existing files");
 
@@ -109,7 +123,8 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
   ren->add_flag("--overwrite", r->overwrite, "Allow --out to hold a previous render");
 
   // --- info ---
-  auto* info = sub->add_subcommand("info", "Describe a volume file (.json header or .vdb) as JSON");
+  auto* info =
+      sub->add_subcommand("info", "Describe a volume file (.json header, .vdb, .clv, .vlb, .nrrd, .nhdr) as JSON");
   auto info_file = std::make_shared<std::string>();
   info->add_option("file", *info_file, "Volume file")->required();
 
@@ -149,6 +164,21 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
         // Table 5.1's volume: 68 slices of 256 x 256 (z the slice axis).
         g->generate.nx = g->generate.ny = 256;
         g->generate.nz = 68;
+      }
+      if (g->generate.kind == render::VolumeKind::kCtPhantom) {
+        if (dims->empty() && !gen->count("--size")) {
+          // Seed 003's CT head: 113 slices of 256 x 256 at spacing 1:1:2.
+          g->generate.nx = g->generate.ny = 256;
+          g->generate.nz = 113;
+        }
+        g->generate.ct.seed = gen->count("--seed") ? *seed : 1;
+        if (!ct_spacing->empty()) {
+          g->generate.ct.spacing = Eigen::Vector3d((*ct_spacing)[0], (*ct_spacing)[1], (*ct_spacing)[2]);
+          if (!(g->generate.ct.spacing.minCoeff() > 0) || !g->generate.ct.spacing.allFinite())
+            throw InputError("--spacing: three finite numbers > 0");
+        }
+      } else if (!ct_spacing->empty() || gen->count("--noise-hu")) {
+        throw InputError("--spacing, --noise-hu: options of --kind ct_phantom");
       }
       if (!dims->empty()) {
         g->generate.nx = (*dims)[0];

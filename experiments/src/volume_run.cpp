@@ -50,6 +50,11 @@ std::map<std::string, std::string> generator_record(const render::VolumeGenerate
             {"seed", std::to_string(g.shapes.seed)},
             {"rng", "xoshiro256** (splitmix64 seeding)"}};
   if (g.kind == render::VolumeKind::kSkull) return {{"kind", "skull"}, {"seed", std::to_string(g.shapes.seed)}};
+  if (g.kind == render::VolumeKind::kCtPhantom) {
+    render::CtPhantomOptions ct = g.ct;
+    ct.dims = {g.nx, g.ny, g.nz};
+    return render::describe_ct_phantom(ct);
+  }
   const auto& n = g.noise;
   return {{"kind", render::volume_kind_name(g.kind)},
           {"octaves", std::to_string(n.octaves)},
@@ -79,6 +84,20 @@ render::Camera resized(const render::Camera& c, int width, int height) {
   p.width = w;
   p.height = h;
   return p;
+}
+
+/// Seed 003's data choices of a render of a .vlb/.nrrd file (vsi.data.*); empty otherwise.
+json vsi_data_json(const render::VolumeScene& scene, const std::optional<render::Normalisation>& n) {
+  json j = json::object();
+  if (!n) return j;
+  j["data.norm_source"] = render::norm_source_name(n->source);
+  j["data.norm_range"] = {n->lo, n->hi};
+  j["data.scanned_range"] = {n->scanned_min, n->scanned_max};
+  j["data.constant"] = n->constant;
+  j["data.clipped"] = {n->clipped_low, n->clipped_high};
+  j["data.window_units"] = scene.volume.read.window_units == render::VlbWindowUnits::kValue ? "value" : "fraction";
+  j["data.internal_bits"] = "float32";
+  return j;
 }
 
 std::string order_name(render::ClvOrder o) { return o == render::ClvOrder::kBlocked ? "blocked" : "linear"; }
@@ -172,28 +191,61 @@ json volume_info(const fs::path& file) {
     j["file"] = file.string();
     return j;
   }
-  const render::Volume v = render::read_volume(file);
+  render::VolumeReadInfo info;
+  const render::Volume v = render::read_volume(file, {}, &info);
   json j = volume_json(v);
   j["file"] = file.string();
+  j["format"] = info.format;
+  if (render::is_medical_volume_file(file)) {
+    // The stored samples (before normalisation) and what the default load did.
+    j["stored"] = {{"sample_type", info.stored_type}, {"content_hash", info.samples_hash}};
+    if (info.normalisation)
+      j["normalisation"] = {{"norm_source", render::norm_source_name(info.normalisation->source)},
+                            {"range", {info.normalisation->lo, info.normalisation->hi}},
+                            {"scanned", {info.normalisation->scanned_min, info.normalisation->scanned_max}},
+                            {"constant", info.normalisation->constant}};
+    if (info.vlb)
+      j["vlb"] = {{"version", info.vlb->version},
+                  {"endian", info.vlb->endian == std::endian::big ? "big" : "little"},
+                  {"range", {info.vlb->min, info.vlb->max}},
+                  {"window", {info.vlb->window_lo, info.vlb->window_hi}}};
+  }
   return j;
 }
 
 json run_volume_generate(const VolumeGenerateRunOptions& o) {
   const std::string ext = o.out.extension().string();
-  if (ext != ".json" && ext != ".vdb" && ext != ".clv")
-    throw InputError(fmt::format(
-        "--out {}: name the header NAME.json (raw samples in NAME.raw), NAME.vdb or NAME.clv (seed 001's format)",
-        o.out.string()));
+  if (ext != ".json" && ext != ".vdb" && ext != ".clv" && !render::is_medical_volume_file(o.out))
+    throw InputError(
+        fmt::format("--out {}: name the header NAME.json (raw samples in NAME.raw), NAME.vdb, NAME.clv (seed 001's "
+                    "format), NAME.vlb, NAME.nrrd or NAME.nhdr (seed 003's)",
+                    o.out.string()));
   fs::path raw = o.out;
   raw.replace_extension(".raw");
   for (const fs::path& f : {o.out, raw}) {
     std::error_code ec;
     if (fs::is_directory(f, ec)) throw InputError(fmt::format("--out {}: is a folder", f.string()));
-    if (fs::exists(f, ec) && !o.overwrite && (f == o.out || ext == ".json"))
+    if (fs::exists(f, ec) && !o.overwrite && (f == o.out || ext == ".json" || ext == ".nhdr"))
       throw InputError(fmt::format("--out {}: exists (use --overwrite to replace it)", f.string()));
   }
   if (o.out.has_parent_path()) create_output_directories(o.out.parent_path(), "--out");
   if (ext == ".clv") return generate_clv(o);
+  if (render::is_medical_volume_file(o.out)) {
+    if (o.box) throw InputError("--box: .vlb and .nrrd volumes are placed by their spacing from the origin");
+    if (o.generate.kind == render::VolumeKind::kShapes || o.generate.kind == render::VolumeKind::kSkull)
+      throw InputError(fmt::format("--out {}: seed 001's volumes are written as .clv files", o.out.string()));
+    if (o.generate.kind == render::VolumeKind::kCtPhantom) {
+      // The phantom's int16 Hounsfield units, as the source's CT head.
+      render::CtPhantomOptions ct = o.generate.ct;
+      ct.dims = {o.generate.nx, o.generate.ny, o.generate.nz};
+      render::write_medical_volume(o.out, render::generate_ct_phantom(ct));
+    } else {
+      render::write_medical_volume(o.out, render::scalar_volume_of(render::generate_volume(o.generate)));
+    }
+    json j = volume_info(o.out);
+    j["generator"] = generator_record(o.generate);
+    return j;
+  }
   render::Volume v = render::generate_volume(o.generate);
   if (o.box) v.fit_to_box(*o.box);
   render::write_volume(o.out, v, generator_record(o.generate));
@@ -282,6 +334,7 @@ VolumeRenderRunResult run_tf_render(const VolumeRenderRunOptions& o, render::Vol
   json clv = json::object();
   for (const auto& [k, v] : render::describe_clv(scene, volume)) clv[k] = v;
   j["clv"] = clv;
+  if (const json vsi = vsi_data_json(scene, volume.normalisation); !vsi.empty()) j["vsi"] = vsi;
   const render::Box3 d = volume.domain();
   const auto dims = volume.is_bricked() ? volume.bricked.dims() : volume.dense.dims();
   j["volume"] = {
@@ -331,7 +384,9 @@ VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
   if (scene.settings.samples < 1) throw InputError("--samples must be >= 1");
   if (scene.settings.model == render::OpticalModel::kTransferFunction) return run_tf_render(o, scene);
   if (o.sample_counts) throw InputError("--sample-counts is for model transfer_function");
-  const render::Volume volume = render::load_scene_volume(scene);
+  const render::SceneVolume loaded = render::load_scene_volumes(scene);
+  if (loaded.is_bricked()) (void)render::load_scene_volume(scene);  // refuses a blocked volume, naming it
+  const render::Volume& volume = loaded.dense;
   ImageF background;
   if (scene.mode == render::VolumeOutputMode::kComposite) {
     background = read_image(scene.background_image);
@@ -418,6 +473,7 @@ VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
   json vlr = json::object();
   for (const auto& [k, v] : render::describe_vlr(scene, volume)) vlr[k] = v;
   j["vlr"] = vlr;
+  if (const json vsi = vsi_data_json(scene, loaded.normalisation); !vsi.empty()) j["vsi"] = vsi;
   j["volume"] = volume_json(volume);
   if (scene.volume.generate) j["volume"]["generator"] = generator_record(*scene.volume.generate);
   if (!scene.volume.file.empty()) j["volume"]["file"] = scene.volume.file.string();

@@ -634,6 +634,85 @@ def clv_cases():
     return cases
 
 
+def vlb_header(dims="2 2 2", typ="int16", endian="little", spacing="1. 1. 2.", rng="-1117 2248", window="0 1",
+               version="VLB.1"):
+    return f"{version}\n{dims}\n{typ}\n{endian}\n{spacing}\n{rng}\n{window}\n".encode()
+
+
+def medical_cases():
+    """Seed 003's medical volume files (.vlb, .nrrd, .nhdr): lying sample counts, unknown types,
+    zero, negative and overflowing dimensions, truncated headers, unsupported encodings, corrupt
+    gzip; each refused with FILE:LINE (or the data file) before anything is allocated."""
+    cam = "camera: {type: pinhole, width: 8, height: 8, fov_deg: 30, eye: [40, -30, 20], target: [1, 1, 1]}\n"
+    nrrd = b"NRRD0004\ntype: int16\ndimension: 3\nsizes: 2 2 2\nendian: little\n"
+    files = {
+        "vlb_samples_short": ("v.vlb", vlb_header() + b"\1" * 15),
+        "vlb_samples_long": ("v.vlb", vlb_header() + b"\1" * 17),
+        "vlb_type_unknown": ("v.vlb", vlb_header(typ="int24") + b"\1" * 24),
+        "vlb_type_int64": ("v.vlb", vlb_header(typ="int64") + b"\1" * 64),
+        "vlb_dims_zero": ("v.vlb", vlb_header(dims="0 2 2")),
+        "vlb_dims_negative": ("v.vlb", vlb_header(dims="-2 2 2") + b"\1" * 16),
+        "vlb_dims_two": ("v.vlb", vlb_header(dims="2 2") + b"\1" * 8),
+        "vlb_dims_overflow": ("v.vlb", vlb_header(dims="2147483647 2147483647 2147483647") + b"\1" * 16),
+        "vlb_dims_over_the_limit": ("v.vlb", vlb_header(dims="65535 65535 65535") + b"\1" * 16),
+        "vlb_dims_claim_terabytes_double": ("v.vlb", vlb_header(dims="2147483647 2147483647 2", typ="double")),
+        "vlb_header_cut": ("v.vlb", vlb_header()[:20]),
+        "vlb_empty": ("v.vlb", b""),
+        "vlb_version_2": ("v.vlb", vlb_header(version="VLB.2") + b"\1" * 16),
+        "vlb_endian_middle": ("v.vlb", vlb_header(endian="middle") + b"\1" * 16),
+        "vlb_spacing_zero": ("v.vlb", vlb_header(spacing="1 0 1") + b"\1" * 16),
+        "vlb_range_reversed": ("v.vlb", vlb_header(rng="5 -5") + b"\1" * 16),
+        "vlb_window_empty": ("v.vlb", vlb_header(window="1 1") + b"\1" * 16),
+        "vlb_float_nan": ("v.vlb", vlb_header(dims="2 1 1", typ="float") + b"\0\0\x80\x3f\0\0\xc0\x7f"),
+        "vlb_binary": ("v.vlb", bytes((i * 97 + 13) % 256 for i in range(4096))),
+        "nrrd_samples_short": ("v.nrrd", nrrd + b"encoding: raw\n\n" + b"\1" * 15),
+        "nrrd_encoding_ascii": ("v.nrrd", nrrd + b"encoding: ascii\n\n1 2 3 4 5 6 7 8\n"),
+        "nrrd_gzip_corrupt": ("v.nrrd", nrrd + b"encoding: gzip\n\n" + b"\x1f\x8b" + b"\1" * 30),
+        "nrrd_gzip_bomb_claim": ("v.nrrd", nrrd.replace(b"2 2 2", b"4096 4096 1024") + b"encoding: gzip\n\n\x1f\x8b\1"),
+        "nrrd_dimension_4": ("v.nrrd", b"NRRD0004\ntype: int16\ndimension: 4\n"),
+        "nrrd_sizes_zero": ("v.nrrd", b"NRRD0004\ntype: int16\ndimension: 3\nsizes: 0 2 2\n"),
+        "nrrd_oblique": ("v.nrrd", nrrd + b"encoding: raw\nspace directions: (1,1,0) (0,1,0) (0,0,1)\n\n" + b"\1" * 16),
+        "nrrd_no_data": ("v.nrrd", nrrd + b"encoding: raw\n"),
+        "nrrd_text": ("v.nrrd", b"this is not a volume\n"),
+        "nhdr_data_missing": ("v.nhdr", nrrd + b"encoding: raw\ndata file: w.raw\n"),
+    }
+    named = {"nhdr_data_missing": "w.raw"}
+    cases = []
+    for n, (name, data) in files.items():
+        names = [named.get(n, name)]
+        cases.append(Case(f"volume/{n}/info", ["volume", "info", "{f}"], {name: data}, names=names))
+        scene = "model: transfer_function\nvolume: {file: %s}\n" % name + cam
+        cases.append(Case(f"volume/{n}/render", ["volume", "render", "--scene", "{f}", "--out", "{out}"],
+                          {"s.yaml": scene, name: data}, names=names))
+    good = vlb_header(dims="4 4 4") + bytes(range(128))
+    tf = "model: transfer_function\nvolume: {file: v.vlb, %s}\n" + cam
+    scenes = {
+        "vlb_normalise_unknown": tf % "normalise: minmax",
+        "vlb_window_units_unknown": tf % "window_units: percent",
+        "normalise_for_generated": "model: transfer_function\nvolume: {generate: {kind: ct_phantom, dims: [8, 8, 8]}, "
+                                   "normalise: header}\n" + cam,
+        "ct_phantom_noise_negative": "model: transfer_function\nvolume: {generate: {kind: ct_phantom, dims: [8, 8, 8], "
+                                     "noise_hu: -1}}\n" + cam,
+    }
+    for n, t in scenes.items():
+        cases.append(Case(f"volume/{n}", ["volume", "render", "--scene", "{f}", "--out", "{out}"],
+                          {"s.yaml": t, "v.vlb": good}, names=["s.yaml"]))
+    o = ["volume", "generate", "--kind", "ct_phantom"]
+    cases += [
+        Case("volume/generate_ct_phantom_dims_one", o + ["--dims", "1,4,4", "--out", "{out}.vlb"], names=["ct_phantom"]),
+        Case("volume/generate_ct_phantom_spacing_zero", o + ["--spacing", "1,0,2", "--out", "{out}.vlb"],
+             names=["--spacing"]),
+        Case("volume/generate_ct_phantom_noise_negative", o + ["--noise-hu", "-3", "--out", "{out}.vlb"],
+             names=["--noise-hu"]),
+        Case("volume/generate_noise_hu_for_turbulence", ["volume", "generate", "--noise-hu", "3", "--out", "{out}.vlb"],
+             names=["--noise-hu"]),
+        Case("volume/generate_ct_phantom_box", o + ["--box", "0,0,0,1,1,1", "--out", "{out}.vlb"], names=["--box"]),
+        Case("volume/generate_shapes_vlb", ["volume", "generate", "--kind", "shapes", "--size", "8", "--out", "{out}.vlb"],
+             names=["--out"]),
+    ]
+    return cases
+
+
 def run_case(meltlab, case, root, fixtures, asan):
     work = tempfile.mkdtemp(prefix="case-", dir=root)
     first = None
@@ -707,7 +786,7 @@ def main():
     ap.add_argument("--list", action="store_true")
     a = ap.parse_args()
     cases = (mesh_cases() + manifest_cases() + kl_cases() + scene_cases() + reproduce_cases() + sweep_cases() +
-             option_cases() + volume_cases() + clv_cases())
+             option_cases() + volume_cases() + clv_cases() + medical_cases())
     cases = [c for c in cases if a.only in c.name]
     if a.list:
         for c in cases:

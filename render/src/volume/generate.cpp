@@ -138,6 +138,11 @@ Volume generate_voxels(const VolumeGenerateOptions& o) {
 
 Volume generate_volume(const VolumeGenerateOptions& o) {
   if (o.kind == VolumeKind::kShapes || o.kind == VolumeKind::kSkull) return generate_voxels(o);
+  if (o.kind == VolumeKind::kCtPhantom) {
+    CtPhantomOptions ct = o.ct;
+    ct.dims = {o.nx, o.ny, o.nz};
+    return normalised_volume(generate_ct_phantom(ct), NormSource::kScanned, 0, 0, nullptr, "ct_phantom");
+  }
   if (o.noise.octaves < 1 || o.noise.octaves > 16)
     throw InputError(fmt::format("volume generator: octaves must be in [1, 16] (got {})", o.noise.octaves));
   if (!(o.noise.gain > 0) || !(o.noise.lacunarity > 0) || !(o.noise.base_frequency > 0) ||
@@ -175,6 +180,7 @@ Volume generate_volume(const VolumeGenerateOptions& o) {
               case VolumeKind::kConstant:
               case VolumeKind::kShapes:
               case VolumeKind::kSkull:
+              case VolumeKind::kCtPhantom:
                 break;
             }
           }
@@ -198,16 +204,19 @@ std::string volume_kind_name(VolumeKind kind) {
       return "shapes";
     case VolumeKind::kSkull:
       return "skull";
+    case VolumeKind::kCtPhantom:
+      return "ct_phantom";
   }
   return "turbulence_box";
 }
 
 VolumeKind parse_volume_kind(const std::string& name, const std::string& what) {
   for (VolumeKind k : {VolumeKind::kTurbulenceBox, VolumeKind::kTurbulenceSphere, VolumeKind::kFireball,
-                       VolumeKind::kConstant, VolumeKind::kShapes, VolumeKind::kSkull})
+                       VolumeKind::kConstant, VolumeKind::kShapes, VolumeKind::kSkull, VolumeKind::kCtPhantom})
     if (volume_kind_name(k) == name) return k;
   throw InputError(
-      fmt::format("{}: unknown volume kind '{}' (turbulence_box, turbulence_sphere, fireball, constant, shapes, skull)",
+      fmt::format("{}: unknown volume kind '{}' (turbulence_box, turbulence_sphere, fireball, constant, shapes, skull, "
+                  "ct_phantom)",
                   what, name));
 }
 

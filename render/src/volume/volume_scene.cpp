@@ -32,7 +32,7 @@ VolumeGenerateOptions parse_generate(const ConfigSection& g) {
   VolumeGenerateOptions o;
   o.kind = parse_volume_kind(
       g.get_choice("kind", "turbulence_box",
-                   {"turbulence_box", "turbulence_sphere", "fireball", "constant", "shapes", "skull"}),
+                   {"turbulence_box", "turbulence_sphere", "fireball", "constant", "shapes", "skull", "ct_phantom"}),
       g.where());
   if (g.has("size") && g.has("dims")) g.fail("give 'size' or 'dims', not both");
   if (g.has("dims")) {
@@ -41,6 +41,9 @@ VolumeGenerateOptions parse_generate(const ConfigSection& g) {
       if (!(x >= 1 && x <= 4096 && x == std::floor(x)))
         g.fail_at("dims", "'dims' must be three whole numbers in [1, 4096]");
     o.nx = int(d[0]), o.ny = int(d[1]), o.nz = int(d[2]);
+  } else if (o.kind == VolumeKind::kCtPhantom && !g.has("size")) {
+    o.nx = o.ny = 256;  // the source's CT head: 113 slices of 256 x 256
+    o.nz = 113;
   } else {
     o.nx = o.ny = o.nz = g.get_in_range<int>("size", 64, 1, 4096);
   }
@@ -61,6 +64,13 @@ VolumeGenerateOptions parse_generate(const ConfigSection& g) {
     o.shapes.count = g.get_in_range<int>("shapes", 70, 0, 1000000);
     o.shapes.sample = g.get_in_range<int>("sample", 100, 10, 245);
     o.shapes.object_size = g.get_in_range<int>("object_size", 70, 1, 1 << 20);
+  }
+  if (o.kind == VolumeKind::kCtPhantom) {
+    // Seed 003 (vsi.testgen): the noise seed (default 1) and sigma in HU.
+    o.ct.seed = seed_value >= 0 ? std::uint64_t(seed_value) : 1;
+    o.ct.noise_sigma_hu = g.get_in_range<double>("noise_hu", 20.0, 0.0, 1e4);
+    o.ct.spacing = g.get_vec3("spacing", Eigen::Vector3d(1, 1, 2));
+    if (!(o.ct.spacing.minCoeff() > 0)) g.fail_at("spacing", "'spacing' must be three numbers > 0");
   }
   o.falloff =
       g.get_choice("falloff", "linear", {"linear", "none"}) == "none" ? SphereFalloff::kNone : SphereFalloff::kLinear;
@@ -169,7 +179,8 @@ VolumeScene parse_volume_scene(const ConfigSection& c, const fs::path& base_dir)
     if (!(size.minCoeff() > 0)) b->fail_at("size", "'size' must be three numbers > 0");
     scene.volume.box = Box3{centre - 0.5 * size, centre + 0.5 * size};
   } else if (scene.volume.generate && scene.volume.generate->kind != VolumeKind::kShapes &&
-             scene.volume.generate->kind != VolumeKind::kSkull) {
+             scene.volume.generate->kind != VolumeKind::kSkull &&
+             scene.volume.generate->kind != VolumeKind::kCtPhantom) {
     scene.volume.box = Box3{Eigen::Vector3d::Constant(-150), Eigen::Vector3d::Constant(150)};  // the seed's Box300
   }
   s.address =
@@ -182,6 +193,17 @@ VolumeScene parse_volume_scene(const ConfigSection& c, const fs::path& base_dir)
                         : layout == "blocked" ? VolumeLayout::kBlocked
                                               : VolumeLayout::kAsStored;
   scene.volume.block_side = v.get_in_range<int>("block_side", 16, 2, 255);
+  // Seed 003's medical files (.vlb, .nrrd, .nhdr): vsi.data.norm_source and vsi.data.window_units.
+  const std::string norm = v.get_choice("normalise", "scanned", {"scanned", "header", "window", "none"});
+  scene.volume.read.norm = norm == "header"   ? NormSource::kHeader
+                           : norm == "window" ? NormSource::kWindow
+                           : norm == "none"   ? NormSource::kNone
+                                              : NormSource::kScanned;
+  scene.volume.read.window_units = v.get_choice("window_units", "fraction", {"fraction", "value"}) == "value"
+                                       ? VlbWindowUnits::kValue
+                                       : VlbWindowUnits::kFraction;
+  if (v.has("normalise") && !(scene.volume.generate ? false : is_medical_volume_file(scene.volume.file)))
+    v.fail_at("normalise", "'normalise' applies to .vlb, .nrrd and .nhdr files only");
   // --- camera ---
   scene.camera = parse_camera(c.section("camera"));
   if (!std::holds_alternative<Pinhole>(scene.camera)) c.fail_at("camera", "the volume renderer needs a pinhole camera");
@@ -318,7 +340,9 @@ SceneVolume load_scene_volumes(const VolumeScene& scene) {
     else
       out.dense = c.linear;
   } else {
-    out.dense = read_volume(src.file);
+    VolumeReadInfo info;
+    out.dense = read_volume(src.file, src.read, &info);
+    out.normalisation = info.normalisation;
   }
   // The layout asked for (converted in memory).
   if (src.layout == VolumeLayout::kBlocked && !out.is_bricked()) {

@@ -11,7 +11,12 @@
 //                base_frequency: 4, clip: per_octave, seed: 0, falloff: linear, quantization: float32}
 //     # seed 001: {kind: shapes, size: 256 (or dims: [x, y, z]), shapes: 70, sample: 100,
 //     #            object_size: 70, seed: 2} | {kind: skull, dims: [256, 256, 68], seed: 1}
+//     # seed 003: {kind: ct_phantom, dims: [256, 256, 113], spacing: [1, 1, 2], noise_hu: 20, seed: 1}
 //     # or file: cloud.vdb | volume.json | volume.clv  (meltlab's raw + header, OpenVDB, seed 001's)
+//     #        | head.vlb | head.nrrd | head.nhdr      (seed 003's medical formats)
+//     normalise: scanned          # .vlb/.nrrd/.nhdr: vsi.data.norm_source: scanned | header | window
+//                                 # (VLB lines 6, 7) | none (stored values, e.g. HU)
+//     window_units: fraction      # vsi.data.window_units: VLB line 7 as fractions of line 6 | value
 //     box: {centre: [0, 0, 0], size: [300, 300, 300]}   # the seed's Box300 (default for seed 000's
 //                                                       # generated volumes; seed 001's: voxel units)
 //     address: clamp              # vlr.tex.address: clamp | wrap
@@ -53,6 +58,7 @@
 #include <meltlab/render/integrator/volume_integrator.h>
 #include <meltlab/render/volume/clv_file.h>
 #include <meltlab/render/volume/generate.h>
+#include <meltlab/render/volume/volume_io.h>
 
 #include <filesystem>
 #include <optional>
@@ -77,7 +83,8 @@ struct VolumeSource {
   ClvMemory memory = ClvMemory::kMmap;            ///< .clv files
   ClvSamples samples = ClvSamples::kStored;       ///< stored numbers or float32 at load
   VolumeLayout layout = VolumeLayout::kAsStored;
-  int block_side = 16;  ///< layout: blocked
+  int block_side = 16;     ///< layout: blocked
+  VolumeReadOptions read;  ///< .vlb, .nrrd, .nhdr: normalisation
 };
 
 /// vlr.output.mode.
@@ -112,7 +119,8 @@ Volume load_scene_volume(const VolumeScene& scene);
 struct SceneVolume {
   Volume dense;
   BrickedVolume bricked;
-  std::optional<ClvHeader> clv;  ///< the header of a .clv file
+  std::optional<ClvHeader> clv;                ///< the header of a .clv file
+  std::optional<Normalisation> normalisation;  ///< a .vlb, .nrrd or .nhdr file: what its load did
   bool is_bricked() const { return !bricked.empty(); }
   Box3 domain() const { return is_bricked() ? bricked.domain() : dense.domain(); }
 };
