@@ -118,9 +118,11 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
               ++cnt.classified;
               const Eigen::Vector3d g = (p - origin).cwiseProduct(inv_spacing);
               const float f = samples.trilinear_clamped(float(g.x()), float(g.y()), float(g.z()));
-              const TfValue tv = s_.tfs[std::size_t(m - 1)].evaluate((double(f) - lo_) * inv_range);
-              if (!(tv.alpha > 0)) continue;
-              const double a = tv.alpha;
+              const TransferFunction& tf = s_.tfs[std::size_t(m - 1)];
+              const double fn = (double(f) - lo_) * inv_range;
+              const double a = tf.alpha_at(fn);
+              if (!(a > 0)) continue;
+              const TfValue tv = tf.evaluate(fn);
               const double ac = exponent == 1.0 ? a : 1.0 - std::pow(1.0 - a, exponent);
               Eigen::Vector3d c = tv.rgb;
               if (lit) {

@@ -133,6 +133,12 @@ TfValue TransferFunction::evaluate(double v) const {
   return out;
 }
 
+double TransferFunction::alpha_at(double v) const {
+  if (kind_ == TfKind::kPiecewiseLinear) return curves_[3].at(v);
+  const int i = find(v);
+  return i < 0 ? 0.0 : ranges_[std::size_t(i)].alpha;
+}
+
 int TransferFunction::find(double v) const {
   for (std::size_t i = 0; i < ranges_.size(); ++i)
     if (ranges_[i].contains(v)) return int(i);

@@ -77,6 +77,8 @@ class TransferFunction {
   const std::array<TfCurve, 4>& curves() const { return curves_; }
   /// The TF at v (either kind; colour in [0, 1] units).
   TfValue evaluate(double v) const;
+  /// α(v) alone (evaluate(v).alpha, bit for bit): callers skip the colour where it is 0.
+  double alpha_at(double v) const;
 
   /// The spec's tables (§3).
   static TransferFunction shapes();
