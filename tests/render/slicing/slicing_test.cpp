@@ -59,6 +59,16 @@ TEST(SlicingTf, PiecewiseLinearCurvesInterpolateAndClampAtTheEnds) {
   const TransferFunction c = TransferFunction::skull();
   EXPECT_DOUBLE_EQ(c.evaluate(100).rgb.x(), 1.0);
   EXPECT_DOUBLE_EQ(c.evaluate(10).alpha, 0.0);
+  // The ray caster's kernel tables ranges: it refuses the linear kind instead of rendering nothing.
+  VolumeRenderSettings rc;
+  rc.model = OpticalModel::kTransferFunction;
+  rc.tf.table = tf;
+  rc.step_rule = StepRule::kFixedStep;
+  rc.step = 0.5;
+  Volume v = Volume::allocate(4, 4, 4, SampleType::kFloat32);
+  EXPECT_THROW(check_volume_render_settings(v, rc), InputError);
+  rc.tf.table = c;
+  EXPECT_NO_THROW(check_volume_render_settings(v, rc));
   std::array<TfCurve, 4> bad;
   bad[3].points = {{0.5, 0.1}, {0.5, 0.2}};
   EXPECT_THROW(TransferFunction::piecewise_linear(bad), InputError);
