@@ -409,6 +409,7 @@ VolumeRenderRunResult run_slicing_render(const VolumeRenderRunOptions& o, render
   j["stats"] = {{"rays", frame.stats.rays},
                 {"samples", frame.stats.samples},
                 {"samples_past_mask", frame.stats.classified},
+                {"samples_skipped_empty", frame.stats.skipped},
                 {"slices", frame.stats.slices},
                 {"slice_spacing", frame.stats.slice_spacing}};
   if (gradients)

@@ -19,8 +19,10 @@ namespace {
 
 /// Per-tile counters, summed after the frame.
 struct TileCounts {
-  std::int64_t rays = 0, samples = 0, classified = 0;
+  std::int64_t rays = 0, samples = 0, classified = 0, skipped = 0;
 };
+
+constexpr int kCellShift = 3;  // 8 voxels per empty-space cell
 
 }  // namespace
 
@@ -65,6 +67,38 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
   } else {
     grad_.reset();
   }
+  if (s_.skip_empty) {
+    // Min and max over each cell's voxels [8c, 8c + 8] (the +1 is the trilinear neighbour).
+    for (int a = 0; a < 3; ++a) cells_[std::size_t(a)] = ((volume.dims()[std::size_t(a)] - 1) >> kCellShift) + 1;
+    live_.assign(std::size_t(cells_[0]) * cells_[1] * cells_[2], 0);
+    std::array<bool, 4> used{true, false, false, false};
+    if (!s_.mask.empty()) {
+      const auto h = s_.mask.histogram();
+      for (int i = 0; i < 4; ++i) used[std::size_t(i)] = h[std::size_t(i) + 1] > 0;
+    }
+    const double inv = 1.0 / (hi_ - lo_);
+    visit_samples(volume, [&](const auto v) {
+      tbb::parallel_for(0, cells_[2], [&](int ck) {
+        for (int cj = 0; cj < cells_[1]; ++cj)
+          for (int ci = 0; ci < cells_[0]; ++ci) {
+            double mn = 1e300, mx = -1e300;
+            for (int k = ck << kCellShift; k <= std::min((ck + 1) << kCellShift, v.nz - 1); ++k)
+              for (int j = cj << kCellShift; j <= std::min((cj + 1) << kCellShift, v.ny - 1); ++j)
+                for (int i = ci << kCellShift; i <= std::min((ci + 1) << kCellShift, v.nx - 1); ++i) {
+                  const double x = double(v.at(i, j, k));
+                  mn = std::min(mn, x);
+                  mx = std::max(mx, x);
+                }
+            const double pad = 1e-5 * std::max({std::abs(mn), std::abs(mx), 1.0});
+            const double a = (mn - pad - lo_) * inv, b = (mx + pad - lo_) * inv;
+            bool live = false;
+            for (int t = 0; t < 4; ++t)
+              live = live || (used[std::size_t(t)] && s_.tfs[std::size_t(t)].visible_in(a, b));
+            live_[std::size_t(ci) + std::size_t(cells_[0]) * (std::size_t(cj) + std::size_t(cells_[1]) * ck)] = live;
+          }
+      });
+    });
+  }
 }
 
 SlicingFrame SlicingRenderer::render(const Camera& camera) const {
@@ -86,6 +120,8 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
   frame.stats.slice_spacing = stack.spacing;
   const bool lit = slicing_needs_gradients(s_);
   const bool use_mask = !s_.mask.empty();
+  const bool skip = !live_.empty();
+  const std::array<int, 3> dims = volume_.dims();
   const double inv_range = 1.0 / (hi_ - lo_);
   const Eigen::Vector3d origin = volume_.origin(), inv_spacing = volume_.spacing().cwiseInverse();
   std::array<VolumeSamples<std::uint8_t>, 3> gch;
@@ -113,10 +149,22 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             for (int k = rs.k_first; k <= rs.k_last; ++k) {
               ++cnt.samples;
               const Eigen::Vector3d p = ray.origin + rs.t(stack, k) * ray.direction;
+              const Eigen::Vector3d g = (p - origin).cwiseProduct(inv_spacing);
+              if (skip) {
+                int c[3];
+                for (int a = 0; a < 3; ++a) {
+                  const int i = std::clamp(int(std::floor(float(g[a]))), 0, dims[a] - 1);
+                  c[a] = i >> kCellShift;
+                }
+                if (!live_[std::size_t(c[0]) +
+                           std::size_t(cells_[0]) * (std::size_t(c[1]) + std::size_t(cells_[1]) * c[2])]) {
+                  ++cnt.skipped;
+                  continue;
+                }
+              }
               const int m = use_mask ? s_.mask.lookup(p) : 1;
               if (m == 0) continue;
               ++cnt.classified;
-              const Eigen::Vector3d g = (p - origin).cwiseProduct(inv_spacing);
               const float f = samples.trilinear_clamped(float(g.x()), float(g.y()), float(g.z()));
               const TransferFunction& tf = s_.tfs[std::size_t(m - 1)];
               const double fn = (double(f) - lo_) * inv_range;
@@ -180,6 +228,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
     frame.stats.rays += c.rays;
     frame.stats.samples += c.samples;
     frame.stats.classified += c.classified;
+    frame.stats.skipped += c.skipped;
   }
   const auto t1 = std::chrono::steady_clock::now();
   frame.rgb = apply_bloom(frame.raw, s_.post);
@@ -251,6 +300,7 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
   add("post.sigma/radius", fmt::format("{} half-res px, radius ceil(3 sigma)", num(s.post.sigma)));
   add("post.bloom_blend", fmt::format("additive, gain {}", num(s.post.gain)));
   add("post.render_target", "float32");
+  add("skip_empty", s.skip_empty ? "8^3 cells, exact (same image)" : "off");
   return r;
 }
 

@@ -133,6 +133,7 @@ SlicingScene parse_slicing_scene(const ConfigSection& c) {
   }
   s.tile = c.get_in_range<int>("tile", 16, 1, 4096);
   s.parallel = c.get<bool>("parallel", true);
+  s.skip_empty = c.get<bool>("skip_empty", true);
   return out;
 }
 

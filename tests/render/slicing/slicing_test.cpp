@@ -298,7 +298,7 @@ TEST(SlicingRender, BlendConvergesToTheRayCasterAsQualityClassFalls) {
 }
 
 TEST(SlicingRender, SerialAndParallelFramesAreBitwiseEqualInEveryMode) {
-  const Volume v = make_test_field(TestField::kSphere, 24);
+  const Volume v = make_test_field(TestField::kSphere, 40);  // 5³ cells of 8³: the corners are empty
   const Camera cam = camera_30deg(40, 30, v.domain(), Eigen::Vector3d(1.5, -2.0, 1.0));
   SlicingSettings s;
   s.value_range = std::make_pair(0.0, 1.0);
@@ -311,6 +311,13 @@ TEST(SlicingRender, SerialAndParallelFramesAreBitwiseEqualInEveryMode) {
     const SlicingFrame b = render_slicing(v, cam, s);
     EXPECT_EQ(a.raw, b.raw) << slicing_mode_name(m);
     EXPECT_GT(a.stats.classified, 0);
+    // Empty-space skipping changes no pixel (it only leaves out samples of α = 0).
+    s.skip_empty = false;
+    const SlicingFrame c = render_slicing(v, cam, s);
+    s.skip_empty = true;
+    EXPECT_EQ(a.raw, c.raw) << slicing_mode_name(m);
+    EXPECT_GT(a.stats.skipped, 0);
+    EXPECT_EQ(c.stats.skipped, 0);
   }
 }
 

@@ -27,6 +27,7 @@
 //     bloom: {enabled: false, contrast: 1, brightness: 0, gamma: 1, threshold: 0.7, sigma: 2, gain: 1}
 //     tile: 16
 //     parallel: true
+//     skip_empty: true            # 8³ cells where no TF in use is visible are not fetched (same image)
 
 #include <meltlab/render/slicing/slicing_renderer.h>
 
