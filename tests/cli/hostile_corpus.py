@@ -543,6 +543,22 @@ def volume_cases():
         "scene_background_claims_30000": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n" + cam +
                                          "output: {mode: composite, background_image: bg.png}\n",
         "scene_fov_and_fx": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n" + cam.replace("fov_deg: 40", "fov_deg: 40, fx: 9"),
+        # seed 003's slicing renderer (method: slicing)
+        "slicing_no_tfs": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  mode: blend\n",
+        "slicing_tf_x_not_increasing": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{a: [[0.5, 0.1], [0.2, 0.3]]}]\n",
+        "slicing_tf_alpha_above_one": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 1.5]]}]\n",
+        "slicing_tf_short_row": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1]]}]\n",
+        "slicing_five_tfs": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{a: [[0, 1]]}, {a: [[0, 1]]}, {a: [[0, 1]]}, {a: [[0, 1]]}, {a: [[0, 1]]}]\n",
+        "slicing_qc_zero": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  quality_class: 0\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n",
+        "slicing_mode_unknown": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  mode: xray\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n",
+        "slicing_mask_index_5": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  mask: {edits: [{shape: box, centre: [0.5, 0.5, 0.5], size: [1, 1, 1], index: 5}]}\n",
+        "slicing_mask_shape_unknown": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  mask: {edits: [{shape: cone, centre: [0.5, 0.5, 0.5], index: 0}]}\n",
+        "slicing_mask_zero_size": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  mask: {edits: [{shape: ellipsoid, centre: [0.5, 0.5, 0.5], radii: [0, 1, 1], index: 0}]}\n",
+        "slicing_mask_resolution_huge": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  mask: {resolution: [100000, 1, 1]}\n",
+        "slicing_gradient_bits_6": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  gradient: {bits: 6}\n",
+        "slicing_with_ray_caster_key": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\nsampling: {n: 10}\n",
+        "slicing_section_without_method": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n",
+        "slicing_bloom_sigma_zero": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  bloom: {enabled: true, sigma: 0}\n",
     }
     for n, t in scenes.items():
         cases.append(Case(f"volume/{n}", ["volume", "render", "--scene", "{f}", "--out", "{out}"],

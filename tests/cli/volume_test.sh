@@ -104,6 +104,41 @@ PY
     expect_err "missing.json"
     expect_one_line_err
     ;;
+  slicing_render)
+    # Seed 003: method: slicing in every mode (the example scene, small), the gradient cache reused
+    # on the second run, the vsi.* record, the combined mode flagged as the spec's interpretation.
+    export MELTLAB_DATA_DIR="$PWD/data"
+    for mode in blend mip combined; do
+      sed -e "s/mode: combined /mode: $mode /" -e 's/dims: \[256, 256, 68\]/dims: [48, 48, 20]/' \
+        "$CONFIGS/slicing_skull.yaml" > "s_$mode.yaml"
+      run_ok "$M" volume render --scene "s_$mode.yaml" --width 80 --height 60 --frames 1 --out "r_$mode"
+      for f in image.png image.exr render.json; do [ -s "r_$mode/$f" ] || fail "r_$mode/$f missing"; done
+    done
+    run_ok "$M" volume render --scene s_mip.yaml --width 80 --height 60 --frames 1 --out r_mip2
+    cmp -s r_mip/image.png r_mip2/image.png || fail "the cached gradients gave another image"
+    py <<'PY'
+import json, struct
+for mode in ['blend', 'mip', 'combined']:
+    j = json.load(open(f'r_{mode}/render.json'))
+    v = j['vsi']
+    assert j['method'] == 'slicing' and v['vsi.mode'] == mode, v
+    assert v['vsi.cpu.realisation'] == 'per-pixel ray-plane sampling' and v['vsi.mask.resolution'] == '100 x 100 x 100'
+    assert v['vsi.combined.rule'].startswith('OUR INTERPRETATION'), v['vsi.combined.rule']
+    assert j['stats']['samples'] > j['stats']['samples_past_mask'] > 0, j['stats']
+    assert ('gradients' in j) == (mode != 'blend'), mode
+    w, h = struct.unpack('>II', open(f'r_{mode}/image.png', 'rb').read(24)[16:24])
+    assert (w, h) == (80, 60), (mode, w, h)
+assert json.load(open('r_mip/render.json'))['gradients']['from_cache'] is False
+assert json.load(open('r_mip2/render.json'))['gradients']['from_cache'] is True
+PY
+    ls data/slicing-gradients/*.grad >/dev/null || fail "no gradient cache file"
+    # A bad key inside the slicing section: file:line, nothing written.
+    printf 'method: slicing\nvolume: {generate: {kind: constant, size: 4}}\ncamera: {type: pinhole, width: 8, height: 8, fov_deg: 30, eye: [400, 0, 0], target: [0, 0, 0]}\nslicing:\n  quality_class: 0\n  transfer_functions: [{a: [[0, 1]]}]\n' > bad_s.yaml
+    expect_exit 2 "$M" volume render --scene bad_s.yaml --out rb
+    expect_err "bad_s.yaml:5"
+    expect_one_line_err
+    expect_no_dir rb
+    ;;
   seed001_generate_and_info)
     # Seed 001's shapes volume in both orders: the file sizes of the spec's arithmetic (§2.1),
     # the header read back, the generator's statistics, the naive writer's bytes.

@@ -1077,6 +1077,9 @@ void validate_tf(const VolumeRenderSettings& s, bool bricked) {
   if (!(sh.ka >= 0 && sh.ks >= 0 && sh.q >= 0 && std::isfinite(sh.ka) && std::isfinite(sh.ks) && std::isfinite(sh.q)))
     bad("the shading's ka, ks and q must be finite and >= 0");
   if (s.tf.table.ranges().size() > 64) bad("a transfer function has at most 64 ranges");
+  if (s.tf.table.kind() != TfKind::kPiecewiseConstant)
+    bad("the ray caster's transfer_function model reads piecewise-constant TFs (piecewise-linear ones: method: "
+        "slicing)");
   if (s.tile < 1 || s.tile > 4096) bad(fmt::format("the tile side must be in [1, 4096] (got {})", s.tile));
   if (s.render_threads < 0 || s.render_threads > 1024)
     bad(fmt::format("the render thread count must be in [0, 1024] (got {})", s.render_threads));

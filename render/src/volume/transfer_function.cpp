@@ -77,6 +77,68 @@ TransferFunction TransferFunction::named(const std::string& name, const std::str
   throw InputError(fmt::format("{}: unknown transfer function '{}' (shapes, skull, or a list of ranges)", what, name));
 }
 
+double TfCurve::at(double x) const {
+  if (points.empty()) return 0;
+  if (!(x > points.front().x())) return points.front().y();  // NaN reads the first value
+  if (x >= points.back().x()) return points.back().y();
+  const auto it =
+      std::upper_bound(points.begin(), points.end(), x, [](double v, const Eigen::Vector2d& p) { return v < p.x(); });
+  const Eigen::Vector2d& b = *it;
+  const Eigen::Vector2d& a = *(it - 1);
+  const double t = (x - a.x()) / (b.x() - a.x());
+  return a.y() + t * (b.y() - a.y());
+}
+
+double TfCurve::max_in(double lo, double hi) const {
+  double m = std::max(at(lo), at(hi));  // linear pieces: the extremes are at the ends or at points
+  for (const auto& p : points)
+    if (p.x() > lo && p.x() < hi) m = std::max(m, p.y());
+  return m;
+}
+
+TransferFunction TransferFunction::piecewise_linear(const std::array<TfCurve, 4>& rgba, std::string name,
+                                                    const std::string& what) {
+  static const char* channel[4] = {"r", "g", "b", "a"};
+  for (int c = 0; c < 4; ++c) {
+    const auto& pts = rgba[std::size_t(c)].points;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      if (!pts[i].allFinite())
+        throw InputError(fmt::format("{}: channel {}: control point {} is not finite", what, channel[c], i + 1));
+      if (!(pts[i].y() >= 0 && pts[i].y() <= 1))
+        throw InputError(fmt::format("{}: channel {}: control point {} has y = {} outside [0, 1]", what, channel[c],
+                                     i + 1, pts[i].y()));
+      if (i > 0 && !(pts[i].x() > pts[i - 1].x()))
+        throw InputError(fmt::format("{}: channel {}: control point x must increase strictly ({} after {})", what,
+                                     channel[c], pts[i].x(), pts[i - 1].x()));
+    }
+  }
+  TransferFunction tf;
+  tf.kind_ = TfKind::kPiecewiseLinear;
+  tf.curves_ = rgba;
+  tf.name_ = std::move(name);
+  return tf;
+}
+
+TfValue TransferFunction::evaluate(double v) const {
+  TfValue out;
+  if (kind_ == TfKind::kPiecewiseLinear) {
+    out.rgb = Eigen::Vector3d(curves_[0].at(v), curves_[1].at(v), curves_[2].at(v));
+    out.alpha = curves_[3].at(v);
+    return out;
+  }
+  const int i = find(v);
+  if (i < 0) return out;
+  out.rgb = ranges_[std::size_t(i)].rgb / 255.0;
+  out.alpha = ranges_[std::size_t(i)].alpha;
+  return out;
+}
+
+double TransferFunction::alpha_at(double v) const {
+  if (kind_ == TfKind::kPiecewiseLinear) return curves_[3].at(v);
+  const int i = find(v);
+  return i < 0 ? 0.0 : ranges_[std::size_t(i)].alpha;
+}
+
 int TransferFunction::find(double v) const {
   for (std::size_t i = 0; i < ranges_.size(); ++i)
     if (ranges_[i].contains(v)) return int(i);
@@ -84,11 +146,13 @@ int TransferFunction::find(double v) const {
 }
 
 bool TransferFunction::visible_at(double v) const {
+  if (kind_ == TfKind::kPiecewiseLinear) return curves_[3].at(v) > 0;
   const int i = find(v);
   return i >= 0 && ranges_[std::size_t(i)].alpha > 0;
 }
 
 bool TransferFunction::visible_in(double lo, double hi) const {
+  if (kind_ == TfKind::kPiecewiseLinear) return curves_[3].max_in(lo, hi) > 0;
   for (const auto& r : ranges_)
     if (r.alpha > 0 && meets(r, lo, hi)) return true;
   return false;

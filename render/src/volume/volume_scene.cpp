@@ -155,6 +155,14 @@ VolumeLight parse_light(const ConfigSection& c) {
 
 VolumeScene parse_volume_scene(const ConfigSection& c, const fs::path& base_dir) {
   VolumeScene scene;
+  if (c.get_choice("method", "ray_casting", {"ray_casting", "slicing"}) == "slicing") {
+    for (const char* key : {"model", "sampling", "quadrature", "optics", "transfer_function", "lights", "shadow",
+                            "acceleration", "traversal", "rays"})
+      if (c.has(key)) c.fail_at(key, fmt::format("'{}' is for method: ray_casting (slicing reads 'slicing:')", key));
+    scene.slicing = parse_slicing_scene(c.section("slicing"));
+  } else if (c.has("slicing")) {
+    c.fail_at("slicing", "'slicing' is for method: slicing");
+  }
   VolumeRenderSettings& s = scene.settings;
   const std::string model =
       c.get_choice("model", "emission_absorption",
@@ -304,6 +312,10 @@ VolumeScene parse_volume_scene(const ConfigSection& c, const fs::path& base_dir)
     if (scene.mode == VolumeOutputMode::kStandalone && !scene.background_image.empty())
       out->fail_at("background_image", "'background_image' is for mode: composite");
     scene.exposure = out->get_in_range<double>("exposure", 1.0, 0.0, 1e12);
+  }
+  if (scene.slicing) {
+    scene.slicing->settings.background = s.background;
+    if (scene.mode == VolumeOutputMode::kComposite) c.fail_at("output", "method: slicing renders standalone frames");
   }
   if (const auto t = c.optional_section("timing")) {
     scene.warmup_frames = t->get_in_range<int>("warmup", 3, 0, 1000);

@@ -10,11 +10,19 @@
 //            (100, 115) → (90, 210, 20), α 0.6
 //   skull:   (40, 240) → (255, 255, 255), α 1   (the repo's colour is not given; white)
 //
+// Seed 003 (spec ../shared/spec/volume-slicing-importance.md §2.4) adds the second kind of the same
+// concept: a piecewise-LINEAR RGBA TF edited as per-channel curves through control points
+// (x = the normalised value, y = the channel in [0, 1]; constant beyond the first and last point).
+// Both kinds answer evaluate(v) (colour in [0, 1] units: a constant TF's 0-255 colour / 255),
+// visible_at and visible_in; the ray caster's TF model reads the constant kind only (its kernel
+// tables the ranges), the slicing renderer (render/slicing/) either kind.
+//
 // The "characteristic" of a TF (the value ranges that map to α > 0) lets the empty-space indexes
 // decide from a cell's [min, max] alone whether any interpolated value in it can be visible.
 
 #include <Eigen/Core>
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -32,6 +40,24 @@ struct TfRange {
   std::string bounds_text() const;
 };
 
+/// One channel of a piecewise-linear TF: control points (x, y), x strictly increasing.
+struct TfCurve {
+  std::vector<Eigen::Vector2d> points;
+  /// y(x): linear between points, the end values beyond them; 0 for an empty curve.
+  double at(double x) const;
+  /// The largest y over the closed interval [lo, hi].
+  double max_in(double lo, double hi) const;
+};
+
+/// The two kinds of transfer function.
+enum class TfKind { kPiecewiseConstant, kPiecewiseLinear };
+
+/// A TF value: colour in [0, 1] units and opacity α ∈ [0, 1].
+struct TfValue {
+  Eigen::Vector3d rgb = Eigen::Vector3d::Zero();
+  double alpha = 0;
+};
+
 class TransferFunction {
  public:
   /// α = 0 everywhere.
@@ -40,6 +66,19 @@ class TransferFunction {
   /// a colour outside [0, 255] or not finite, or two ranges that overlap. Ranges are kept sorted.
   TransferFunction(std::vector<TfRange> ranges, std::string name = "custom",
                    const std::string& what = "transfer function");
+
+  /// Seed 003's piecewise-linear TF from four curves (r, g, b, a). Throws InputError (naming
+  /// `what`) for a curve with x not strictly increasing or not finite, or y outside [0, 1].
+  static TransferFunction piecewise_linear(const std::array<TfCurve, 4>& rgba, std::string name = "linear",
+                                           const std::string& what = "transfer function");
+
+  TfKind kind() const { return kind_; }
+  /// The curves of a piecewise-linear TF (r, g, b, a); empty for the constant kind.
+  const std::array<TfCurve, 4>& curves() const { return curves_; }
+  /// The TF at v (either kind; colour in [0, 1] units).
+  TfValue evaluate(double v) const;
+  /// α(v) alone (evaluate(v).alpha, bit for bit): callers skip the colour where it is 0.
+  double alpha_at(double v) const;
 
   /// The spec's tables (§3).
   static TransferFunction shapes();
@@ -59,6 +98,8 @@ class TransferFunction {
  private:
   std::vector<TfRange> ranges_;
   std::string name_ = "none";
+  TfKind kind_ = TfKind::kPiecewiseConstant;
+  std::array<TfCurve, 4> curves_;
 };
 
 /// Parses "(85, 95]" / "[0, 1)" ... into a range's bounds (colour and α left as they are).

@@ -53,9 +53,15 @@
 //   rays: {method: analytic, camera_inside: reject}
 //   output: {mode: standalone, background: [0, 0, 0], background_image: earth.png, exposure: 1}
 //   timing: {warmup: 3, frames: 20}   # vlr.timing.protocol: frames rendered, the median reported
+//   method: ray_casting           # ray_casting (the volume integrator) | slicing (seed 003: the
+//                                 # `slicing:` section of slicing/slicing_scene.h; volume, camera,
+//                                 # output and timing as above; the ray caster's model, sampling,
+//                                 # optics, lights, shadow, acceleration, traversal and rays keys are
+//                                 # refused with it)
 
 #include <meltlab/render/camera.h>
 #include <meltlab/render/integrator/volume_integrator.h>
+#include <meltlab/render/slicing/slicing_scene.h>
 #include <meltlab/render/volume/clv_file.h>
 #include <meltlab/render/volume/generate.h>
 #include <meltlab/render/volume/volume_io.h>
@@ -102,6 +108,8 @@ struct VolumeScene {
   double exposure = 1.0;                          ///< PNG: colours times this, clamped to [0, 1]
   TfOutput tf_output = TfOutput::kPremultiplied;  ///< model transfer_function: the 8-bit image
   int warmup_frames = 0, timed_frames = 1;
+  /// method: slicing (seed 003) — its settings; nullopt: the ray caster.
+  std::optional<SlicingScene> slicing;
 };
 
 /// Reads a scene file; relative paths in it are taken from the scene's folder.

@@ -1,0 +1,307 @@
+// Seed 003's slicing renderer (see slicing/slicing_renderer.h).
+
+#include <meltlab/render/slicing/slicing_renderer.h>
+
+#include <meltlab/core/error.h>
+#include <meltlab/core/time.h>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range2d.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace meltlab::render {
+
+namespace {
+
+/// Per-tile counters, summed after the frame.
+struct TileCounts {
+  std::int64_t rays = 0, samples = 0, classified = 0, skipped = 0;
+};
+
+constexpr int kCellShift = 3;  // 8 voxels per empty-space cell
+
+}  // namespace
+
+std::string slicing_mode_name(SlicingMode m) {
+  return m == SlicingMode::kBlend ? "blend" : m == SlicingMode::kMip ? "mip" : "combined";
+}
+
+bool slicing_needs_gradients(const SlicingSettings& s) { return s.mode != SlicingMode::kBlend || s.lit_blend; }
+
+void check_slicing_settings(const Volume& volume, const SlicingSettings& s) {
+  auto bad = [](const std::string& m) { throw InputError("slicing: " + m); };
+  if (volume.empty()) bad("no volume");
+  if (!(s.quality_class >= 0.01 && s.quality_class <= 1000))
+    bad(fmt::format("quality_class must be in [0.01, 1000] (the source's [0.1, inf); got {})", s.quality_class));
+  if (s.tile < 1 || s.tile > 4096) bad(fmt::format("tile must be in [1, 4096] (got {})", s.tile));
+  if (s.value_range && !(s.value_range->second > s.value_range->first)) bad("the value range needs hi > lo");
+  const BlinnPhong& L = s.light;
+  if (!(L.ambient >= 0 && L.diffuse >= 0 && L.specular >= 0 && L.exponent >= 0 && L.gate >= 0 &&
+        std::isfinite(L.ambient + L.diffuse + L.specular + L.exponent + L.gate) && L.light_camera.allFinite()))
+    bad("the light's ambient, diffuse, specular, exponent and gate must be finite and >= 0");
+  if (slicing_needs_gradients(s) && (s.gradient.radius < 1 || s.gradient.radius > 4))
+    bad(fmt::format("gradient radius must be in [1, 4] (got {})", s.gradient.radius));
+  if (slicing_needs_gradients(s) && s.gradient.bits != 4 && s.gradient.bits != 8)
+    bad(fmt::format("gradient bits must be 8 or 4 (got {})", s.gradient.bits));
+  if (!s.background.allFinite()) bad("the background must be finite");
+}
+
+SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& settings,
+                                 std::optional<GradientVolume> gradients)
+    : volume_(volume), s_(settings), grad_(std::move(gradients)) {
+  check_slicing_settings(volume, settings);
+  if (s_.value_range) {
+    lo_ = s_.value_range->first, hi_ = s_.value_range->second;
+  } else {
+    const auto r = volume.value_range();
+    lo_ = r[0], hi_ = r[1] > r[0] ? r[1] : r[0] + 1;  // a constant volume maps to 0
+  }
+  if (slicing_needs_gradients(s_)) {
+    if (!grad_) grad_ = build_gradient_volume(volume, s_.gradient);
+    if (grad_->dims != volume.dims())
+      throw InputError("slicing: the gradient volume does not match the data volume's dimensions");
+  } else {
+    grad_.reset();
+  }
+  if (s_.skip_empty) {
+    // Min and max over each cell's voxels [8c, 8c + 8] (the +1 is the trilinear neighbour).
+    for (int a = 0; a < 3; ++a) cells_[std::size_t(a)] = ((volume.dims()[std::size_t(a)] - 1) >> kCellShift) + 1;
+    live_.assign(std::size_t(cells_[0]) * cells_[1] * cells_[2], 0);
+    std::array<bool, 4> used{true, false, false, false};
+    if (!s_.mask.empty()) {
+      const auto h = s_.mask.histogram();
+      for (int i = 0; i < 4; ++i) used[std::size_t(i)] = h[std::size_t(i) + 1] > 0;
+    }
+    const double inv = 1.0 / (hi_ - lo_);
+    visit_samples(volume, [&](const auto v) {
+      tbb::parallel_for(0, cells_[2], [&](int ck) {
+        for (int cj = 0; cj < cells_[1]; ++cj)
+          for (int ci = 0; ci < cells_[0]; ++ci) {
+            double mn = 1e300, mx = -1e300;
+            for (int k = ck << kCellShift; k <= std::min((ck + 1) << kCellShift, v.nz - 1); ++k)
+              for (int j = cj << kCellShift; j <= std::min((cj + 1) << kCellShift, v.ny - 1); ++j)
+                for (int i = ci << kCellShift; i <= std::min((ci + 1) << kCellShift, v.nx - 1); ++i) {
+                  const double x = double(v.at(i, j, k));
+                  mn = std::min(mn, x);
+                  mx = std::max(mx, x);
+                }
+            const double pad = 1e-5 * std::max({std::abs(mn), std::abs(mx), 1.0});
+            const double a = (mn - pad - lo_) * inv, b = (mx + pad - lo_) * inv;
+            bool live = false;
+            for (int t = 0; t < 4; ++t)
+              live = live || (used[std::size_t(t)] && s_.tfs[std::size_t(t)].visible_in(a, b));
+            live_[std::size_t(ci) + std::size_t(cells_[0]) * (std::size_t(cj) + std::size_t(cells_[1]) * ck)] = live;
+          }
+      });
+    });
+  }
+}
+
+SlicingFrame SlicingRenderer::render(const Camera& camera) const {
+  const auto* pin = std::get_if<Pinhole>(&camera);
+  if (!pin) throw InputError("slicing: the slicing renderer needs a pinhole camera");
+  const RayGenerator rays(camera);
+  const Box3 box = volume_.domain();
+  const Eigen::Isometry3d world_from_camera = pin->camera_from_world.inverse();
+  const Eigen::Vector3d eye = world_from_camera.translation();
+  if (box.contains(eye)) throw InputError("slicing: the eye is inside the volume's box");
+  const double h0 = volume_.spacing().minCoeff();
+  const SliceStack stack = slice_stack(box, eye, slice_spacing(s_.quality_class, volume_.spacing()), s_.d_range);
+  const Eigen::Vector3d light_pos = eye + world_from_camera.linear() * (s_.light.light_camera * box.diagonal());
+  const int W = pin->width, H = pin->height;
+  SlicingFrame frame;
+  frame.raw = ImageF(W, H, 3);
+  frame.alpha = ImageF(W, H, 1);
+  frame.stats.slices = stack.count;
+  frame.stats.slice_spacing = stack.spacing;
+  const bool lit = slicing_needs_gradients(s_);
+  const bool use_mask = !s_.mask.empty();
+  const bool skip = !live_.empty();
+  const std::array<int, 3> dims = volume_.dims();
+  const double inv_range = 1.0 / (hi_ - lo_);
+  const Eigen::Vector3d origin = volume_.origin(), inv_spacing = volume_.spacing().cwiseInverse();
+  std::array<VolumeSamples<std::uint8_t>, 3> gch;
+  double grad_scale = 0;
+  if (lit) {
+    for (int c = 0; c < 3; ++c) gch[std::size_t(c)] = grad_->channel(c);
+    grad_scale = 1;
+  }
+  const int T = s_.tile;
+  const int tiles_x = (W + T - 1) / T, tiles_y = (H + T - 1) / T;
+  std::vector<TileCounts> counts(std::size_t(tiles_x) * tiles_y);
+  const auto t0 = std::chrono::steady_clock::now();
+  visit_samples(volume_, [&](const auto samples) {
+    auto do_tile = [&](int tx, int ty) {
+      TileCounts& cnt = counts[std::size_t(ty) * tiles_x + tx];
+      for (int y = ty * T; y < std::min(H, (ty + 1) * T); ++y)
+        for (int x = tx * T; x < std::min(W, (tx + 1) * T); ++x) {
+          const CameraRay ray = rays.generate_ray(x, y);
+          const RaySlices rs = ray_slices(stack, box, ray.origin, ray.direction);
+          SliceAccumulator acc;
+          if (!rs.empty()) {
+            ++cnt.rays;
+            const double exponent = s_.opacity_correction ? (stack.spacing / rs.cos_psi) / h0 : 1.0;
+            const Eigen::Vector3d to_eye = -ray.direction;
+            for (int k = rs.k_first; k <= rs.k_last; ++k) {
+              ++cnt.samples;
+              const Eigen::Vector3d p = ray.origin + rs.t(stack, k) * ray.direction;
+              const Eigen::Vector3d g = (p - origin).cwiseProduct(inv_spacing);
+              if (skip) {
+                int c[3];
+                for (int a = 0; a < 3; ++a) {
+                  const int i = std::clamp(int(std::floor(float(g[a]))), 0, dims[a] - 1);
+                  c[a] = i >> kCellShift;
+                }
+                if (!live_[std::size_t(c[0]) +
+                           std::size_t(cells_[0]) * (std::size_t(c[1]) + std::size_t(cells_[1]) * c[2])]) {
+                  ++cnt.skipped;
+                  continue;
+                }
+              }
+              const int m = use_mask ? s_.mask.lookup(p) : 1;
+              if (m == 0) continue;
+              ++cnt.classified;
+              const float f = samples.trilinear_clamped(float(g.x()), float(g.y()), float(g.z()));
+              const TransferFunction& tf = s_.tfs[std::size_t(m - 1)];
+              const double fn = (double(f) - lo_) * inv_range;
+              const double a = tf.alpha_at(fn);
+              if (!(a > 0)) continue;
+              const TfValue tv = tf.evaluate(fn);
+              const double ac = exponent == 1.0 ? a : 1.0 - std::pow(1.0 - a, exponent);
+              Eigen::Vector3d c = tv.rgb;
+              if (lit) {
+                Eigen::Vector3d e;
+                for (int ch = 0; ch < 3; ++ch)
+                  e[ch] = gch[std::size_t(ch)].trilinear_clamped(float(g.x()), float(g.y()), float(g.z()));
+                const Eigen::Vector3d gd = (2.0 * e - Eigen::Vector3d::Ones()) * grad_scale;
+                const Eigen::Vector3d gw = gd.cwiseProduct(inv_spacing);  // index units -> world direction
+                if (gd.norm() > s_.light.gate && gw.norm() > 0) {
+                  const Eigen::Vector3d nrm = -gw.normalized();
+                  const Eigen::Vector3d l = (light_pos - p).normalized();
+                  const Eigen::Vector3d h = (l + to_eye).normalized();
+                  const double diff = std::max(nrm.dot(l), 0.0);
+                  const double spec = std::pow(std::max(nrm.dot(h), 0.0), s_.light.exponent);
+                  c = c * (s_.light.ambient + s_.light.diffuse * diff) +
+                      Eigen::Vector3d::Constant(s_.light.specular * spec);
+                }
+              }
+              switch (s_.mode) {
+                case SlicingMode::kBlend:
+                  if (s_.blend == BlendOperator::kOver)
+                    acc.blend_over(c, ac);
+                  else
+                    acc.blend_additive(c, ac);
+                  break;
+                case SlicingMode::kMip:
+                  acc.mip(c, a);
+                  break;
+                case SlicingMode::kCombined:
+                  acc.combined(c, a, ac);
+                  break;
+              }
+            }
+          }
+          Eigen::Vector3d out;
+          if (s_.mode == SlicingMode::kBlend)
+            out = acc.C + (1 - acc.A) * s_.background;
+          else
+            out = acc.A > 0 ? acc.C : s_.background;
+          for (int ch = 0; ch < 3; ++ch) frame.raw.at(x, y, ch) = float(out[ch]);
+          frame.alpha.at(x, y) = float(acc.A);
+        }
+    };
+    if (s_.parallel)
+      tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const auto& r) {
+        for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
+          for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) do_tile(tx, ty);
+      });
+    else
+      for (int ty = 0; ty < tiles_y; ++ty)
+        for (int tx = 0; tx < tiles_x; ++tx) do_tile(tx, ty);
+  });
+  frame.stats.render_ms = ms_since(t0);
+  for (const auto& c : counts) {
+    frame.stats.rays += c.rays;
+    frame.stats.samples += c.samples;
+    frame.stats.classified += c.classified;
+    frame.stats.skipped += c.skipped;
+  }
+  const auto t1 = std::chrono::steady_clock::now();
+  frame.rgb = apply_bloom(frame.raw, s_.post);
+  frame.stats.post_ms = ms_since(t1);
+  return frame;
+}
+
+SlicingFrame render_slicing(const Volume& volume, const Camera& camera, const SlicingSettings& settings) {
+  return SlicingRenderer(volume, settings).render(camera);
+}
+
+std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSettings& s, const Volume& volume,
+                                                              const Camera& camera) {
+  std::vector<std::pair<std::string, std::string>> r;
+  auto add = [&](const std::string& k, const std::string& v) { r.emplace_back("vsi." + k, v); };
+  auto num = [](double x) { return fmt::format("{:.17g}", x); };
+  add("data.norm_source",
+      s.value_range ? fmt::format("given [{}, {}]", num(s.value_range->first), num(s.value_range->second)) : "scanned");
+  add("data.internal_bits", sample_type_name(volume.type()));
+  add("grad.radius", std::to_string(s.gradient.radius));
+  add("grad.neighbourhood", s.gradient.neighbourhood == GradientNeighbourhood::kBall ? "ball" : "cube");
+  add("grad.encode", "1/2 + 1/2 g / max|g|");
+  add("grad.bits", std::to_string(s.gradient.bits));
+  add("grad.boundary", "clamp");
+  add("grad.used", slicing_needs_gradients(s) ? "true" : "false (unlit Blend)");
+  add("tf.count", "4");
+  for (int i = 0; i < 4; ++i) {
+    const auto& tf = s.tfs[std::size_t(i)];
+    add(fmt::format("tf{}.kind", i + 1),
+        tf.kind() == TfKind::kPiecewiseLinear ? "piecewise_linear" : "piecewise_constant");
+    add(fmt::format("tf{}.name", i + 1), tf.name());
+  }
+  add("tf.resolution/curve", "exact: control points evaluated per sample (no table), piecewise linear");
+  if (s.mask.empty()) {
+    add("mask.resolution", "none (TF 1 everywhere)");
+  } else {
+    const auto d = s.mask.dims();
+    add("mask.resolution", fmt::format("{} x {} x {}", d[0], d[1], d[2]));
+    const auto h = s.mask.histogram();
+    add("mask.histogram", fmt::format("[{}, {}, {}, {}, {}]", h[0], h[1], h[2], h[3], h[4]));
+  }
+  add("mask.filter", "nearest");
+  add("mask.object_shape", "box | sphere | ellipsoid (normalised box coordinates)");
+  add("slice.normal", "centre - camera");
+  add("slice.normalise_n", "true");
+  add("slice.d_range", s.d_range == SliceRange::kTight ? "tight corner range" : "conservative +-D");
+  add("slice.qc_map", "dd = QC * h0");
+  add("slice.quality_class", num(s.quality_class));
+  add("slice.spacing", num(slice_spacing(s.quality_class, volume.spacing())));
+  add("slice.order", "back to front");
+  if (const auto* p = std::get_if<Pinhole>(&camera))
+    add("camera.fov", fmt::format("{:.6g} deg (vertical)", 2 * std::atan(0.5 * p->height / p->fy) * 180 / M_PI));
+  add("cpu.realisation", "per-pixel ray-plane sampling");
+  add("mode", slicing_mode_name(s.mode));
+  add("blend.operator", s.blend == BlendOperator::kOver ? "over" : "additive");
+  add("blend.opacity_correction", s.opacity_correction ? "on, dref = h0, along-ray spacing dd / cos psi" : "off");
+  add("mip.rule", "max alpha wins");
+  add("combined.rule", "OUR INTERPRETATION (spec 2.6): a >= A_max replaces, else over-blends the lit colour");
+  add("light.model", fmt::format("Blinn-Phong ambient {} diffuse {} specular {} exponent {}", num(s.light.ambient),
+                                 num(s.light.diffuse), num(s.light.specular), num(s.light.exponent)));
+  add("light.position", fmt::format("eye + camera-frame ({}, {}, {}) box diagonals", num(s.light.light_camera.x()),
+                                    num(s.light.light_camera.y()), num(s.light.light_camera.z())));
+  add("light.gate", num(s.light.gate));
+  add("shade.modes", s.lit_blend ? "mip, combined and blend" : "mip and combined");
+  add("post.adjust", fmt::format("contrast {} brightness {} gamma {}", num(s.post.adjust.contrast),
+                                 num(s.post.adjust.brightness), num(s.post.adjust.gamma)));
+  add("post.bloom", s.post.enabled ? "on" : "off");
+  add("post.threshold", num(s.post.threshold) + " of Rec. 709 luminance");
+  add("post.sigma/radius", fmt::format("{} half-res px, radius ceil(3 sigma)", num(s.post.sigma)));
+  add("post.bloom_blend", fmt::format("additive, gain {}", num(s.post.gain)));
+  add("post.render_target", "float32");
+  add("skip_empty", s.skip_empty ? "8^3 cells, exact (same image)" : "off");
+  return r;
+}
+
+}  // namespace meltlab::render
