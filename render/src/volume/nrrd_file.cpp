@@ -2,6 +2,7 @@
 
 #include <meltlab/render/volume/nrrd_file.h>
 
+#include <meltlab/core/text_fields.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
 #include <meltlab/core/input_file.h>
@@ -32,48 +33,6 @@ std::int64_t NrrdHeader::sample_bytes() const {
 }
 
 namespace {
-
-std::string trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-  return std::string(s);
-}
-
-std::vector<std::string> words(const std::string& s) {
-  std::vector<std::string> out;
-  std::size_t i = 0;
-  while (i < s.size()) {
-    while (i < s.size() && (s[i] == ' ' || s[i] == '\t')) ++i;
-    std::size_t j = i;
-    while (j < s.size() && s[j] != ' ' && s[j] != '\t') ++j;
-    if (j > i) out.push_back(s.substr(i, j - i));
-    i = j;
-  }
-  return out;
-}
-
-std::optional<double> number(const std::string& s) {
-  if (s.empty()) return std::nullopt;
-  errno = 0;
-  char* end = nullptr;
-  const double d = std::strtod(s.c_str(), &end);
-  if (end != s.c_str() + s.size() || errno == ERANGE || !std::isfinite(d)) return std::nullopt;
-  return d;
-}
-
-std::optional<std::int64_t> whole(const std::string& s, std::int64_t lo, std::int64_t hi) {
-  if (s.empty() || s.size() > 12) return std::nullopt;
-  std::size_t i = s[0] == '-' ? 1 : 0;
-  if (i == s.size()) return std::nullopt;
-  std::int64_t v = 0;
-  for (; i < s.size(); ++i) {
-    if (s[i] < '0' || s[i] > '9') return std::nullopt;
-    v = v * 10 + (s[i] - '0');
-  }
-  if (s[0] == '-') v = -v;
-  if (v < lo || v > hi) return std::nullopt;
-  return v;
-}
 
 std::optional<ScalarType> nrrd_type(const std::string& t) {
   static const std::map<std::string, ScalarType> kTypes = {
@@ -111,28 +70,6 @@ std::optional<ScalarType> nrrd_type(const std::string& t) {
   return it->second;
 }
 
-std::string nrrd_type_name(ScalarType t) {
-  switch (t) {
-    case ScalarType::kInt8:
-      return "int8";
-    case ScalarType::kUint8:
-      return "uint8";
-    case ScalarType::kInt16:
-      return "int16";
-    case ScalarType::kUint16:
-      return "uint16";
-    case ScalarType::kInt32:
-      return "int32";
-    case ScalarType::kUint32:
-      return "uint32";
-    case ScalarType::kFloat32:
-      return "float";
-    case ScalarType::kFloat64:
-      break;
-  }
-  return "double";
-}
-
 /// "(a,b,c)" → three finite numbers; nullopt otherwise.
 std::optional<Eigen::Vector3d> vector_of(const std::string& s) {
   if (s.size() < 2 || s.front() != '(' || s.back() != ')') return std::nullopt;
@@ -142,7 +79,8 @@ std::optional<Eigen::Vector3d> vector_of(const std::string& s) {
   for (int a = 0; a < 3; ++a) {
     const std::size_t comma = inner.find(',', start);
     if ((a < 2) != (comma != std::string::npos)) return std::nullopt;
-    const auto x = number(trim(inner.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
+    const auto x =
+        parse_finite(trim_blanks(inner.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
     if (!x) return std::nullopt;
     v[a] = *x;
     start = comma + 1;
@@ -197,7 +135,7 @@ NrrdHeader parse_nrrd_header(std::string_view text, const std::string& what, con
       throw InputError(fmt::format("{}:{}: the header is longer than {} bytes", what, line_no, kNrrdMaxHeaderBytes));
     const std::size_t lf = text.find('\n', pos);
     const std::size_t end = lf == std::string_view::npos ? text.size() : lf;
-    const std::string line = trim(text.substr(pos, end - pos));
+    const std::string line = trim_blanks(text.substr(pos, end - pos));
     pos = lf == std::string_view::npos ? text.size() : lf + 1;
     ++line_no;
     auto fail = [&](const std::string& problem) { throw InputError(fmt::format("{}:{}: {}", what, line_no, problem)); };
@@ -220,9 +158,9 @@ NrrdHeader parse_nrrd_header(std::string_view text, const std::string& what, con
     const std::size_t kv = line.find(":=");
     if (kv != std::string::npos && (colon == std::string::npos || kv < colon)) continue;  // key/value pair
     if (colon == std::string::npos) fail(fmt::format("'{}' is not a 'field: value' line", line.substr(0, 60)));
-    const std::string field = line.substr(0, colon), value = trim(line.substr(colon + 2));
+    const std::string field = line.substr(0, colon), value = trim_blanks(line.substr(colon + 2));
     if (!seen.insert(field).second) fail(fmt::format("field '{}' given twice", field));
-    const auto w = words(value);
+    const auto w = blank_separated_fields(value);
     if (field == "type") {
       const auto t = nrrd_type(value);
       if (!t) {
@@ -239,7 +177,7 @@ NrrdHeader parse_nrrd_header(std::string_view text, const std::string& what, con
     } else if (field == "sizes") {
       if (w.size() != 3) fail(fmt::format("sizes '{}': three whole numbers expected", value));
       for (int a = 0; a < 3; ++a) {
-        const auto x = whole(w[std::size_t(a)], 1, 2147483647);
+        const auto x = parse_whole(w[std::size_t(a)], 1, 2147483647);
         if (!x) fail(fmt::format("size '{}' is not a whole number in [1, 2^31 - 1]", w[std::size_t(a)]));
         h.dims[std::size_t(a)] = int(*x);
       }
@@ -268,7 +206,7 @@ NrrdHeader parse_nrrd_header(std::string_view text, const std::string& what, con
       if (have_spacing) fail("give 'spacings' or 'space directions', not both");
       if (w.size() != 3) fail(fmt::format("spacings '{}': three numbers expected", value));
       for (int a = 0; a < 3; ++a) {
-        const auto x = number(w[std::size_t(a)]);
+        const auto x = parse_finite(w[std::size_t(a)]);
         if (!x || !(*x > 0)) fail(fmt::format("spacing '{}' is not a finite number > 0", w[std::size_t(a)]));
         h.spacing[a] = *x;
       }
@@ -292,7 +230,7 @@ NrrdHeader parse_nrrd_header(std::string_view text, const std::string& what, con
       }
       have_spacing = true;
     } else if (field == "space origin") {
-      const auto v = vector_of(trim(value));
+      const auto v = vector_of(trim_blanks(value));
       if (!v) fail(fmt::format("space origin '{}' is not a vector (x,y,z) of finite numbers", value));
       h.origin = *v;
     } else if (field == "centers" || field == "centerings") {
@@ -307,11 +245,11 @@ NrrdHeader parse_nrrd_header(std::string_view text, const std::string& what, con
       const fs::path p(value);
       h.data_file = p.is_absolute() ? p : base_dir / p;
     } else if (field == "byte skip" || field == "byteskip") {
-      const auto x = whole(value, -1, std::int64_t(1) << 40);
+      const auto x = parse_whole(value, -1, std::int64_t(1) << 40);
       if (!x) fail(fmt::format("byte skip '{}' is not -1 or a whole number >= 0", value));
       h.byte_skip = *x;
     } else if (field == "line skip" || field == "lineskip") {
-      const auto x = whole(value, 0, 1 << 20);
+      const auto x = parse_whole(value, 0, 1 << 20);
       if (!x) fail(fmt::format("line skip '{}' is not a whole number in [0, 2^20]", value));
       h.line_skip = *x;
     } else if (field == "block size" || field == "blocksize") {
@@ -427,7 +365,7 @@ ScalarVolume read_nrrd(const fs::path& file, NrrdHeader* header_out) {
   if (h.encoding == NrrdEncoding::kRaw) {
     if (available != expected)
       throw InputError(fmt::format("{}: holds {} bytes of samples, but {} x {} x {} {} samples are {} bytes", data_name,
-                                   available, h.dims[0], h.dims[1], h.dims[2], nrrd_type_name(h.type), expected));
+                                   available, h.dims[0], h.dims[1], h.dims[2], scalar_type_name(h.type), expected));
     v = ScalarVolume::allocate(h.dims, h.type, file.string());
     in.clear();
     in.seekg(start);
@@ -503,7 +441,7 @@ void write_nrrd(const fs::path& file, const ScalarVolume& v, const NrrdWriteOpti
       "NRRD0004\n# written by meltlab\ntype: {}\ndimension: 3\nspace dimension: 3\nsizes: {} {} {}\n"
       "space directions: ({:.17g},0,0) (0,{:.17g},0) (0,0,{:.17g})\nspace origin: ({:.17g},{:.17g},{:.17g})\n"
       "endian: {}\nencoding: {}\n",
-      nrrd_type_name(v.type), v.dims[0], v.dims[1], v.dims[2], v.spacing.x(), v.spacing.y(), v.spacing.z(),
+      scalar_type_name(v.type), v.dims[0], v.dims[1], v.dims[2], v.spacing.x(), v.spacing.y(), v.spacing.z(),
       v.origin.x(), v.origin.y(), v.origin.z(), o.endian == std::endian::big ? "big" : "little",
       o.encoding == NrrdEncoding::kGzip ? "gzip" : "raw");
   if (ext == ".nrrd") {

@@ -2,6 +2,7 @@
 
 #include <meltlab/render/volume/vlb_file.h>
 
+#include <meltlab/core/text_fields.h>
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
 #include <meltlab/core/input_file.h>
@@ -24,40 +25,6 @@ std::int64_t VlbHeader::sample_bytes() const {
 }
 
 namespace {
-
-std::vector<std::string> fields_of(std::string_view line) {
-  std::vector<std::string> out;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
-    std::size_t j = i;
-    while (j < line.size() && line[j] != ' ' && line[j] != '\t') ++j;
-    if (j > i) out.emplace_back(line.substr(i, j - i));
-    i = j;
-  }
-  return out;
-}
-
-/// A finite number (the whole field), or nullopt.
-std::optional<double> number_of(const std::string& s) {
-  if (s.empty()) return std::nullopt;
-  errno = 0;
-  char* end = nullptr;
-  const double d = std::strtod(s.c_str(), &end);
-  if (end != s.c_str() + s.size() || errno == ERANGE || !std::isfinite(d)) return std::nullopt;
-  return d;
-}
-
-/// A whole number in [1, 2^31 - 1] written with digits only, or -1.
-std::int64_t dimension_of(const std::string& s) {
-  if (s.empty() || s.size() > 10) return -1;
-  std::int64_t v = 0;
-  for (char c : s) {
-    if (c < '0' || c > '9') return -1;
-    v = v * 10 + (c - '0');
-  }
-  return v >= 1 && v <= 2147483647 ? v : -1;
-}
 
 std::string list_of_types() { return "int8, int16, int32, uint8, uint16, uint32, float or double"; }
 
@@ -93,7 +60,7 @@ VlbHeader parse_vlb_header(std::string_view text, const std::string& what) {
   }
   h.header_bytes = std::int64_t(pos);
   auto fields = [&](int n, std::size_t count, const char* meaning) {
-    auto f = fields_of(lines[std::size_t(n - 1)]);
+    auto f = blank_separated_fields(lines[std::size_t(n - 1)]);
     if (f.size() != count)
       throw InputError(fmt::format("{}:{}: expected {} ({} field{}), found '{}'", what, n, meaning, count,
                                    count == 1 ? "" : "s", lines[std::size_t(n - 1)]));
@@ -109,7 +76,7 @@ VlbHeader parse_vlb_header(std::string_view text, const std::string& what) {
   // 2: dimensions
   const auto d = fields(2, 3, "the dimensions N_x N_y N_z");
   for (int a = 0; a < 3; ++a) {
-    const std::int64_t x = dimension_of(d[std::size_t(a)]);
+    const std::int64_t x = parse_whole(d[std::size_t(a)], 1, 2147483647).value_or(-1);
     if (x < 0)
       throw InputError(
           fmt::format("{}:2: dimension '{}' is not a whole number in [1, 2^31 - 1]", what, d[std::size_t(a)]));
@@ -136,21 +103,21 @@ VlbHeader parse_vlb_header(std::string_view text, const std::string& what) {
   // 5: spacing
   const auto s = fields(5, 3, "the voxel spacing per axis");
   for (int a = 0; a < 3; ++a) {
-    const auto x = number_of(s[std::size_t(a)]);
+    const auto x = parse_finite(s[std::size_t(a)]);
     if (!x || !(*x > 0))
       throw InputError(fmt::format("{}:5: spacing '{}' is not a finite number > 0", what, s[std::size_t(a)]));
     h.spacing[a] = *x;
   }
   // 6: range
   const auto r = fields(6, 2, "the minimum and maximum value");
-  const auto lo = number_of(r[0]), hi = number_of(r[1]);
+  const auto lo = parse_finite(r[0]), hi = parse_finite(r[1]);
   if (!lo || !hi) throw InputError(fmt::format("{}:6: the range '{} {}' is not two finite numbers", what, r[0], r[1]));
   if (*lo > *hi) throw InputError(fmt::format("{}:6: the minimum {} is greater than the maximum {}", what, r[0], r[1]));
   h.min = *lo;
   h.max = *hi;
   // 7: window
   const auto w = fields(7, 2, "the recommended window");
-  const auto wlo = number_of(w[0]), whi = number_of(w[1]);
+  const auto wlo = parse_finite(w[0]), whi = parse_finite(w[1]);
   if (!wlo || !whi)
     throw InputError(fmt::format("{}:7: the window '{} {}' is not two finite numbers", what, w[0], w[1]));
   if (!(*wlo < *whi))
