@@ -260,23 +260,27 @@ json run_volume_generate(const VolumeGenerateRunOptions& o) {
 
 namespace {
 
+/// Runs `call`; an InputError that does not name the scene file yet is re-thrown naming it.
+template <class Call>
+void run_naming_scene(const std::string& scene_name, const Call& call) {
+  try {
+    call();
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    if (what.rfind(scene_name, 0) == 0) throw;
+    throw InputError(fmt::format("{}: {}", scene_name, what));
+  }
+}
+
 /// Seed 001's transfer-function model: the volume in its layout, the empty-space index built once
 /// (timed apart), then warm-up and timed frames through one tracer.
 VolumeRenderRunResult run_tf_render(const VolumeRenderRunOptions& o, render::VolumeScene& scene) {
   const std::string scene_name = o.scene_file.string();
-  auto named = [&](const auto& call) {
-    try {
-      call();
-    } catch (const InputError& e) {
-      const std::string what = e.what();
-      if (what.rfind(scene_name, 0) == 0) throw;
-      throw InputError(fmt::format("{}: {}", scene_name, what));
-    }
-  };
+  auto named = [&](const auto& call) { run_naming_scene(scene_name, call); };
   scene.settings.record_sample_counts = o.sample_counts;
   const auto t_load = std::chrono::steady_clock::now();
   const render::SceneVolume volume = render::load_scene_volumes(scene);
-  const double load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_load).count();
+  const double load_ms = ms_since(t_load);
   if (const auto* pin = std::get_if<render::Pinhole>(&scene.camera)) {
     const Eigen::Vector3d eye = pin->camera_from_world.inverse().translation();
     if (volume.domain().contains(eye) && scene.settings.camera_inside == render::CameraInside::kReject)
@@ -380,15 +384,7 @@ VolumeRenderRunResult run_tf_render(const VolumeRenderRunOptions& o, render::Vol
 /// under the dataset cache, when the mode lights samples), then warm-up and timed frames.
 VolumeRenderRunResult run_slicing_render(const VolumeRenderRunOptions& o, render::VolumeScene& scene) {
   const std::string scene_name = o.scene_file.string();
-  auto named = [&](const auto& call) {
-    try {
-      call();
-    } catch (const InputError& e) {
-      const std::string what = e.what();
-      if (what.rfind(scene_name, 0) == 0) throw;
-      throw InputError(fmt::format("{}: {}", scene_name, what));
-    }
-  };
+  auto named = [&](const auto& call) { run_naming_scene(scene_name, call); };
   const auto t_load = std::chrono::steady_clock::now();
   const render::Volume volume = render::load_scene_volume(scene);
   const double load_ms = ms_since(t_load);
@@ -520,15 +516,7 @@ VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
   }
   // Settings the integrator refuses (an eye inside the box, ...) are problems of the scene file.
   const std::string scene_name = o.scene_file.string();
-  auto named = [&](const auto& call) {
-    try {
-      call();
-    } catch (const InputError& e) {
-      const std::string what = e.what();
-      if (what.rfind(scene_name, 0) == 0) throw;
-      throw InputError(fmt::format("{}: {}", scene_name, what));
-    }
-  };
+  auto named = [&](const auto& call) { run_naming_scene(scene_name, call); };
   if (const auto* pin = std::get_if<render::Pinhole>(&scene.camera)) {
     const Eigen::Vector3d eye = pin->camera_from_world.inverse().translation();
     if (volume.domain().contains(eye) && scene.settings.camera_inside == render::CameraInside::kReject)
