@@ -87,24 +87,41 @@ render::GradientVolume gradients_of(const render::Volume& v, const render::Gradi
 
 struct Timed {
   double median_ms = 0, min_ms = 0, max_ms = 0, render_ms = 0, post_ms = 0;
+  double cpu_ms = 0;  ///< median process CPU time per frame (all threads): steadier than wall time under load
   render::SlicingFrame frame;
 };
 
-Timed time_frames(const render::SlicingRenderer& r, const render::Camera& cam, int warmup, int repeats) {
-  std::vector<double> ms, rms, pms;
-  Timed t;
-  for (int i = 0; i < warmup + repeats; ++i) {
-    const auto t0 = std::chrono::steady_clock::now();
-    t.frame = r.render(cam);
-    const double d = ms_since(t0);
-    if (i >= warmup) ms.push_back(d), rms.push_back(t.frame.stats.render_ms), pms.push_back(t.frame.stats.post_ms);
+/// Frames of several renderers, interleaved (warm-up rounds first, then `repeats` timed rounds of
+/// one frame each), so that a change of the machine's load falls on all of them alike.
+std::vector<Timed> time_interleaved(const std::vector<const render::SlicingRenderer*>& renderers,
+                                    const render::Camera& cam, int warmup, int repeats) {
+  const std::size_t n = renderers.size();
+  std::vector<std::vector<double>> ms(n), rms(n), pms(n), cpu(n);
+  std::vector<Timed> t(n);
+  for (int i = 0; i < warmup + repeats; ++i)
+    for (std::size_t k = 0; k < n; ++k) {
+      const double c0 = process_cpu_ms();
+      const auto t0 = std::chrono::steady_clock::now();
+      t[k].frame = renderers[k]->render(cam);
+      const double d = ms_since(t0);
+      const double c = process_cpu_ms() - c0;
+      if (i < warmup) continue;
+      ms[k].push_back(d), rms[k].push_back(t[k].frame.stats.render_ms), pms[k].push_back(t[k].frame.stats.post_ms);
+      cpu[k].push_back(c);
+    }
+  for (std::size_t k = 0; k < n; ++k) {
+    t[k].median_ms = median(ms[k]);
+    t[k].min_ms = *std::min_element(ms[k].begin(), ms[k].end());
+    t[k].max_ms = *std::max_element(ms[k].begin(), ms[k].end());
+    t[k].render_ms = median(rms[k]);
+    t[k].post_ms = median(pms[k]);
+    t[k].cpu_ms = median(cpu[k]);
   }
-  t.median_ms = median(ms);
-  t.min_ms = *std::min_element(ms.begin(), ms.end());
-  t.max_ms = *std::max_element(ms.begin(), ms.end());
-  t.render_ms = median(rms);
-  t.post_ms = median(pms);
   return t;
+}
+
+Timed time_frames(const render::SlicingRenderer& r, const render::Camera& cam, int warmup, int repeats) {
+  return time_interleaved({&r}, cam, warmup, repeats).front();
 }
 
 /// The share of pixels whose accumulated opacity exceeds 0.01 (the object's coverage of the image).
@@ -194,26 +211,33 @@ void study_table3(const VolumeBenchOptions& o, const fs::path& dir, json& record
   const std::vector<double> qcs = o.quick ? std::vector<double>{1, 2, 4, 8} : std::vector<double>{0.5, 1, 2, 4, 8};
   const auto grads = gradients_of(l.volume, l.settings.gradient);
   CsvTable csv(
-      "mode,qc,width,height,median_ms,min_ms,max_ms,render_ms,post_ms,fps,samples,samples_past_mask,skipped_empty,"
-      "slices,slice_spacing,coverage");
+      "mode,qc,width,height,median_ms,min_ms,max_ms,cpu_ms,render_ms,post_ms,fps,samples,samples_past_mask,"
+      "skipped_empty,slices,slice_spacing,coverage");
   double cover = 0;
-  for (const auto mode : {render::SlicingMode::kBlend, render::SlicingMode::kCombined})
-    for (double qc : qcs) {
+  for (double qc : qcs) {
+    // Blend and combined at this QC, their frames interleaved (a load change hits both).
+    std::vector<render::SlicingSettings> settings;
+    for (const auto mode : {render::SlicingMode::kBlend, render::SlicingMode::kCombined}) {
       render::SlicingSettings s = l.settings;
       s.mode = mode;
       s.quality_class = qc;
       s.post.enabled = false;  // the source's Table 3 is the renderer alone
-      const render::SlicingRenderer r(l.volume, s, grads);
-      const Timed t = time_frames(r, l.scene.camera, o.warmup, o.repeats);
-      const double c = coverage(t.frame.alpha);
-      if (mode == render::SlicingMode::kBlend && qc == 1) cover = c;
-      const auto& st = t.frame.stats;
-      csv.row("{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{},{},{},{},{:.6g},{:.4f}",
-              render::slicing_mode_name(mode), qc, t.frame.rgb.width(), t.frame.rgb.height(), t.median_ms, t.min_ms,
-              t.max_ms, t.render_ms, t.post_ms, 1000.0 / t.median_ms, st.samples, st.classified, st.skipped, st.slices,
-              st.slice_spacing, c);
-      progress(fmt::format("seed003 Table 3 {} QC {}: {:.1f} ms", render::slicing_mode_name(mode), qc, t.median_ms));
+      settings.push_back(s);
     }
+    const render::SlicingRenderer r_blend(l.volume, settings[0], grads), r_comb(l.volume, settings[1], grads);
+    const auto times = time_interleaved({&r_blend, &r_comb}, l.scene.camera, o.warmup, o.repeats);
+    for (std::size_t k = 0; k < 2; ++k) {
+      const Timed& t = times[k];
+      const double c = coverage(t.frame.alpha);
+      if (k == 0 && qc == 1) cover = c;
+      const auto& st = t.frame.stats;
+      const std::string mode = render::slicing_mode_name(settings[k].mode);
+      csv.row("{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{},{},{},{},{:.6g},{:.4f}", mode, qc,
+              t.frame.rgb.width(), t.frame.rgb.height(), t.median_ms, t.min_ms, t.max_ms, t.cpu_ms, t.render_ms,
+              t.post_ms, 1000.0 / t.median_ms, st.samples, st.classified, st.skipped, st.slices, st.slice_spacing, c);
+      progress(fmt::format("seed003 Table 3 {} QC {}: {:.1f} ms (CPU {:.1f} ms)", mode, qc, t.median_ms, t.cpu_ms));
+    }
+  }
   csv.write(dir / "slicing_table3.csv");
   record["seed003_table3"] = {{"scene", l.file.string()},
                               {"image", size_text(l.scene.camera)},
@@ -264,8 +288,8 @@ void study_table4(const VolumeBenchOptions& o, const fs::path& dir, json& record
   curves[3].points = {{0.0, 0.01}, {1.0, 0.05}};
   const auto tf = render::TransferFunction::piecewise_linear(curves, "visible_everywhere");
   CsvTable csv(
-      "dims,voxels,data_bytes,qc,slice_spacing,slices,median_ms,min_ms,max_ms,render_ms,samples,ns_per_sample,"
-      "generate_ms");
+      "dims,voxels,data_bytes,qc,slice_spacing,slices,median_ms,min_ms,max_ms,cpu_ms,render_ms,samples,ns_per_sample,"
+      "cpu_ns_per_sample,generate_ms");
   for (std::size_t i = 0; i < dims.size(); ++i) {
     const auto& d = dims[i];
     render::VolumeGenerateOptions g;
@@ -285,10 +309,10 @@ void study_table4(const VolumeBenchOptions& o, const fs::path& dir, json& record
     const Timed t = time_frames(r, cam, o.warmup, o.repeats);
     const auto& st = t.frame.stats;
     const std::int64_t voxels = std::int64_t(d[0]) * d[1] * d[2];
-    csv.row("{},{},{},{:.6g},{:.6g},{},{:.3f},{:.3f},{:.3f},{:.3f},{},{:.4f},{:.1f}", sizes[i], voxels,
+    const double n = double(std::max<std::int64_t>(1, st.samples));
+    csv.row("{},{},{},{:.6g},{:.6g},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{},{:.4f},{:.4f},{:.1f}", sizes[i], voxels,
             voxels * std::int64_t(sizeof(float)), s.quality_class, st.slice_spacing, st.slices, t.median_ms, t.min_ms,
-            t.max_ms, t.render_ms, st.samples, 1e6 * t.render_ms / double(std::max<std::int64_t>(1, st.samples)),
-            gen_ms);
+            t.max_ms, t.cpu_ms, t.render_ms, st.samples, 1e6 * t.render_ms / n, 1e6 * t.cpu_ms / n, gen_ms);
     progress(fmt::format("seed003 Table 4 {}: {:.1f} ms, {:.2f} ns/sample", sizes[i], t.render_ms,
                          1e6 * t.render_ms / double(std::max<std::int64_t>(1, st.samples))));
   }
@@ -345,7 +369,7 @@ void study_pareto(const VolumeBenchOptions& o, const fs::path& dir, json& record
   write_image(dir / "slicing_pareto_reference.png", clamped(ref, 1));
   // samples: the plane (slicing) or ray (ray caster) positions; fetched: those whose value was read
   // (both skip empty space exactly: slicing 8³-voxel cells, the ray caster its multi-level index).
-  CsvTable csv("method,qc,step,median_ms,min_ms,max_ms,samples,fetched,rmse,rel_rmse");
+  CsvTable csv("method,qc,step,median_ms,min_ms,max_ms,cpu_ms,samples,fetched,rmse,rel_rmse");
   const std::vector<double> qcs = o.quick ? std::vector<double>{0.5, 1, 2, 4} : std::vector<double>{0.25, 0.5, 1, 2, 4};
   for (double qc : qcs) {
     render::SlicingSettings s;
@@ -356,20 +380,21 @@ void study_pareto(const VolumeBenchOptions& o, const fs::path& dir, json& record
     const render::SlicingRenderer r(l.volume, s);
     const Timed t = time_frames(r, cam, o.warmup, o.repeats);
     const double e = rmse(t.frame.raw, ref);
-    csv.row("slicing,{},{:.6g},{:.3f},{:.3f},{:.3f},{},{},{:.6g},{:.6g}", qc, qc * h0, t.median_ms, t.min_ms, t.max_ms,
-            t.frame.stats.samples, t.frame.stats.samples - t.frame.stats.skipped, e, e / ref_rms);
+    csv.row("slicing,{},{:.6g},{:.3f},{:.3f},{:.3f},{:.3f},{},{},{:.6g},{:.6g}", qc, qc * h0, t.median_ms, t.min_ms,
+            t.max_ms, t.cpu_ms, t.frame.stats.samples, t.frame.stats.samples - t.frame.stats.skipped, e, e / ref_rms);
     if (qc == 1) write_image(dir / "slicing_pareto_qc1.png", clamped(t.frame.raw, 1));
     const render::VolumeTracer tracer(l.volume, ray_caster(qc * h0));
-    std::vector<double> ms;
+    std::vector<double> ms, cpu;
     render::VolumeFrame f;
     for (int i = 0; i < o.warmup + o.repeats; ++i) {
+      const double c0 = process_cpu_ms();
       const auto t0 = std::chrono::steady_clock::now();
       f = tracer.render(cam);
-      if (i >= o.warmup) ms.push_back(ms_since(t0));
+      if (i >= o.warmup) ms.push_back(ms_since(t0)), cpu.push_back(process_cpu_ms() - c0);
     }
     const double er = rmse(rgb_of(f.radiance), ref);
-    csv.row("ray_casting,{},{:.6g},{:.3f},{:.3f},{:.3f},{},{},{:.6g},{:.6g}", qc, qc * h0, median(ms),
-            *std::min_element(ms.begin(), ms.end()), *std::max_element(ms.begin(), ms.end()),
+    csv.row("ray_casting,{},{:.6g},{:.3f},{:.3f},{:.3f},{:.3f},{},{},{:.6g},{:.6g}", qc, qc * h0, median(ms),
+            *std::min_element(ms.begin(), ms.end()), *std::max_element(ms.begin(), ms.end()), median(cpu),
             f.stats.samples + f.stats.skipped, f.stats.samples, er, er / ref_rms);
     progress(fmt::format("seed003 Pareto QC {}: slicing {:.1f} ms RMSE {:.5f}, ray casting {:.1f} ms RMSE {:.5f}", qc,
                          t.median_ms, e, median(ms), er));
@@ -390,31 +415,19 @@ void study_pareto(const VolumeBenchOptions& o, const fs::path& dir, json& record
   render::SlicingSettings bloom = base;
   bloom.post.enabled = true;
   const render::SlicingRenderer r_base(l.volume, base), r_mask(l.volume, masked), r_bloom(l.volume, bloom);
-  struct Acc {
-    std::vector<double> frame, render, post;
-    render::SlicingFrame last;
-  };
-  Acc a_base, a_mask, a_bloom;
-  for (int i = 0; i < o.warmup + repeats; ++i)
-    for (auto [r, acc] : {std::pair{&r_base, &a_base}, std::pair{&r_mask, &a_mask}, std::pair{&r_bloom, &a_bloom}}) {
-      const auto t0 = std::chrono::steady_clock::now();
-      acc->last = r->render(cam);
-      const double ms = ms_since(t0);
-      if (i >= o.warmup)
-        acc->frame.push_back(ms), acc->render.push_back(acc->last.stats.render_ms),
-            acc->post.push_back(acc->last.stats.post_ms);
-    }
-  const bool same_image = a_base.last.raw.values() == a_mask.last.raw.values();
-  CsvTable costs("knob,state,frame_ms,render_ms,post_ms,repeats,samples,same_image_as_off");
-  for (auto [knob, state, acc] : {std::tuple{"mask", "off", &a_base}, std::tuple{"mask", "all_ones", &a_mask},
-                                  std::tuple{"bloom", "off", &a_base}, std::tuple{"bloom", "on", &a_bloom}}) {
+  const auto times = time_interleaved({&r_base, &r_mask, &r_bloom}, cam, o.warmup, repeats);
+  const Timed &t_base = times[0], &t_mask = times[1], &t_bloom = times[2];
+  const bool same_image = t_base.frame.raw.values() == t_mask.frame.raw.values();
+  CsvTable costs("knob,state,frame_ms,cpu_ms,render_ms,post_ms,repeats,samples,same_image_as_off");
+  for (auto [knob, state, t] : {std::tuple{"mask", "off", &t_base}, std::tuple{"mask", "all_ones", &t_mask},
+                                std::tuple{"bloom", "off", &t_base}, std::tuple{"bloom", "on", &t_bloom}}) {
     const bool same = std::string(knob) == "mask" ? same_image : std::string(state) == "off";
-    costs.row("{},{},{:.3f},{:.3f},{:.3f},{},{},{}", knob, state, median(acc->frame), median(acc->render),
-              median(acc->post), repeats, acc->last.stats.samples, same ? "yes" : "no");
+    costs.row("{},{},{:.3f},{:.3f},{:.3f},{:.3f},{},{},{}", knob, state, t->median_ms, t->cpu_ms, t->render_ms,
+              t->post_ms, repeats, t->frame.stats.samples, same ? "yes" : "no");
   }
   costs.write(dir / "slicing_costs.csv");
-  progress(fmt::format("seed003 costs: frame {:.1f} ms, with mask {:.1f} ms, with bloom {:.1f} ms (post {:.1f} ms)",
-                       median(a_base.frame), median(a_mask.frame), median(a_bloom.frame), median(a_bloom.post)));
+  progress(fmt::format("seed003 costs: CPU {:.1f} ms, with mask {:.1f} ms, with bloom {:.1f} ms (post {:.1f} ms)",
+                       t_base.cpu_ms, t_mask.cpu_ms, t_bloom.cpu_ms, t_bloom.post_ms));
   record["seed003_pareto"] = {
       {"scene", l.file.string()},
       {"image", size_text(cam)},
@@ -425,7 +438,8 @@ void study_pareto(const VolumeBenchOptions& o, const fs::path& dir, json& record
       {"equal_density", "slicing plane spacing QC·h0 against the ray caster's fixed step QC·h0"},
       {"error", "RMSE of the RGB values over black; rel_rmse = RMSE / RMS of the reference"},
       {"costs",
-       fmt::format("Blend QC 1 with the scene's TFs at {}, medians of {} interleaved repeats; mask: an "
+       fmt::format("Blend QC 1 with the scene's TFs at {}, medians of {} interleaved repeats (wall and process CPU "
+                   "time); mask: an "
                    "all-ones {}x{}x{} mask against none",
                    size_text(cam), repeats, sl.mask_resolution[0], sl.mask_resolution[1], sl.mask_resolution[2])}};
 }
