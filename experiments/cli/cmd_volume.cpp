@@ -137,7 +137,18 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
   bench
       ->add_option("--study", b->studies,
                    "tables, scaling, pareto, peer (seed 000; the default: all four); seed001-generate, "
-                   "seed001-tables, seed001-large, seed001-sweeps, seed001-peer, seed001-steps, seed001-ess")
+                   "seed001-tables, seed001-large, seed001-sweeps, seed001-peer, seed001-steps, seed001-ess; "
+                   "seed003-figures, seed003-table3, seed003-table4, seed003-pareto (need --slicing-scenes)")
+      ->delimiter(',');
+  bench
+      ->add_option("--slicing-scenes", b->slicing_scenes,
+                   "seed003-*: scene files with method: slicing, comma-separated (the first: Tables 3, 4, Pareto)")
+      ->delimiter(',')
+      ->check(CLI::ExistingFile);
+  bench
+      ->add_option("--sizes", b->table4_sizes,
+                   "seed003-table4: volume sizes NXxNYxNZ, comma-separated (default: the source's 1³ (as 2³) ... "
+                   "256x256x113; --full adds 512x512x226)")
       ->delimiter(',');
   bench
       ->add_option("--large-size", b->large_size,

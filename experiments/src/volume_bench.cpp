@@ -6,6 +6,7 @@
 #include <meltlab/experiments/volume_bench.h>
 
 #include "volume_bench_clv.h"
+#include "volume_bench_slicing.h"
 
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
@@ -428,7 +429,11 @@ void run_volume_bench(const VolumeBenchOptions& options) {
       {"seed001-sweeps", clv_bench::study_sweeps},
       {"seed001-peer", clv_bench::study_peer},
       {"seed001-steps", clv_bench::study_steps},
-      {"seed001-ess", clv_bench::study_ess}};
+      {"seed001-ess", clv_bench::study_ess},
+      {"seed003-figures", slicing_bench::study_figures},
+      {"seed003-table3", slicing_bench::study_table3},
+      {"seed003-table4", slicing_bench::study_table4},
+      {"seed003-pareto", slicing_bench::study_pareto}};
   for (const auto& s : o.studies)
     if (!run.count(s)) {
       std::string names;

@@ -73,22 +73,6 @@ std::map<std::string, std::string> generator_record(const render::VolumeGenerate
           {"permutation", "Perlin 2002 reference"}};
 }
 
-render::Camera resized(const render::Camera& c, int width, int height) {
-  if (width <= 0 && height <= 0) return c;
-  auto p = std::get<render::Pinhole>(c);
-  const int w = width > 0 ? width : int(std::lround(double(p.width) * height / p.height));
-  const int h = height > 0 ? height : int(std::lround(double(p.height) * width / p.width));
-  // Keep the field of view: focal lengths and the principal point scale with the image.
-  const double sx = double(w) / p.width, sy = double(h) / p.height;
-  p.fx *= sx;
-  p.fy *= sy;
-  p.cx = (p.cx + 0.5) * sx - 0.5;
-  p.cy = (p.cy + 0.5) * sy - 0.5;
-  p.width = w;
-  p.height = h;
-  return p;
-}
-
 /// Seed 003's data choices of a render of a .vlb/.nrrd file (vsi.data.*); empty otherwise.
 json vsi_data_json(const render::VolumeScene& scene, const std::optional<render::Normalisation>& n) {
   json j = json::object();
@@ -481,9 +465,25 @@ VolumeRenderRunResult run_slicing_render(const VolumeRenderRunOptions& o, render
 
 }  // namespace
 
+render::Camera resized_camera(const render::Camera& c, int width, int height) {
+  if (width <= 0 && height <= 0) return c;
+  auto p = std::get<render::Pinhole>(c);
+  const int w = width > 0 ? width : int(std::lround(double(p.width) * height / p.height));
+  const int h = height > 0 ? height : int(std::lround(double(p.height) * width / p.width));
+  // Keep the field of view: focal lengths and the principal point scale with the image.
+  const double sx = double(w) / p.width, sy = double(h) / p.height;
+  p.fx *= sx;
+  p.fy *= sy;
+  p.cx = (p.cx + 0.5) * sx - 0.5;
+  p.cy = (p.cy + 0.5) * sy - 0.5;
+  p.width = w;
+  p.height = h;
+  return p;
+}
+
 VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
   render::VolumeScene scene = render::read_volume_scene(o.scene_file);
-  scene.camera = resized(scene.camera, o.width, o.height);
+  scene.camera = resized_camera(scene.camera, o.width, o.height);
   if (o.frames) scene.timed_frames = *o.frames;
   if (o.samples) scene.settings.samples = *o.samples;
   if (scene.timed_frames < 1) throw InputError("--frames must be >= 1");

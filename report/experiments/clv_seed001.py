@@ -6,7 +6,6 @@ empty-space skipping, OpenVDB's VolumeRender as the peer, and verdict lines for 
 Single-thread times are compared as CPU time (the process's, median of the repeats): the machine is
 shared, and a frame's wall time under a load of several runnable processes measures the load. The
 multi-thread rows are wall times; the load average is recorded beside every row."""
-import csv
 import json
 from pathlib import Path
 
@@ -16,7 +15,7 @@ matplotlib.use("Agg")
 import matplotlib.image as mpimg  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 
-from .common import write_csv, write_fragment
+from .common import write_csv, write_fragment, read, yes
 
 SOURCE_HW = ("AMD Ryzen 5 3600 (6 cores / 12 threads), 16 GB DDR4, Samsung 970 EVO; Criterion means at 700x700, "
              "step 0.2 voxel; the harness: medians of timed frames on this machine's cores")
@@ -33,15 +32,6 @@ METHODS = ["none", "ert", "ess", "ert_ess", "ess_ml", "ert_ess_ml"]
 LABEL = {"none": "no optimisation", "ert": "ERT", "ess": "ESS (source: one level, per voxel)",
          "ert_ess": "ERT + ESS (source)", "ess_ml": "ESS multi-level (meltlab)",
          "ert_ess_ml": "ERT + ESS multi-level (meltlab)"}
-
-
-def read(path):
-    with open(path) as f:
-        return list(csv.DictReader(f))
-
-
-def yes(b):
-    return "yes" if b else "NO"
 
 
 def clv_seed001(exp: Path, args):

@@ -5,7 +5,6 @@ R-surf-model (E3), the model error against R-surf-true, the cost shapes and the 
 uniform-step ray marching, with the issue's goals as verdict lines. The thesis reports no accuracy
 and its frame-rate tables were lost in the transcript (spec §5): there are no source numbers to
 put beside ours, only the stated shapes."""
-import csv
 import json
 import math
 from pathlib import Path
@@ -16,7 +15,7 @@ matplotlib.use("Agg")
 import matplotlib.image as mpimg  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 
-from .common import write_csv, write_fragment
+from .common import write_csv, write_fragment, read, linfit
 
 SOURCE_HW = ("Athlon 3000+, 512 MB, ATI Radeon X1650 Pro, OpenGL/GLSL fragment shader (spec §5; every fps value "
              "lost in the transcript); the harness: this CPU, median of timed frames after warm-up")
@@ -33,23 +32,6 @@ FIGURES = [
 ]
 DEFAULT = ("H", "sqrt")  # the harness's table (fsa.table.function, fsa.table.axis_warp)
 SOURCE = ("F", "none")   # the listing's
-
-
-def read(path):
-    with open(path) as f:
-        return list(csv.DictReader(f))
-
-
-def linfit(xs, ys):
-    n = len(xs)
-    mx, my = sum(xs) / n, sum(ys) / n
-    sxx = sum((x - mx) ** 2 for x in xs)
-    sxy = sum((x - mx) * (y - my) for x, y in zip(xs, ys))
-    b = sxy / sxx if sxx > 0 else 0.0
-    a = my - b * mx
-    ss_res = sum((y - a - b * x) ** 2 for x, y in zip(xs, ys))
-    ss_tot = sum((y - my) ** 2 for y in ys)
-    return a, b, 1 - ss_res / ss_tot if ss_tot > 0 else 1.0
 
 
 def order(ns, errs, lo=32):

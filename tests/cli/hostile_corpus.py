@@ -647,6 +647,24 @@ def clv_cases():
         Case("volume/bench_unknown_study", ["volume", "bench", "--study", "seed001-everything", "--out", "{out}"],
              names=["--study"]),
     ]
+    # Seed 003's studies: no scenes, a scene that is not method: slicing, a bad key in one, bad --sizes.
+    sl = ("method: slicing\nvolume: {generate: {kind: constant, size: 4}}\ncamera: {type: pinhole, width: 8, "
+          "height: 8, fov_deg: 30, eye: [400, 0, 0], target: [0, 0, 0]}\nslicing:\n  transfer_functions: "
+          "[{a: [[0, 1]]}]\n")
+    b = ["volume", "bench", "--warmup", "0", "--repeats", "1"]
+    cases += [
+        Case("volume/bench_seed003_no_scenes", b + ["--study", "seed003-table3", "--out", "{out}"],
+             names=["--slicing-scenes"]),
+        Case("volume/bench_seed003_not_slicing", b + ["--study", "seed003-table3", "--slicing-scenes", "{f}", "--out",
+                                                      "{out}"], {"s.yaml": sl.replace("method: slicing\n", "")},
+             names=["s.yaml", "method: slicing"]),
+        Case("volume/bench_seed003_bad_key", b + ["--study", "seed003-figures", "--slicing-scenes", "{f}", "--out",
+                                                  "{out}"], {"s.yaml": sl + "  quality: 2\n"}, names=["s.yaml:6"]),
+        Case("volume/bench_seed003_sizes_one", b + ["--study", "seed003-table4", "--slicing-scenes", "{f}", "--sizes",
+                                                    "1x1x1", "--out", "{out}"], {"s.yaml": sl}, names=["--sizes"]),
+        Case("volume/bench_seed003_sizes_text", b + ["--study", "seed003-table4", "--slicing-scenes", "{f}", "--sizes",
+                                                     "4x4", "--out", "{out}"], {"s.yaml": sl}, names=["--sizes"]),
+    ]
     return cases
 
 

@@ -266,5 +266,68 @@ Y
     run_ok "$M" volume render --scene ct.yaml --out r_ct
     json r_ct/render.json "d['stats']['samples']" | grep -qv '^0$' || fail "no samples on the user's volume"
     ;;
+  seed003_bench)
+    # Seed 003's studies (volume bench --study seed003-*) on the three phantom scenes made tiny
+    # (40 x 40 x 18 samples, 100 x 73 pixels), then the report module on their output.
+    export MELTLAB_DATA_DIR="$PWD/data"
+    scenes=""
+    for s in ones open cavity; do
+      sed -e 's/dims: \[256, 256, 113\]/dims: [40, 40, 18]/' -e 's/width: 1000, height: 730/width: 100, height: 73/' \
+        "$CONFIGS/slicing_phantom_$s.yaml" > "slicing_phantom_$s.yaml"
+      scenes="$scenes${scenes:+,}slicing_phantom_$s.yaml"
+    done
+    run_ok "$M" volume bench --study seed003-figures,seed003-table3,seed003-table4,seed003-pareto --warmup 0 \
+      --repeats 1 --slicing-scenes "$scenes" --sizes 2x2x2,20x20x9,40x40x18 --out exp/bench
+    py <<'PY'
+import csv, json, os
+B = 'exp/bench/'
+rd = lambda f: list(csv.DictReader(open(B + f)))
+fig = {(r['scene'], r['mode']): r for r in rd('slicing_figures.csv')}
+assert len(fig) == 9, fig.keys()
+for r in fig.values():
+    assert os.path.getsize(B + r['png']) > 0 and os.path.getsize(B + r['png_bloom']) > 0, r
+    assert (int(r['width']), int(r['height'])) == (50, 36), r   # quick: half the scene's size
+past = {s: int(fig[('slicing_phantom_' + s, 'blend')]['samples_past_mask']) for s in ('ones', 'open', 'cavity')}
+assert past['open'] < past['ones'] == past['cavity'], past   # index 0 cuts samples away; index 2 does not
+t3 = {(r['mode'], float(r['qc'])): r for r in rd('slicing_table3.csv')}
+assert sorted({q for _, q in t3}) == [1, 2, 4, 8] and {m for m, _ in t3} == {'blend', 'combined'}
+for q in (1, 2, 4):   # halving the spacing doubles the planes (tight range, mid-interval planes: +-1)
+    assert abs(int(t3[('blend', q)]['slices']) - 2 * int(t3[('blend', 2 * q)]['slices'])) <= 1, q
+    assert int(t3[('blend', q)]['samples']) == int(t3[('combined', q)]['samples']), q
+assert 0 < float(t3[('blend', 1)]['coverage']) < 1
+t4 = rd('slicing_table4.csv')
+assert [r['dims'] for r in t4] == ['2x2x2', '20x20x9', '40x40x18'], t4
+assert len({r['samples'] for r in t4}) == 1 and len({r['slices'] for r in t4}) == 1, t4   # constant slice count
+pa = rd('slicing_pareto.csv')
+sl = {float(r['qc']): float(r['rmse']) for r in pa if r['method'] == 'slicing'}
+assert sorted(sl) == [0.5, 1, 2, 4] and len([r for r in pa if r['method'] == 'ray_casting']) == 4, pa
+assert sl[0.5] < sl[4], sl   # finer planes are closer to the fine ray-cast reference
+co = {(r['knob'], r['state']): r for r in rd('slicing_costs.csv')}
+assert co[('mask', 'all_ones')]['same_image_as_off'] == 'yes', co
+assert float(co[('bloom', 'on')]['post_ms']) > 0
+j = json.load(open(B + 'bench.json'))
+assert {'seed003_figures', 'seed003_table3', 'seed003_table4', 'seed003_pareto'} <= set(j), j.keys()
+PY
+    REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+    /usr/bin/python3 "$REPO/report/experiment_report.py" slicing_seed003 exp > rep.txt 2>&1 || fail "report: $(cat rep.txt)"
+    for f in report.json figures.png table_3.csv table_3_fits.csv table_4.csv pareto.png costs.csv; do
+      [ -s "exp/$f" ] || fail "report: exp/$f missing"
+    done
+    grep -q "GOAL Blend QC 1" exp/report.json || fail "no goal verdict"
+    # Bad options: one line, exit 2, nothing written.
+    expect_exit 2 "$M" volume bench --study seed003-table3 --out nb
+    expect_err "--slicing-scenes"
+    expect_one_line_err
+    expect_no_dir nb
+    expect_exit 2 "$M" volume bench --study seed003-table4 --slicing-scenes slicing_phantom_ones.yaml --sizes 1x1x1 --out nb
+    expect_err "--sizes"
+    expect_one_line_err
+    expect_no_dir nb
+    printf 'volume: {generate: {kind: constant, size: 4}}\ncamera: {type: pinhole, width: 8, height: 8, fov_deg: 30, eye: [400, 0, 0], target: [0, 0, 0]}\n' > rc.yaml
+    expect_exit 2 "$M" volume bench --study seed003-table3 --slicing-scenes rc.yaml --out nb
+    expect_err "rc.yaml"
+    expect_one_line_err
+    expect_no_dir nb
+    ;;
   *) fail "unknown case" ;;
 esac

@@ -67,4 +67,8 @@ struct VolumeRenderRunResult {
 /// Validates the scene (InputError naming the file) and renders.
 VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& options);
 
+/// A pinhole camera at another image size with the same field of view (focal lengths and the
+/// principal point scaled; a size <= 0 follows the other at the camera's aspect; both <= 0: unchanged).
+render::Camera resized_camera(const render::Camera& camera, int width, int height);
+
 }  // namespace meltlab::experiments
