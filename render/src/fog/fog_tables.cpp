@@ -84,25 +84,79 @@ double g_kernel(double T, double phi) {
 
 }  // namespace
 
-const char* axis_warp_name(AxisWarp w) { return w == AxisWarp::kSqrt ? "sqrt" : "none"; }
+const char* axis_warp_name(AxisWarp w) {
+  switch (w) {
+    case AxisWarp::kSqrt:
+      return "sqrt";
+    case AxisWarp::kCbrt:
+      return "cbrt";
+    case AxisWarp::kSqrtHi:
+      return "sqrt_hi";
+    case AxisWarp::kSmooth:
+      return "smooth";
+    case AxisWarp::kNone:
+      break;
+  }
+  return "none";
+}
 
 AxisWarp parse_axis_warp(const std::string& name, const std::string& where) {
-  if (name == "none") return AxisWarp::kNone;
-  if (name == "sqrt") return AxisWarp::kSqrt;
-  throw InputError(fmt::format("{}: unknown axis warp '{}' (none, sqrt)", where, name));
+  for (AxisWarp w : {AxisWarp::kNone, AxisWarp::kSqrt, AxisWarp::kCbrt, AxisWarp::kSqrtHi, AxisWarp::kSmooth})
+    if (name == axis_warp_name(w)) return w;
+  throw InputError(fmt::format("{}: unknown axis warp '{}' (none, sqrt, cbrt, sqrt_hi, smooth)", where, name));
+}
+
+const char* interp_space_name(InterpSpace s) { return s == InterpSpace::kValue ? "value" : "index"; }
+
+InterpSpace parse_interp_space(const std::string& name, const std::string& where) {
+  if (name == "index") return InterpSpace::kIndex;
+  if (name == "value") return InterpSpace::kValue;
+  throw InputError(fmt::format("{}: unknown interpolation space '{}' (index, value)", where, name));
 }
 
 double TableAxis::node(int i) const {
   const double s = n > 1 ? static_cast<double>(i) / (n - 1) : 0.0;
-  return lo + (hi - lo) * (warp == AxisWarp::kSqrt ? s * s : s);
+  switch (warp) {
+    case AxisWarp::kSqrt:
+      return lo + (hi - lo) * s * s;
+    case AxisWarp::kCbrt:
+      return lo + (hi - lo) * s * s * s;
+    case AxisWarp::kSqrtHi:
+      return i + 1 == n ? hi : hi - (hi - lo) * (1 - s) * (1 - s);
+    case AxisWarp::kSmooth:
+      return i + 1 == n ? hi : lo + (hi - lo) * s * s * (3 - 2 * s);
+    case AxisWarp::kNone:
+      break;
+  }
+  return lo + (hi - lo) * s;
 }
 
 double TableAxis::index(double x, bool& clamped) const {
   const double slack = 1e-12 * std::max(1.0, std::abs(hi - lo));
   if (x < lo - slack || x > hi + slack) clamped = true;
   double s = std::clamp((x - lo) / (hi - lo), 0.0, 1.0);
-  if (warp == AxisWarp::kSqrt) s = std::sqrt(s);
-  return s * (n - 1);
+  switch (warp) {
+    case AxisWarp::kSqrt:
+      s = std::sqrt(s);
+      break;
+    case AxisWarp::kCbrt:
+      s = std::cbrt(s);
+      break;
+    case AxisWarp::kSqrtHi:
+      s = 1 - std::sqrt(1 - s);
+      break;
+    // The inverse of 3s² - 2s³ on [0, 1] (the cubic's trigonometric root).
+    case AxisWarp::kSmooth:
+      s = 0.5 - std::sin(std::asin(1 - 2 * s) / 3);
+      break;
+    case AxisWarp::kNone:
+      break;
+  }
+  const double index = s * (n - 1);
+  if (space == InterpSpace::kIndex || warp == AxisWarp::kNone || n < 2) return index;
+  const int i = std::clamp(static_cast<int>(index), 0, n - 2);
+  const double x0 = node(i), x1 = node(i + 1);
+  return i + std::clamp((std::clamp(x, lo, hi) - x0) / (x1 - x0), 0.0, 1.0);
 }
 
 double FogTable::lookup(double xv, double yv, bool* clamped) const {
@@ -114,9 +168,10 @@ double FogTable::lookup(double xv, double yv, bool* clamped) const {
 
 std::string FogTable::describe() const {
   return fmt::format(
-      "{}: x = {} in [{}, {}] ({} nodes, warp {}), y = {} in [{}, {}] ({} nodes, warp {}), bilinear, "
-      "float, clamped beyond",
-      name, x.name, x.lo, x.hi, x.n, axis_warp_name(x.warp), y.name, y.lo, y.hi, y.n, axis_warp_name(y.warp));
+      "{}: x = {} in [{}, {}] ({} nodes, warp {}), y = {} in [{}, {}] ({} nodes, warp {}), bilinear in {} "
+      "space, float, clamped beyond",
+      name, x.name, x.lo, x.hi, x.n, axis_warp_name(x.warp), y.name, y.lo, y.hi, y.n, axis_warp_name(y.warp),
+      interp_space_name(x.space));
 }
 
 FogTable f_table(const TableOptions& o) {
@@ -124,8 +179,9 @@ FogTable f_table(const TableOptions& o) {
   if (!(o.u_max > 0)) throw InputError(fmt::format("fsa.table.F.u_max = {}: must be > 0", o.u_max));
   FogTable t;
   t.name = fmt::format("{}", "F");  // (not = "F": a false -Wrestrict of GCC 12)
-  t.x = make_axis("v", 0.0, 0.5 * kPi, o.n, AxisWarp::kNone);
+  t.x = make_axis("v", 0.0, 0.5 * kPi, o.n, o.v_warp);
   t.y = make_axis("u", 0.0, o.u_max, o.n, o.u_warp);
+  t.x.space = o.v_interp;
   t.values = ImageF(o.n, o.n, 1);
   tbb::parallel_for(0, o.n, [&](int j) {
     const double u = t.y.node(j);
@@ -145,8 +201,9 @@ FogTable h_table(const TableOptions& o) {
   if (!(o.u_max > 0)) throw InputError(fmt::format("fsa.table.F.u_max = {}: must be > 0", o.u_max));
   FogTable t;
   t.name = fmt::format("{}", "H");
-  t.x = make_axis("v", 0.0, 0.5 * kPi, o.n, AxisWarp::kNone);
+  t.x = make_axis("v", 0.0, 0.5 * kPi, o.n, o.v_warp);
   t.y = make_axis("u", 0.0, o.u_max, o.n, o.u_warp);
+  t.x.space = o.v_interp;
   t.values = ImageF(o.n, o.n, 1);
   tbb::parallel_for(0, o.n, [&](int j) {
     const double u = t.y.node(j);

@@ -65,10 +65,15 @@ SceneFog parse_scene_fog(const ConfigSection& fs) {
   if (const auto ts = fs.optional_section("table")) {
     f.tables.n = ts->get_in_range("n", f.tables.n, 2, 4096);
     f.function = ts->get_choice("function", "H", {"F", "H"}) == "F" ? TableFunction::kF : TableFunction::kH;
-    f.tables.u_warp = ts->get_choice("u_warp", "sqrt", {"none", "sqrt"}) == "none" ? AxisWarp::kNone : AxisWarp::kSqrt;
+    const std::vector<std::string> warps{"none", "sqrt", "cbrt", "sqrt_hi", "smooth"};
+    f.tables.u_warp = parse_axis_warp(ts->get_choice("u_warp", "cbrt", warps), "u_warp");
+    f.tables.v_warp = parse_axis_warp(ts->get_choice("v_warp", "sqrt_hi", warps), "v_warp");
+    f.tables.v_interp = parse_interp_space(ts->get_choice("v_interp", "value", {"index", "value"}), "v_interp");
     ts->finish();
   } else {
-    f.tables.u_warp = AxisWarp::kSqrt;
+    f.tables.u_warp = AxisWarp::kCbrt;
+    f.tables.v_warp = AxisWarp::kSqrtHi;
+    f.tables.v_interp = InterpSpace::kValue;
   }
   f.model.view_attenuation = fs.get_choice("view_attenuation", "apply", {"apply", "source_omit"}) == "apply"
                                  ? ViewAttenuation::kApply
@@ -90,6 +95,8 @@ std::vector<std::pair<std::string, std::string>> describe_scene_fog(const SceneF
   out.emplace_back("fsa.table.N", fmt::format("{}", f.tables.n));
   out.emplace_back("fsa.table.function", table_function_name(f.function));
   out.emplace_back("fsa.table.axis_warp", axis_warp_name(f.tables.u_warp));
+  out.emplace_back("fsa.table.v_warp", axis_warp_name(f.tables.v_warp));
+  out.emplace_back("fsa.table.v_interp", interp_space_name(f.tables.v_interp));
   out.emplace_back("fsa.table.interp", "bilinear");
   out.emplace_back("fog.far", fmt::format("{} mesh units", f.far));
   out.emplace_back("fog.spotlights", fmt::format("{}", f.spotlights.size()));

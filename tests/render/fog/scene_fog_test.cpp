@@ -24,7 +24,8 @@ constexpr double kPixelTol = 1e-5;
 const char* kFogScene =
     "{width: 48, height: 36, fog: {kt: 0.4, far: 8, spotlights: [{position: [-1, -1, 3], target: [0, 0, 0.3], "
     "half_angle_deg: 25, intensity: 12, rings: [{half_angle_deg: 10, intensity: 2}]}], "
-    "table: {n: 32, function: F, u_warp: none}, view_attenuation: source_omit, specular_args: source}}";
+    "table: {n: 32, function: F, u_warp: none, v_warp: smooth, v_interp: index}, view_attenuation: source_omit, "
+    "specular_args: source}}";
 
 std::string message(const std::string& y) {
   try {
@@ -52,6 +53,8 @@ TEST(SceneFog, ParsesEveryKeyAndRefusesBadOnes) {
   EXPECT_EQ(f.tables.n, 32);
   EXPECT_EQ(f.function, TableFunction::kF);
   EXPECT_EQ(f.tables.u_warp, AxisWarp::kNone);
+  EXPECT_EQ(f.tables.v_warp, AxisWarp::kSmooth);
+  EXPECT_EQ(f.tables.v_interp, InterpSpace::kIndex);
   EXPECT_EQ(f.model.view_attenuation, ViewAttenuation::kSourceOmit);
   EXPECT_EQ(f.model.specular_args, SpecularArgs::kSource);
   EXPECT_FALSE(parse_render_scene(YAML::Load("{}"), "scene.yaml").fog);
@@ -59,7 +62,9 @@ TEST(SceneFog, ParsesEveryKeyAndRefusesBadOnes) {
   const RenderScene d =
       parse_render_scene(YAML::Load("{fog: {spotlights: [{position: [0, 0, 3], target: [0, 0, 0]}]}}"), "scene.yaml");
   EXPECT_EQ(d.fog->function, TableFunction::kH);
-  EXPECT_EQ(d.fog->tables.u_warp, AxisWarp::kSqrt);
+  EXPECT_EQ(d.fog->tables.u_warp, AxisWarp::kCbrt);
+  EXPECT_EQ(d.fog->tables.v_warp, AxisWarp::kSqrtHi);
+  EXPECT_EQ(d.fog->tables.v_interp, InterpSpace::kValue);
   EXPECT_EQ(d.fog->model.view_attenuation, ViewAttenuation::kApply);
   EXPECT_NE(message("{fog: {kt: 0.1}}").find("'spotlights'"), std::string::npos) << message("{fog: {kt: 0.1}}");
   EXPECT_NE(message("{fog: {kt: -1, spotlights: [{position: [0, 0, 3], target: [0, 0, 0]}]}}").find("'fog.kt'"),

@@ -22,7 +22,9 @@
 // Domains and axis warps (fsa.table.*; describe() says them, the callers log it):
 //   F: x = v in [0, π/2], y = u in [0, u_max = 20]; G: x = T in [0, T_max = 10], y = θ in [0, π].
 //   An axis warp `sqrt` places nodes at lo + (hi - lo)(i/(N-1))² (dense near lo: the steep region
-//   u -> 0 of F); `none` uniformly. Beyond the domain the lookup clamps and reports it.
+//   u -> 0 of F), `cbrt` at lo + (hi - lo)(i/(N-1))³, `sqrt_hi` at hi - (hi - lo)(1 - i/(N-1))²
+//   (dense near hi: v -> π/2 of H); `none` uniformly. Beyond the domain the lookup clamps and
+//   reports it.
 
 #include <meltlab/core/image.h>
 
@@ -31,11 +33,22 @@
 namespace meltlab::render::fog {
 
 enum class AxisWarp {
-  kNone,  ///< uniform nodes
-  kSqrt,  ///< index ∝ sqrt((x - lo)/(hi - lo)): nodes dense near lo
+  kNone,    ///< uniform nodes
+  kSqrt,    ///< index ∝ sqrt((x - lo)/(hi - lo)): nodes at lo + (hi - lo) s², dense near lo
+  kCbrt,    ///< index ∝ cbrt((x - lo)/(hi - lo)): nodes at lo + (hi - lo) s³, denser near lo
+  kSqrtHi,  ///< nodes at hi - (hi - lo)(1 - s)²: dense near hi
+  kSmooth,  ///< nodes at lo + (hi - lo)(3s² - 2s³): dense near both ends
 };
 const char* axis_warp_name(AxisWarp w);
 AxisWarp parse_axis_warp(const std::string& name, const std::string& where);
+
+/// Where bilinear interpolation is linear between two nodes (fsa.table.v_interp).
+enum class InterpSpace {
+  kIndex,  ///< in the warped coordinate (the node index): with `sqrt`, linear in √u
+  kValue,  ///< in the axis variable itself (u, v) between its nodes: exact for a linear function
+};
+const char* interp_space_name(InterpSpace s);
+InterpSpace parse_interp_space(const std::string& name, const std::string& where);
 
 /// One axis of a table: n nodes from lo to hi (both included) with a warp.
 struct TableAxis {
@@ -43,11 +56,14 @@ struct TableAxis {
   double lo = 0, hi = 1;
   int n = 2;
   AxisWarp warp = AxisWarp::kNone;
+  InterpSpace space = InterpSpace::kIndex;
 
   /// The value at node i (0..n-1).
   double node(int i) const;
   /// The continuous node index of x in [0, n-1]; sets `clamped` if x is beyond [lo, hi]
-  /// (by more than 1e-12 relative: rounding at the ends is not counted).
+  /// (by more than 1e-12 relative: rounding at the ends is not counted). With space kValue the
+  /// fraction within a cell is (x - node(i))/(node(i + 1) - node(i)); with kIndex, the warped
+  /// coordinate's (the two agree for warp none).
   double index(double x, bool& clamped) const;
 };
 
@@ -60,17 +76,20 @@ struct FogTable {
   /// Bilinear lookup at (x, y), clamped to the domain; `clamped` (if given) is set to true when
   /// (x, y) lies beyond it (fsa.table.beyond_domain: clamp, flag).
   double lookup(double x, double y, bool* clamped = nullptr) const;
-  /// "F: x = v in [0, 1.5708] (64, none), y = u in [0, 20] (64, sqrt)".
+  /// "F: x = v in [0, 1.5708] (64 nodes, warp none), y = u in [0, 20] (64 nodes, warp sqrt),
+  /// bilinear in index, ...".
   std::string describe() const;
 };
 
 /// Table resolution and domains (fsa.table.*).
 struct TableOptions {
-  int n = 64;                         ///< fsa.table.N: nodes per axis
-  double u_max = 20;                  ///< fsa.table.F.domain: u in [0, u_max]
-  double t_max = 10;                  ///< fsa.table.G.domain: T in [0, t_max]
-  AxisWarp u_warp = AxisWarp::kNone;  ///< fsa.table.axis_warp (F's u axis)
-  AxisWarp t_warp = AxisWarp::kNone;  ///< the same for G's T axis
+  int n = 64;                                  ///< fsa.table.N: nodes per axis
+  double u_max = 20;                           ///< fsa.table.F.domain: u in [0, u_max]
+  double t_max = 10;                           ///< fsa.table.G.domain: T in [0, t_max]
+  AxisWarp u_warp = AxisWarp::kNone;           ///< fsa.table.axis_warp (F's and H's u axis)
+  AxisWarp v_warp = AxisWarp::kNone;           ///< fsa.table.v_warp (F's and H's v axis)
+  InterpSpace v_interp = InterpSpace::kIndex;  ///< fsa.table.v_interp (F's and H's v axis; u: index)
+  AxisWarp t_warp = AxisWarp::kNone;           ///< the same for G's T axis
 };
 
 /// The F table on N×N nodes (entries from airlight_f; TBB over rows).
