@@ -27,8 +27,15 @@ Run add_fog(CLI::App& app, const std::vector<std::string>& command_line) {
   ren->add_option("--table-n", r->table_n, "Table nodes per axis (fsa.table.N)")->default_val(64);
   ren->add_option("--table-function", r->table_function, "F (the source) or H (the tail, the harness's default)")
       ->default_val("H");
-  ren->add_option("--u-warp", r->u_warp, "none or sqrt: the u axis of the airlight table (fsa.table.axis_warp)")
-      ->default_val("sqrt");
+  ren->add_option("--u-warp", r->u_warp,
+                  "none, sqrt, cbrt, sqrt_hi or smooth: the u axis of the airlight table (fsa.table.axis_warp)")
+      ->default_val("cbrt");
+  ren->add_option("--v-warp", r->v_warp,
+                  "none, sqrt, cbrt, sqrt_hi or smooth: the v axis of the airlight table (fsa.table.v_warp)")
+      ->default_val("sqrt_hi");
+  ren->add_option("--v-interp", r->v_interp,
+                  "index or value: bilinear in the v axis' warped index or in v itself (fsa.table.v_interp)")
+      ->default_val("value");
   ren->add_option("--view-attenuation", r->view_attenuation, "apply or source_omit (fsa.surface.view_attenuation)")
       ->default_val("apply");
   ren->add_option("--specular-args", r->specular_args, "mirror or source (fsa.errata.specular_args)")

@@ -80,15 +80,41 @@ ErrorStats relative_errors(const std::vector<double>& values, const std::vector<
   return s;
 }
 
+// An airlight table's axes (fsa.table.axis_warp on u, fsa.table.v_warp and fsa.table.v_interp on v).
+struct TableDesign {
+  fog::AxisWarp u = fog::AxisWarp::kNone, v = fog::AxisWarp::kNone;
+  fog::InterpSpace v_interp = fog::InterpSpace::kIndex;
+};
+// The source's uniform axes, the √u axis of the first harness tables, u³ nodes with v dense
+// towards π/2 (bilinear in the warped index), and the harness's default: the same nodes with v
+// interpolated linearly in v itself (fog_tables.h: the corner u -> 0, v -> π/2 of H).
+constexpr TableDesign kUniform{}, kSqrtU{fog::AxisWarp::kSqrt, fog::AxisWarp::kNone, fog::InterpSpace::kIndex},
+    kCbrtSqrtHi{fog::AxisWarp::kCbrt, fog::AxisWarp::kSqrtHi, fog::InterpSpace::kIndex},
+    kDefaultDesign{fog::AxisWarp::kCbrt, fog::AxisWarp::kSqrtHi, fog::InterpSpace::kValue};
+constexpr TableDesign kDesigns[] = {kUniform, kSqrtU, kCbrtSqrtHi, kDefaultDesign};
+
+// "sqrt" (the u warp alone when v is uniform and interpolated in index space, as the earlier
+// CSVs), else "u warp/v warp" and "/value" when v is interpolated in value space.
+std::string design_name(fog::AxisWarp u, fog::AxisWarp v, fog::InterpSpace v_interp) {
+  std::string s = fog::axis_warp_name(u);
+  if (v != fog::AxisWarp::kNone || v_interp != fog::InterpSpace::kIndex)
+    s += fmt::format("/{}", fog::axis_warp_name(v));
+  if (v_interp != fog::InterpSpace::kIndex) s += fmt::format("/{}", fog::interp_space_name(v_interp));
+  return s;
+}
+
 // The airlight tables of the studies, each built once (E1, E2 and the speed study share them).
-const fog::FogTableSet& airlight_tables(fog::TableFunction function, fog::AxisWarp warp, int n) {
-  static std::map<std::tuple<int, int, int>, fog::FogTableSet> cache;
-  const auto key = std::make_tuple(static_cast<int>(function), static_cast<int>(warp), n);
+const fog::FogTableSet& airlight_tables(fog::TableFunction function, TableDesign design, int n) {
+  static std::map<std::tuple<int, int, int, int, int>, fog::FogTableSet> cache;
+  const auto key = std::make_tuple(static_cast<int>(function), static_cast<int>(design.u), static_cast<int>(design.v),
+                                   static_cast<int>(design.v_interp), n);
   auto it = cache.find(key);
   if (it == cache.end()) {
     fog::TableOptions to;
     to.n = n;
-    to.u_warp = warp;
+    to.u_warp = design.u;
+    to.v_warp = design.v;
+    to.v_interp = design.v_interp;
     it = cache.emplace(key, fog::build_fog_tables(to, function, 20, false)).first;
   }
   return it->second;
@@ -179,16 +205,18 @@ void study_tables(const FogBenchOptions& o, const fs::path& dir, json& record) {
       mean_abs += std::abs(val[k] - ref[k]);
       max_abs = std::max(max_abs, std::abs(val[k] - ref[k]));
     }
-    csv.row("{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.1f}", t.name, fog::axis_warp_name(t.y.warp), t.x.n, pts.size(),
-            s.mean, s.max, mean_abs / static_cast<double>(ref.size()), max_abs, build_ms);
+    // F/H: the u warp (and the v warp when not uniform); G: θ's warp (none).
+    const std::string warp = xy_swapped ? design_name(t.y.warp, t.x.warp, t.x.space) : fog::axis_warp_name(t.y.warp);
+    csv.row("{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.1f}", t.name, warp, t.x.n, pts.size(), s.mean, s.max,
+            mean_abs / static_cast<double>(ref.size()), max_abs, build_ms);
   };
   for (int n : table_sizes(o.quick, false))
-    for (auto warp : {fog::AxisWarp::kNone, fog::AxisWarp::kSqrt}) {
-      const fog::FogTableSet& f = airlight_tables(fog::TableFunction::kF, warp, n);
-      const fog::FogTableSet& h = airlight_tables(fog::TableFunction::kH, warp, n);
+    for (const TableDesign& d : kDesigns) {
+      const fog::FogTableSet& f = airlight_tables(fog::TableFunction::kF, d, n);
+      const fog::FogTableSet& h = airlight_tables(fog::TableFunction::kH, d, n);
       measure(f.airlight, uv, f_ref, true, f.build_ms);
       measure(h.airlight, uv, h_ref, true, h.build_ms);
-      progress(fmt::format("E1 F/H N = {} warp {}", n, fog::axis_warp_name(warp)));
+      progress(fmt::format("E1 F/H N = {} warp {}", n, design_name(d.u, d.v, d.v_interp)));
     }
   // G: fewer points (an accurate G is about 1 ms), T uniform in [0, 10], θ in [0, π].
   const int n_g = o.quick ? 1500 : 10000;
@@ -234,11 +262,11 @@ void study_e2(const FogBenchOptions& o, const fs::path& dir, json& record) {
   CsvTable csv("case,function,warp,n,lit,median,p99,max,mean,clamped_share");
   const fog::FogModelOptions model;
   long long rejected = 0, total = 0;
-  // Every airlight table once (F and H, both warps, every N), shared by the cases.
+  // Every airlight table once (F and H, every design, every N), shared by the cases.
   std::vector<const fog::FogTableSet*> tables;
   for (auto function : {fog::TableFunction::kF, fog::TableFunction::kH})
-    for (auto warp : {fog::AxisWarp::kNone, fog::AxisWarp::kSqrt})
-      for (int n : table_sizes(o.quick, false)) tables.push_back(&airlight_tables(function, warp, n));
+    for (const TableDesign& d : kDesigns)
+      for (int n : table_sizes(o.quick, false)) tables.push_back(&airlight_tables(function, d, n));
   progress(fmt::format("E2: {} airlight tables built", tables.size()));
   auto run_case = [&](const std::string& name, const std::vector<double>& ref, auto eval) {
     // The accurate-F model first: its error against R-air is the derivation's floor.
@@ -248,7 +276,8 @@ void study_e2(const FogBenchOptions& o, const fs::path& dir, json& record) {
       fog::LookupCounts counts;
       const ErrorStats s = relative_errors(eval(t->functions(), &counts), ref);
       csv.row("{},{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.4g}", name, fog::table_function_name(t->function),
-              fog::axis_warp_name(t->options.u_warp), t->options.n, s.count, s.median, s.p99, s.max, s.mean,
+              design_name(t->options.u_warp, t->options.v_warp, t->options.v_interp), t->options.n, s.count, s.median,
+              s.p99, s.max, s.mean,
               counts.lookups ? static_cast<double>(counts.clamped) / static_cast<double>(counts.lookups) : 0.0);
     }
     progress(fmt::format("E2 {} done", name));
@@ -376,7 +405,7 @@ void study_e3(const FogBenchOptions& o, const fs::path& dir, json& record) {
     for (int n : nphi) max_phi = std::max(max_phi, n);
     progress(fmt::format("E3 kt {}: R-surf-model at {} points in {:.0f} ms", kt, pick.size(), ms_since(t0)));
     for (int n : table_sizes(o.quick, true)) {
-      fog::FogFunctions fn = airlight_tables(fog::TableFunction::kH, fog::AxisWarp::kSqrt, n).functions();
+      fog::FogFunctions fn = airlight_tables(fog::TableFunction::kH, kDefaultDesign, n).functions();
       fn.g_diffuse = &g_tables(1, n);
       fn.g_specular = &g_tables(s.material.n, n);
       std::vector<double> val(pick.size());
@@ -489,7 +518,9 @@ void study_cost(const FogBenchOptions& o, const fs::path& dir, json& record) {
   CsvTable csv("kind,x,lit_pixels,pixels,triangles,visibility_ms,shading_ms");
   const fog::FogModelOptions model;
   fog::TableOptions to;
-  to.u_warp = fog::AxisWarp::kSqrt;
+  to.u_warp = kDefaultDesign.u;
+  to.v_warp = kDefaultDesign.v;
+  to.v_interp = kDefaultDesign.v_interp;
   const fog::FogTableSet tables = fog::build_fog_tables(to, fog::TableFunction::kH, 20);
   const fog::FogFunctions fn = tables.functions();
   std::vector<double> lit, t_lit, lights, t_lights;
@@ -575,7 +606,7 @@ void study_speed(const FogBenchOptions& o, const fs::path& dir, json& record) {
     double analytic_ns = 0;
     ErrorStats analytic_err;
     for (int n : {16, 64, 256}) {
-      const fog::FogFunctions fn = airlight_tables(fog::TableFunction::kH, fog::AxisWarp::kSqrt, n).functions();
+      const fog::FogFunctions fn = airlight_tables(fog::TableFunction::kH, kDefaultDesign, n).functions();
       std::vector<double> val;
       const double ms = timed_median(o, [&] {
         val = per_pixel(g, [&](const fog::GBufferPixel& p) { return airlight_sum(c.scene, g.eye, p, fn, model); });

@@ -67,11 +67,13 @@ json describe_model(const fog::FogModelOptions& o, const fog::FogTableSet& table
   j["fsa.table.N"] = tables.options.n;
   j["fsa.table.interp"] = "bilinear";
   j["fsa.table.axis_warp"] = fog::axis_warp_name(tables.options.u_warp);
+  j["fsa.table.v_warp"] = fog::axis_warp_name(tables.options.v_warp);
+  j["fsa.table.v_interp"] = fog::interp_space_name(tables.options.v_interp);
   j["fsa.table.F.domain"] = fmt::format("v in [0, π/2], u in [0, {}]", tables.options.u_max);
   j["fsa.table.G.domain"] = fmt::format("T in [0, {}], θ in [0, π]", tables.options.t_max);
   j["fsa.table.beyond_domain"] = tables.function == fog::TableFunction::kF
                                      ? "clamp, flag"
-                                     : "H: K = H (1 + tan v)(1 + u tan v) continued as K(u_max, v), flag";
+                                     : "H: K = H (1 + u tan v) continued as K(u_max, v), flag";
   j["fsa.table.function"] = fog::table_function_name(tables.function);
   j["tables"] = tables.describe();
   return j;
@@ -88,6 +90,8 @@ FogRenderResult run_fog_render(const FogRenderOptions& o) {
   fog::TableOptions to;
   to.n = o.table_n;
   to.u_warp = fog::parse_axis_warp(o.u_warp, "--u-warp");
+  to.v_warp = fog::parse_axis_warp(o.v_warp, "--v-warp");
+  to.v_interp = fog::parse_interp_space(o.v_interp, "--v-interp");
   const fog::TableFunction function = fog_table_function(o.table_function);
   RunFolder folder(o.out_dir, RunFolderOptions{"--out", "render.json", "fog render", o.overwrite});
   Provenance provenance = start_provenance("fog render", o.command_line);

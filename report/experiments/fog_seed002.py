@@ -30,7 +30,7 @@ FIGURES = [
     ("fig_5_7_kt004", "Fig. 5.7: S2, 4 spotlights, k_t = 0.04"),
     ("fig_5_7_kt01", "Fig. 5.7: S2, 4 spotlights, k_t = 0.1"),
 ]
-DEFAULT = ("H", "sqrt")  # the harness's table (fsa.table.function, fsa.table.axis_warp)
+DEFAULT = ("H", "cbrt/sqrt_hi/value")  # the harness's table (fsa.table.function, fsa.table.axis_warp/v_warp/v_interp)
 SOURCE = ("F", "none")   # the listing's
 
 
@@ -98,7 +98,7 @@ def fog_seed002(exp: Path, args):
     fig_png = figures(exp)
     if fig_png:
         figs.append({"caption": "The source's figures as S1-S3 analogues (assets unavailable; spec §4), "
-                                "the harness's defaults (N = 64, H table, √u axis)", "png": fig_png})
+                                "the harness's defaults (N = 64, H table, u³ and v-dense-at-π/2 axes)", "png": fig_png})
 
     lab_png, lab_csv = lab_figure(exp)
     if lab_png:
@@ -145,7 +145,7 @@ def fog_seed002(exp: Path, args):
     for case in cases:
         exact = [r for r in e2 if r["case"] == case and r["function"] == "exact"]
         floor_ok = floor_ok and all(float(r["max"]) < 1e-8 for r in exact)
-        for fn, warp in (DEFAULT, SOURCE, ("F", "sqrt"), ("H", "none")):
+        for fn, warp in (DEFAULT, SOURCE, ("H", "sqrt"), ("H", "cbrt/sqrt_hi"), ("F", "sqrt"), ("H", "none")):
             rs = [r for r in e2 if r["case"] == case and r["function"] == fn and r["warp"] == warp]
             if not rs:
                 continue
@@ -163,7 +163,7 @@ def fog_seed002(exp: Path, args):
                                "max E2 N=64", "order of the mean E2", "accurate-F model: max E2 (the derivation's floor)"],
               e2_rows)
     tables.append({"caption": "E2: the airlight against R-air at N = 64 on S1-S4 (relative, floor 1e-4 of the "
-                              "maximum; H/sqrt the harness's default, F/none the listing's)", "csv": "e2.csv"})
+                              "maximum; H/cbrt/sqrt_hi/value the harness's default, H/sqrt the earlier one, F/none the listing's)", "csv": "e2.csv"})
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     for case in cases:
         for ax, (fn, warp) in zip(axes, (DEFAULT, SOURCE)):

@@ -12,7 +12,7 @@ case "$CASE" in
     done
     # The source's choices: F table, no warp, the listing's cone logic, specular args, no view attenuation.
     run_ok "$M" fog render --scene sphere --kt 0.04 --width 64 --height 48 --table-n 32 --table-function F \
-      --u-warp none --cone-solver source --specular-args source --view-attenuation source_omit --out r_source
+      --u-warp none --v-warp none --v-interp index --cone-solver source --specular-args source --view-attenuation source_omit --out r_source
     run_ok "$M" fog render --scene sphere --kt 0 --width 64 --height 48 --table-n 32 --terms direct --out r_direct
     py <<'PY'
 import json, struct
@@ -22,9 +22,11 @@ for s, name in [('sphere', 'S1_sphere'), ('street', 'S2_street'), ('lamp_spot', 
     m = j['model']
     for k in ('fsa.phase.normalisation', 'fsa.medium.albedo', 'fsa.medium.kt', 'fsa.cone.solver', 'fsa.h_min',
               'fsa.surface.view_attenuation', 'fsa.errata.specular_args', 'fsa.table.N', 'fsa.table.axis_warp',
+              'fsa.table.v_warp', 'fsa.table.v_interp',
               'fsa.table.F.domain', 'fsa.table.G.domain', 'fsa.table.beyond_domain'):
         assert k in m, (s, k)
     assert m['fsa.table.N'] == 32 and m['fsa.medium.kt'] == 0.1, m
+    assert (m['fsa.table.axis_warp'], m['fsa.table.v_warp'], m['fsa.table.v_interp']) == ('cbrt', 'sqrt_hi', 'value'), m
     assert any('nodes' in t for t in m['tables']), m['tables']
     assert j['lit_pixels'] > 0 and j['table_lookups']['total'] > 0, j
     assert j['provenance']['meltlab']['version'], j['provenance']
@@ -33,6 +35,7 @@ for s, name in [('sphere', 'S1_sphere'), ('street', 'S2_street'), ('lamp_spot', 
 assert json.load(open('r_street/render.json'))['lights'] == 4
 m = json.load(open('r_source/render.json'))['model']
 assert m['fsa.table.function'] == 'F' and m['fsa.table.axis_warp'] == 'none', m
+assert m['fsa.table.v_warp'] == 'none' and m['fsa.table.v_interp'] == 'index', m
 assert m['fsa.cone.solver'] == 'source' and m['fsa.errata.specular_args'] == 'source', m
 assert m['fsa.surface.view_attenuation'] == 'source_omit', m
 assert json.load(open('r_direct/render.json'))['terms'] == 'direct'
@@ -93,6 +96,14 @@ PY
     expect_exit 2 "$M" fog render --scene sphere --u-warp log --out r
     expect_err "--u-warp"
     expect_one_line_err
+    expect_exit 2 "$M" fog render --scene sphere --v-warp log --out r
+    expect_err "--v-warp"
+    expect_one_line_err
+    expect_no_dir r
+    expect_exit 2 "$M" fog render --scene sphere --v-interp cubic --out r
+    expect_err "--v-interp"
+    expect_one_line_err
+    expect_no_dir r
     expect_exit 2 "$M" fog render --scene sphere --terms some --out r
     expect_err "--terms"
     expect_one_line_err

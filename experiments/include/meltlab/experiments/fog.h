@@ -32,7 +32,7 @@ struct FogRenderOptions {
   double kt = 0.04;
   int width = 640, height = 480, lights = 4;
   int table_n = 64;
-  std::string table_function = "H", u_warp = "sqrt";
+  std::string table_function = "H", u_warp = "cbrt", v_warp = "sqrt_hi", v_interp = "value";
   std::string view_attenuation = "apply", specular_args = "mirror", cone_solver = "robust";
   std::string terms = "all";  ///< all, no_airlight (Fig. 5.2 b), direct (no fog terms at all)
   double exposure = 1.0;
