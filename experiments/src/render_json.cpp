@@ -91,8 +91,12 @@ json fog_json(const render::RenderScene& s) {
   json lights = json::array();
   for (const auto& l : s.fog->spotlights) {
     json rings = json::array();
-    for (const auto& r : l.profile) rings.push_back({{"half_angle_rad", r.half_angle_rad}, {"intensity", r.intensity}});
-    lights.push_back({{"position", xyz(l.position)},
+    const bool point = l.kind == render::fog::LightKind::kPoint;
+    if (!point)
+      for (const auto& r : l.profile)
+        rings.push_back({{"half_angle_rad", r.half_angle_rad}, {"intensity", r.intensity}});
+    lights.push_back({{"kind", point ? "point" : "spot"},
+                      {"position", xyz(l.position)},
                       {"axis", xyz(l.axis)},
                       {"colour", xyz(l.colour)},
                       {"intensity", l.intensity},

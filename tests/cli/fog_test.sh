@@ -63,6 +63,43 @@ assert f['fsa.table.function'] == 'H' and f['fog.spotlights'] == '1', f
 assert len(f['spotlights']) == 1 and f['spotlights'][0]['intensity'] == 0.025, f
 PY
     ;;
+  lamp_scene_files)
+    # S2 and S3 (spot and point) as scene files of the ice renderer (experiments/configs/fog_street.yaml,
+    # fog_lamp_spot.yaml, fog_lamp_point.yaml; the posts as OBJ meshes) against `fog render` with the
+    # analytic geometry. The same model, but the ice renderer's fog pass shades surfaces white and
+    # `fog render` with S2's (0.8, 0.8, 0.75) and S3's (0.85, 0.8, 0.7): per channel, fog render /
+    # ice renderer lies in [colour, 1] (1 for the airlight and the specular terms). Measured (over
+    # the channels above 1e-3 of the image's maximum): p1 0.70-0.75, p99 1.000, min 0.677 (S3 spot:
+    # the post's silhouette, 16-sided prism against a cylinder), max 1.001 (half-float EXR).
+    # A wrong lamp position, cone, intensity or k_t moves whole regions out of these bounds.
+    CONFIGS="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../experiments/configs" && pwd)"
+    for s in lamp_spot lamp_point street; do
+      mesh="$CONFIGS/fog_lamp_post.obj" kt=0.1
+      [ "$s" = street ] && mesh="$CONFIGS/fog_street_posts.obj" kt=0.04
+      run_ok "$M" render --mesh "$mesh" --keep-position --cycles 0 --every 1 --scene "$CONFIGS/fog_$s.yaml" --out "a_$s"
+      run_ok "$M" fog render --scene "$s" --kt "$kt" --width 160 --height 120 --out "b_$s"
+      oiiotool --dumpdata "a_$s/frames/frame_000000.exr" > "a_$s.txt" || fail "oiiotool a_$s"
+      oiiotool --dumpdata "b_$s/image.exr" > "b_$s.txt" || fail "oiiotool b_$s"
+    done
+    py <<'PY'
+import json, re
+def load(p):
+    return [tuple(map(float, m.groups())) for m in re.finditer(r"Pixel \(\d+, \d+\): (\S+) (\S+) (\S+)", open(p).read())]
+for s, lo in (('lamp_spot', 0.7), ('lamp_point', 0.7), ('street', 0.75)):
+    a, b = load(f'a_{s}.txt'), load(f'b_{s}.txt')
+    assert len(a) == len(b) == 160 * 120, (s, len(a), len(b))
+    peak = max(max(p) for p in a)
+    rs = sorted(pb[c] / pa[c] for pa, pb in zip(a, b) for c in range(3) if pa[c] > 1e-3 * peak)
+    assert len(rs) > 5000, (s, len(rs))
+    inside = sum(lo - 0.02 <= r <= 1.01 for r in rs) / len(rs)
+    # 99 % within the colour bounds (2 % slack: half floats, the tessellation), none beyond 2x off.
+    assert inside > 0.99 and rs[0] > 0.5 and rs[-1] < 1.05, (s, inside, rs[0], rs[-1])
+f = json.load(open('a_street/render.json'))['scene']['fog']
+assert f['fog.spotlights'] == '4' and all(l['kind'] == 'spot' for l in f['spotlights']), f
+f = json.load(open('a_lamp_point/render.json'))['scene']['fog']
+assert f['spotlights'][0]['kind'] == 'point' and f['spotlights'][0]['profile'] == [], f
+PY
+    ;;
   bench_model)
     # The quickest study end to end (the model error against R-surf-true) into a CSV, the record with the load.
     run_ok "$M" fog bench --study model --repeats 1 --out b

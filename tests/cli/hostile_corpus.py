@@ -357,6 +357,7 @@ def scene_cases():
         "fog_table_n_huge": "fog: {spotlights: [{position: [0, 0, 3], target: [0, 0, 0]}], table: {n: 100000000}}\n",
         "fog_table_v_warp_bad": "fog: {spotlights: [{position: [0, 0, 3], target: [0, 0, 0]}], table: {v_warp: log}}\n",
         "fog_table_v_interp_bad": "fog: {spotlights: [{position: [0, 0, 3], target: [0, 0, 0]}], table: {v_interp: cubic}}\n",
+        "fog_point_with_target": "fog: {spotlights: [{kind: point, position: [0, 0, 3], target: [0, 0, 0]}]}\n",
         "fog_half_angle_90": "fog: {spotlights: [{position: [0, 0, 3], target: [0, 0, 0], half_angle_deg: 90}]}\n",
     }
     files = {"env.png": png_claiming(30000, 15000), "tex.png": png_claiming(64, 64)[:50]}

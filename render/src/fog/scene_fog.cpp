@@ -23,8 +23,20 @@ int phong_exponent(double n) { return std::clamp(static_cast<int>(std::lround(n)
 
 Spotlight read_spotlight(const ConfigSection& s) {
   Spotlight l;
-  l.kind = LightKind::kSpot;
+  // kind: point is Sun et al.'s isotropic point light (S3's comparison): no target, cone or rings.
+  l.kind = s.get_choice("kind", "spot", {"spot", "point"}) == "point" ? LightKind::kPoint : LightKind::kSpot;
   if (!s.has("position")) s.fail("a spotlight needs 'position'");
+  if (l.kind == LightKind::kPoint) {
+    if (s.has("target") || s.has("half_angle_deg") || s.has("rings"))
+      s.fail("a point light ('kind: point') takes no 'target', 'half_angle_deg' or 'rings'");
+    l.position = s.get_vec3("position", Vec3::Zero());
+    l.colour = s.get_vec3("colour", Vec3(1, 1, 1));
+    if (l.colour.minCoeff() < 0) s.fail_at("colour", "'colour' values must be >= 0");
+    l.intensity = s.get_in_range("intensity", 1.0, 0.0, 1e12);
+    l.profile.clear();
+    s.finish();
+    return l;
+  }
   if (!s.has("target")) s.fail("a spotlight needs 'target'");
   l.position = s.get_vec3("position", Vec3::Zero());
   const Vec3 target = s.get_vec3("target", Vec3::Zero());

@@ -66,6 +66,18 @@ TEST(SceneFog, ParsesEveryKeyAndRefusesBadOnes) {
   EXPECT_EQ(d.fog->tables.v_warp, AxisWarp::kSqrtHi);
   EXPECT_EQ(d.fog->tables.v_interp, InterpSpace::kValue);
   EXPECT_EQ(d.fog->model.view_attenuation, ViewAttenuation::kApply);
+  // A point light (S3's comparison): no cone, intensity 1 in every direction.
+  const RenderScene p = parse_render_scene(
+      YAML::Load("{fog: {spotlights: [{kind: point, position: [0, 0, 4], intensity: 30}]}}"), "scene.yaml");
+  ASSERT_EQ(p.fog->spotlights.size(), 1u);
+  EXPECT_EQ(p.fog->spotlights[0].kind, LightKind::kPoint);
+  EXPECT_TRUE(p.fog->spotlights[0].profile.empty());
+  EXPECT_EQ(p.fog->spotlights[0].intensity, 30);
+  EXPECT_EQ(p.fog->spotlights[0].intensity_at(Vec3(5, -3, 0)), 1.0);
+  EXPECT_NE(message("{fog: {spotlights: [{kind: point, position: [0, 0, 3], target: [0, 0, 0]}]}}").find("point"),
+            std::string::npos);
+  EXPECT_NE(message("{fog: {spotlights: [{kind: lamp, position: [0, 0, 3], target: [0, 0, 0]}]}}").find(".kind'"),
+            std::string::npos);
   EXPECT_NE(message("{fog: {kt: 0.1}}").find("'spotlights'"), std::string::npos) << message("{fog: {kt: 0.1}}");
   EXPECT_NE(message("{fog: {kt: -1, spotlights: [{position: [0, 0, 3], target: [0, 0, 0]}]}}").find("'fog.kt'"),
             std::string::npos);

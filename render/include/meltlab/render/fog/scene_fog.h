@@ -23,6 +23,7 @@
 //     spotlights:
 //       - {position: [x, y, z], target: [x, y, z], half_angle_deg: 30, colour: [1, 1, 1], intensity: 1,
 //          rings: [{half_angle_deg: 15, intensity: 2}]}   # optional inner rings (fsa.light.profile)
+//       - {kind: point, position: [x, y, z], colour: [1, 1, 1], intensity: 1}  # Sun et al.'s point light
 //     table: {n: 64, function: H, u_warp: cbrt, v_warp: sqrt_hi, v_interp: value}
 //                              # fsa.table.* (F|H; warps none|sqrt|cbrt|sqrt_hi|smooth; v_interp index|value)
 //     view_attenuation: apply  # apply | source_omit
