@@ -672,7 +672,8 @@ void study_speed(const FogBenchOptions& o, const fs::path& dir, json& record) {
   record["speed"] = {
       {"criterion",
        "equal error: the coarsest marching step (1 m halved) whose E2 against R-air over the lit pixels is <= 1 % "
-       "(median; and p99: 1 % at 99 % of the lit pixels), against the analytic model at N = 64 (H, sqrt axis), "
+       "(median; and p99: 1 % at 99 % of the lit pixels), against the analytic model at N = 64 (H, the default axes "
+       "cbrt/sqrt_hi/value), "
        "airlight only, same G-buffer, same threads; times are medians of the repeats"},
       {"ratios", ratios}};
 }
