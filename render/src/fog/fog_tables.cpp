@@ -168,10 +168,10 @@ double FogTable::lookup(double xv, double yv, bool* clamped) const {
 
 std::string FogTable::describe() const {
   return fmt::format(
-      "{}: x = {} in [{}, {}] ({} nodes, warp {}), y = {} in [{}, {}] ({} nodes, warp {}), bilinear in {} "
-      "space, float, clamped beyond",
-      name, x.name, x.lo, x.hi, x.n, axis_warp_name(x.warp), y.name, y.lo, y.hi, y.n, axis_warp_name(y.warp),
-      interp_space_name(x.space));
+      "{}: x = {} in [{}, {}] ({} nodes, warp {}, linear in {} space), y = {} in [{}, {}] ({} nodes, warp {}, "
+      "linear in {} space), bilinear, float, clamped beyond",
+      name, x.name, x.lo, x.hi, x.n, axis_warp_name(x.warp), interp_space_name(x.space), y.name, y.lo, y.hi, y.n,
+      axis_warp_name(y.warp), interp_space_name(y.space));
 }
 
 FogTable f_table(const TableOptions& o) {

@@ -76,8 +76,8 @@ struct FogTable {
   /// Bilinear lookup at (x, y), clamped to the domain; `clamped` (if given) is set to true when
   /// (x, y) lies beyond it (fsa.table.beyond_domain: clamp, flag).
   double lookup(double x, double y, bool* clamped = nullptr) const;
-  /// "F: x = v in [0, 1.5708] (64 nodes, warp none), y = u in [0, 20] (64 nodes, warp sqrt),
-  /// bilinear in index, ...".
+  /// "H: x = v in [0, 1.5708] (64 nodes, warp sqrt_hi, linear in value space), y = u in [0, 20]
+  /// (64 nodes, warp cbrt, linear in index space), bilinear, ...".
   std::string describe() const;
 };
 
