@@ -137,15 +137,18 @@ double coverage(const ImageF& alpha) {
 void slicing_counters(benchmark::State& state, const render::SlicingStats& st, double cover) {
   state.counters["samples"] = double(st.samples);
   state.counters["fetched"] = double(st.samples - st.skipped);
+  state.counters["visited"] = double(st.visited);
   state.counters["coverage"] = cover;
   state.counters["ns_per_sample"] = benchmark::Counter(
       double(st.samples) * 1e-9, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 
-// arg: QC x 100
+// args: QC x 100, empty-space cell edge (voxels), early termination x 1000 (0: off)
 void BM_PhantomBlend(benchmark::State& state) {
   render::SlicingSettings s;
   s.quality_class = double(state.range(0)) / 100;
+  s.skip_cell = int(state.range(1));
+  s.early_termination = double(state.range(2)) / 1000;
   s.tfs[0] = phantom_tf();
   const render::SlicingRenderer r(phantom(), s);
   const auto cam = phantom_camera();
@@ -157,11 +160,12 @@ void BM_PhantomBlend(benchmark::State& state) {
   slicing_counters(state, f.stats, coverage(f.alpha));
 }
 
-// arg: QC x 100
+// args: QC x 100, empty-space cell edge (voxels)
 void BM_PhantomCombined(benchmark::State& state) {
   render::SlicingSettings s;
   s.mode = render::SlicingMode::kCombined;
   s.quality_class = double(state.range(0)) / 100;
+  s.skip_cell = int(state.range(1));
   s.tfs[0] = phantom_tf();
   static const render::GradientVolume grad = render::build_gradient_volume(phantom(), s.gradient);
   const render::SlicingRenderer r(phantom(), s, grad);
@@ -198,13 +202,23 @@ void BM_PhantomRayCast(benchmark::State& state) {
 }
 
 BENCHMARK(BM_PhantomBlend)
-    ->Arg(50)
-    ->Arg(100)
-    ->Arg(200)
+    ->Args({50, 4, 0})
+    ->Args({100, 4, 0})
+    ->Args({200, 4, 0})
+    ->Args({100, 2, 0})
+    ->Args({100, 8, 0})
+    ->Args({100, 4, 990})
+    ->Args({50, 4, 990})
+    ->Args({200, 4, 990})
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()
     ->UseRealTime();
-BENCHMARK(BM_PhantomCombined)->Arg(100)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK(BM_PhantomCombined)
+    ->Args({100, 8})
+    ->Args({100, 4})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
 BENCHMARK(BM_PhantomRayCast)
     ->Args({100, 0})
     ->Args({100, 1})
