@@ -191,6 +191,8 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
   const bool use_mask = !s_.mask.empty();
   const bool skip = !live_.empty();
   const int cell_shift = cell_shift_;
+  const std::size_t cells_x = std::size_t(cells_[0]), cells_y = std::size_t(cells_[1]);
+  const std::uint8_t* const dist_cells = dist_.data();  // the distance map answers "live" too (0)
   const std::array<int, 3> dims = volume_.dims();
   const double inv_range = 1.0 / (hi_ - lo_);
   const Eigen::Vector3d origin = volume_.origin(), inv_spacing = volume_.spacing().cwiseInverse();
@@ -241,9 +243,9 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                 const int c0 = std::clamp(int(fx), 0, dims[0] - 1) >> cell_shift;
                 const int c1 = std::clamp(int(fy), 0, dims[1] - 1) >> cell_shift;
                 const int c2 = std::clamp(int(fz), 0, dims[2] - 1) >> cell_shift;
-                const std::size_t cell =
-                    std::size_t(c0) + std::size_t(cells_[0]) * (std::size_t(c1) + std::size_t(cells_[1]) * c2);
-                if (!live_[cell]) {
+                const std::size_t cell = std::size_t(c0) + cells_x * (std::size_t(c1) + cells_y * std::size_t(c2));
+                const int dist = dist_cells[cell];  // 0: live
+                if (dist != 0) {
                   ++cnt.skipped;
                   // Jump the run of empty planes: every cell within D - 1 of this one (max norm) is
                   // empty, D = dist_ the distance to the nearest live cell; so is every sample whose
@@ -252,7 +254,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                   // where clamping keeps the index in the box). With g moving by delta per plane, the
                   // planes while g stays 0.01 index units inside that box (for the float rounding of
                   // g and of t_k) are empty and are counted as skipped without being visited.
-                  const int r = dist_[cell] - 1;
+                  const int r = dist - 1;
                   const int cc[3] = {c0, c1, c2};
                   double run = double(n_samples - 1 - step);
                   for (int a = 0; a < 3; ++a) {
