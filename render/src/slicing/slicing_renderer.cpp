@@ -253,16 +253,25 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                   // per axis (e the cell edge; a side at the volume's border reaches to infinity,
                   // where clamping keeps the index in the box). With g moving by delta per plane, the
                   // planes while g stays 0.01 index units inside that box (for the float rounding of
-                  // g and of t_k) are empty and are counted as skipped without being visited.
+                  // g and of t_k) are empty and are counted as skipped without being visited. On an
+                  // axis where g moves by more than 1e-6 per plane it moves monotonically (round-off
+                  // is ~1e-12), so only the side ahead bounds the run.
                   const int r = dist - 1;
                   const int cc[3] = {c0, c1, c2};
                   double run = double(n_samples - 1 - step);
                   for (int a = 0; a < 3; ++a) {
                     const double d = delta[a];
-                    if (d > 0 && cc[a] + r < cells_[std::size_t(a)] - 1)
-                      run = std::min(run, (double((cc[a] + r + 1) << cell_shift) - 0.01 - g[a]) / d);
-                    else if (d < 0 && cc[a] - r > 0)
-                      run = std::min(run, (g[a] - double((cc[a] - r) << cell_shift) - 0.01) / -d);
+                    const bool open_hi = cc[a] + r >= cells_[std::size_t(a)] - 1, open_lo = cc[a] - r <= 0;
+                    const double hi = double((cc[a] + r + 1) << cell_shift), lo = double((cc[a] - r) << cell_shift);
+                    if (d > 1e-6) {
+                      if (!open_hi) run = std::min(run, (hi - 0.01 - g[a]) / d);
+                    } else if (d < -1e-6) {
+                      if (!open_lo) run = std::min(run, (g[a] - lo - 0.01) / -d);
+                    } else if ((!open_hi && g[a] > hi - 0.01) || (!open_lo && g[a] < lo + 0.01)) {
+                      // (Almost) still on this axis: t_k's round-off could move g either way across
+                      // a box side it sits on; jump only from 0.01 inside both sides.
+                      run = 0;
+                    }
                   }
                   if (run >= 1) {
                     const int n = int(run);
