@@ -3,7 +3,7 @@
 // a 256 x 256 x 136 box) standing in for seed 003's CT phantom, the spec's 30° camera at
 // 1000 x 730, the same piecewise-constant TF (the skull table, opaque bone, here α 0.3) in both.
 // Slicing Blend at QC (plane spacing Δd = QC · h0); the ray caster's TF model with fixed steps
-// Δs = QC · h0, shading off, no ERT, empty-space skipping off (slicing has none) or on.
+// Δs = QC · h0, shading off, no ERT, empty-space skipping off or on.
 // Wall-clock time (UseRealTime; both run on TBB threads); the ratio of medians in one run is the
 // comparison (the machine is shared).
 //
@@ -14,13 +14,15 @@
 // pixels with α > 0.01), one piecewise-constant TF readable by both renderers, a CT preset in
 // normalised values (the scanned range is about −1100 … 1100 HU): skin (0.23, 0.455] ≈ −600 … −100
 // HU α 0.05 (the air–fat transition and the fat layer), bone (0.75, 1] ≈ above 550 HU α 0.6;
-// water, muscle and air invisible. Blend at QC 0.5,
-// 1, 2, the combined mode at QC 1 (gradients radius 2, 8 bits, built once outside the timing), the
-// ray caster at equal density (Δs = QC · h0) without and with its empty-space skipping. CPU time
+// water, muscle and air invisible. Blend at QC 0.5, 1, 2 (args: QC × 100, empty-space cell edge in
+// voxels, early termination × 1000, 0 = off: the default renderer is /4/0), the combined mode at
+// QC 1 (gradients radius 2, 8 bits, built once outside the timing), the ray caster at equal
+// density (Δs = QC · h0) without and with its empty-space skipping. Counters: samples (plane
+// samples, jumped ones included), visited (positions computed), fetched (not in empty cells). CPU time
 // of the whole process (MeasureProcessCPUTime: every TBB thread) beside the wall time, since the
 // cores are shared: "CPU" / "Time" ≈ the cores the frame kept busy.
 //   --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
-//   --benchmark_filter=Phantom   (issue 17's goal: BM_PhantomBlend/100 <= 150 ms)
+//   --benchmark_filter=Phantom   (issue 17's goal: BM_PhantomBlend/100/4/0 <= 150 ms)
 
 #include <meltlab/render/integrator/volume_integrator.h>
 #include <meltlab/render/slicing/slicing_renderer.h>
