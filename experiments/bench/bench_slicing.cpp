@@ -62,6 +62,30 @@ render::TransferFunction bone() {
   return render::TransferFunction(r, "bone");
 }
 
+/// The ray caster's TF model at the slicing's sample density (fixed step QC x h0 = state.range(0)
+/// / 100 x the smallest spacing; empty-space skipping if state.range(1)), no shading, no ERT.
+void ray_cast_frames(benchmark::State& state, const render::Volume& volume, const render::Camera& cam,
+                     const render::TransferFunction& tf) {
+  render::VolumeRenderSettings s;
+  s.model = render::OpticalModel::kTransferFunction;
+  s.tf.table = tf;
+  s.tf.shading.enabled = false;
+  s.step_rule = render::StepRule::kFixedStep;
+  s.step = double(state.range(0)) / 100 * volume.spacing().minCoeff();
+  s.skip_empty = state.range(1) != 0;
+  s.ert_transmittance = 0;
+  const render::VolumeTracer tracer(volume, s);
+  std::int64_t samples = 0;
+  for (auto _ : state) {
+    const auto f = tracer.render(cam);
+    samples = f.stats.samples;
+    benchmark::DoNotOptimize(f.radiance.data());
+  }
+  state.counters["samples"] = double(samples);
+  state.counters["ns_per_sample"] = benchmark::Counter(
+      double(samples) * 1e-9, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
 // arg: QC x 100
 void BM_SlicingBlend(benchmark::State& state) {
   render::SlicingSettings s;
@@ -82,27 +106,7 @@ void BM_SlicingBlend(benchmark::State& state) {
 }
 
 // args: QC x 100, empty-space skipping (0/1)
-void BM_RayCastTf(benchmark::State& state) {
-  render::VolumeRenderSettings s;
-  s.model = render::OpticalModel::kTransferFunction;
-  s.tf.table = bone();
-  s.tf.shading.enabled = false;
-  s.step_rule = render::StepRule::kFixedStep;
-  s.step = double(state.range(0)) / 100 * skull().spacing().minCoeff();
-  s.skip_empty = state.range(1) != 0;
-  s.ert_transmittance = 0;
-  const render::VolumeTracer tracer(skull(), s);
-  const auto cam = camera();
-  std::int64_t samples = 0;
-  for (auto _ : state) {
-    const auto f = tracer.render(cam);
-    samples = f.stats.samples;
-    benchmark::DoNotOptimize(f.radiance.data());
-  }
-  state.counters["samples"] = double(samples);
-  state.counters["ns_per_sample"] = benchmark::Counter(
-      double(samples) * 1e-9, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
-}
+void BM_RayCastTf(benchmark::State& state) { ray_cast_frames(state, skull(), camera(), bone()); }
 
 // --- seed 003's CT phantom ---
 
@@ -181,27 +185,7 @@ void BM_PhantomCombined(benchmark::State& state) {
 }
 
 // args: QC x 100, empty-space skipping (0/1)
-void BM_PhantomRayCast(benchmark::State& state) {
-  render::VolumeRenderSettings s;
-  s.model = render::OpticalModel::kTransferFunction;
-  s.tf.table = phantom_tf();
-  s.tf.shading.enabled = false;
-  s.step_rule = render::StepRule::kFixedStep;
-  s.step = double(state.range(0)) / 100 * phantom().spacing().minCoeff();
-  s.skip_empty = state.range(1) != 0;
-  s.ert_transmittance = 0;
-  const render::VolumeTracer tracer(phantom(), s);
-  const auto cam = phantom_camera();
-  std::int64_t samples = 0;
-  for (auto _ : state) {
-    const auto f = tracer.render(cam);
-    samples = f.stats.samples;
-    benchmark::DoNotOptimize(f.radiance.data());
-  }
-  state.counters["samples"] = double(samples);
-  state.counters["ns_per_sample"] = benchmark::Counter(
-      double(samples) * 1e-9, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
-}
+void BM_PhantomRayCast(benchmark::State& state) { ray_cast_frames(state, phantom(), phantom_camera(), phantom_tf()); }
 
 BENCHMARK(BM_PhantomBlend)
     ->Args({50, 4, 0})
