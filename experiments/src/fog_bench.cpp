@@ -7,6 +7,7 @@
 #include <meltlab/core/error.h>
 #include <meltlab/core/run_folder.h>
 #include <meltlab/experiments/fog.h>
+#include <meltlab/experiments/bench_studies.h>
 #include <meltlab/experiments/provenance.h>
 #include <meltlab/render/fog/airlight_f.h>
 #include <meltlab/render/fog/fog_frame.h>
@@ -42,13 +43,6 @@ constexpr double kDeg = kPi / 180;
 constexpr double kFloor = 1e-4;
 
 void progress(const std::string& what) { std::fprintf(stderr, "meltlab: fog bench: %s\n", what.c_str()); }
-
-std::string load_average() {
-  std::ifstream f("/proc/loadavg");
-  std::string a, b, c;
-  f >> a >> b >> c;
-  return a.empty() ? "unknown" : a + " " + b + " " + c;
-}
 
 struct ErrorStats {
   double median = 0, p99 = 0, max = 0, mean = 0;
@@ -681,29 +675,18 @@ void study_speed(const FogBenchOptions& o, const fs::path& dir, json& record) {
 }  // namespace
 
 void run_fog_bench(const FogBenchOptions& o) {
-  const std::vector<std::string> known{"tables", "e2", "e3", "model", "cost", "speed"};
-  for (const auto& s : o.studies)
-    if (std::find(known.begin(), known.end(), s) == known.end())
-      throw InputError(fmt::format("--study: unknown study '{}' (tables, e2, e3, model, cost, speed)", s));
-  if (o.repeats < 1 || o.warmup < 0) throw InputError("--repeats must be >= 1 and --warmup >= 0");
-  RunFolder folder(o.out_dir, RunFolderOptions{"--out", "bench.json", "fog bench", o.overwrite});
-  Provenance provenance = start_provenance("fog bench", o.command_line);
-  json record;
-  record["mode"] = o.quick ? "quick" : "full";
-  record["warmup"] = o.warmup;
-  record["repeats"] = o.repeats;
-  record["studies"] = o.studies;
-  record["load_average_start"] = load_average();
-  const std::map<std::string, std::function<void(const FogBenchOptions&, const fs::path&, json&)>> run{
-      {"tables", study_tables}, {"e2", study_e2},     {"e3", study_e3},
-      {"model", study_model},   {"cost", study_cost}, {"speed", study_speed}};
-  for (const auto& s : o.studies) {
-    const auto t0 = std::chrono::steady_clock::now();
-    run.at(s)(o, folder.path(), record);
-    record["study_seconds"][s] = ms_since(t0) / 1000;
-    record["load_average_after"][s] = load_average();
-  }
-  commit_run(folder, std::move(record), provenance);
+  std::map<std::string, BenchStudy> studies;
+  for (const auto& [name, fn] :
+       std::map<std::string, void (*)(const FogBenchOptions&, const fs::path&, json&)>{{"tables", study_tables},
+                                                                                       {"e2", study_e2},
+                                                                                       {"e3", study_e3},
+                                                                                       {"model", study_model},
+                                                                                       {"cost", study_cost},
+                                                                                       {"speed", study_speed}})
+    studies[name] = [&o, fn = fn](const fs::path& dir, json& record) { fn(o, dir, record); };
+  run_bench_studies(
+      BenchStudiesRun{"fog bench", o.studies, o.quick, o.warmup, o.repeats, o.out_dir, o.overwrite, o.command_line},
+      studies);
 }
 
 }  // namespace meltlab::experiments

@@ -4,6 +4,7 @@
 #include <meltlab/core/time.h>
 #include <meltlab/core/statistics.h>
 #include <meltlab/experiments/volume_bench.h>
+#include <meltlab/experiments/bench_studies.h>
 
 #include "volume_bench_clv.h"
 #include "volume_bench_slicing.h"
@@ -112,13 +113,6 @@ double rel_rmse(const ImageF& a, const ImageF& b) {
 }
 
 void progress(const std::string& what) { std::fprintf(stderr, "meltlab: volume bench: %s\n", what.c_str()); }
-
-/// The 1-, 5- and 15-minute load averages (the machine is shared: timings beside them).
-json load_average_now() {
-  double l[3] = {-1, -1, -1};
-  ::getloadavg(l, 3);
-  return {l[0], l[1], l[2]};
-}
 
 const char* model_key(OpticalModel m, render::ShadowMethod sh) {
   switch (m) {
@@ -434,28 +428,12 @@ void run_volume_bench(const VolumeBenchOptions& options) {
       {"seed003-table3", slicing_bench::study_table3},
       {"seed003-table4", slicing_bench::study_table4},
       {"seed003-pareto", slicing_bench::study_pareto}};
-  for (const auto& s : o.studies)
-    if (!run.count(s)) {
-      std::string names;
-      for (const auto& [k, v] : run) names += (names.empty() ? "" : ", ") + k;
-      throw InputError(fmt::format("--study: unknown study '{}' ({})", s, names));
-    }
-  if (o.repeats < 1 || o.warmup < 0) throw InputError("--repeats must be >= 1 and --warmup >= 0");
-  RunFolder folder(o.out_dir, RunFolderOptions{"--out", "bench.json", "volume bench", o.overwrite});
-  Provenance provenance = start_provenance("volume bench", o.command_line);
-  json record;
-  record["mode"] = o.quick ? "quick" : "full";
-  record["warmup_frames"] = o.warmup;
-  record["timed_frames"] = o.repeats;
-  record["studies"] = o.studies;
-  record["load_average_start"] = load_average_now();
-  for (const auto& s : o.studies) {
-    const auto t0 = std::chrono::steady_clock::now();
-    run.at(s)(o, folder.path(), record);
-    record["study_seconds"][s] = ms_since(t0) / 1000;
-  }
-  record["load_average_end"] = load_average_now();
-  commit_run(folder, std::move(record), provenance);
+  std::map<std::string, BenchStudy> studies;
+  for (const auto& [name, fn] : run)
+    studies[name] = [&o, fn = fn](const fs::path& dir, json& record) { fn(o, dir, record); };
+  run_bench_studies(
+      BenchStudiesRun{"volume bench", o.studies, o.quick, o.warmup, o.repeats, o.out_dir, o.overwrite, o.command_line},
+      studies);
 }
 
 }  // namespace meltlab::experiments

@@ -52,12 +52,6 @@ double stddev(const std::vector<double>& v) {
   return std::sqrt(s / double(v.size() - 1));
 }
 
-/// The load of the machine (the 1-minute load average), for the record beside every timing.
-double load_average() {
-  double l[3] = {0, 0, 0};
-  return ::getloadavg(l, 3) > 0 ? l[0] : -1;
-}
-
 // ---- the seed's volumes in the data cache ---------------------------------------------------------
 
 /// The spec's shapes parameters for an N³ volume: (70, 70) at 800, (140, 140) at 2000 (§3); other
@@ -261,7 +255,7 @@ void study_generate(const VolumeBenchOptions& o, const fs::path& dir, json& reco
   sizes.write(dir / "sizes.csv");
   record["generate"] = {{"naive", "one write() per sample, one thread (the source's first writer)"},
                         {"batched", "batches of 32768 coordinates, sampled in parallel, written in order"},
-                        {"load_average", load_average()}};
+                        {"load_average", load_averages()[0]}};
 }
 
 // ---- Tables 5.1, 5.2, 5.4 ------------------------------------------------------------------------------
@@ -278,7 +272,7 @@ void study_tables(const VolumeBenchOptions& o, const fs::path& dir, json& record
     const auto& st = t.frame.stats;
     csv.row("{},{},{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{},{},{},{},{:.2f}", table, volume, px, m.name, mem, type,
             t.wall.size(), t.wall_median(), stddev(t.wall), t.cpu_median(), stddev(t.cpu), st.samples, st.skipped,
-            st.terminated, st.rays, load_average());
+            st.terminated, st.rays, load_averages()[0]);
     progress(fmt::format("Table {} {} {}² {} {} {}: {:.0f} ms ({:.0f} ms CPU), {} samples", table, volume, px, m.name,
                          mem, type, t.wall_median(), t.cpu_median(), st.samples));
   };
@@ -390,7 +384,8 @@ void study_large(const VolumeBenchOptions& o, const fs::path& dir, json& record)
     csv.row("{},shapes {}^3,{},{},{},{},{},{:.3f},{:.3f},{:.3f},{},{},{},{},{:.4f},{:.1f},{:.1f},{:.2f}", name, n, px,
             m.name, mem, threads, t.wall.size(), t.wall_median(), stddev(t.wall), t.cpu_median(), st.samples,
             st.terminated, st.blocks_visible, st.block_tasks,
-            st.block_tasks ? double(st.queue_empty) / double(st.block_tasks) : 0.0, load_ms, index_ms, load_average());
+            st.block_tasks ? double(st.queue_empty) / double(st.block_tasks) : 0.0, load_ms, index_ms,
+            load_averages()[0]);
     progress(fmt::format("Table 5.3 {}³ {}: {:.0f} ms", n, name, t.wall_median()));
   };
   const int threads = int(tbb::info::default_concurrency());
@@ -459,7 +454,8 @@ void study_sweeps(const VolumeBenchOptions& o, const fs::path& dir, json& record
     const double busy = st.render_busy_ms / (double(threads) * std::max(1e-9, st.render_ms));
     csv.row("{},{},{},{},{},{:.3f},{:.3f},{:.3f},{},{:.4f},{:.4f},{},{:.2f}", sweep, value, tile, b.side(), threads,
             t.wall_median(), stddev(t.wall), t.cpu_median(), st.block_tasks,
-            st.block_tasks ? double(st.queue_empty) / double(st.block_tasks) : 0.0, busy, st.samples, load_average());
+            st.block_tasks ? double(st.queue_empty) / double(st.block_tasks) : 0.0, busy, st.samples,
+            load_averages()[0]);
     progress(fmt::format("sweep {} = {}: {:.1f} ms", sweep, value, t.wall_median()));
   };
   const int hw = int(tbb::info::default_concurrency());
@@ -542,12 +538,12 @@ void study_peer(const VolumeBenchOptions& o, const fs::path& dir, json& record) 
   const int hw = int(tbb::info::default_concurrency());
   const auto d_io = alpha_diff(ours.frame), d_oo = alpha_diff(ours_oo.frame);
   csv.row("meltlab_image_order,{},{:.3f},{:.3f},{:.3f},{},{:.6f},{:.6f},{:.2f}", hw, ours.wall_median(),
-          stddev(ours.wall), ours.cpu_median(), ours.frame.stats.samples, d_io.first, d_io.second, load_average());
+          stddev(ours.wall), ours.cpu_median(), ours.frame.stats.samples, d_io.first, d_io.second, load_averages()[0]);
   csv.row("meltlab_object_order,{},{:.3f},{:.3f},{:.3f},{},{:.6f},{:.6f},{:.2f}", hw, ours_oo.wall_median(),
           stddev(ours_oo.wall), ours_oo.cpu_median(), ours_oo.frame.stats.samples, d_oo.first, d_oo.second,
-          load_average());
+          load_averages()[0]);
   csv.row("openvdb_volume_render,{},{:.3f},{:.3f},{:.3f},,0,0,{:.2f}", hw, median(wall), stddev(wall), median(cpu),
-          load_average());
+          load_averages()[0]);
   csv.write(dir / "peer.csv");
   ImageF a_ours(alpha.width(), alpha.height(), 1);
   for (int y = 0; y < alpha.height(); ++y)
@@ -593,7 +589,7 @@ void study_steps(const VolumeBenchOptions& o, const fs::path& dir, json& record)
     write_image(dir / fmt::format("step_{}.png", step), img);
     const auto d = image_diff(img, ref8);
     csv.row("{},{:.3f},{},{:.4f},{:.0f},{:.2f}", step, t.wall_median(), t.frame.stats.samples, d.first, d.second,
-            load_average());
+            load_averages()[0]);
   }
   csv.write(dir / "steps.csv");
   record["steps"] = {{"volume", fmt::format("shapes {}^3", n)},
@@ -618,7 +614,7 @@ void study_ess(const VolumeBenchOptions& o, const fs::path& dir, json& record) {
       const VolumeTracer tracer(v, settings_for(m, render::TransferFunction::shapes()), ranges);
       const Timed t = time_frames(tracer, cam, 0, o.quick ? 1 : 3);
       csv.row("{},{},{:.3f},{:.3f},{},{},{},{:.2f}", pose, m.name, t.cpu_median(), t.wall_median(),
-              t.frame.stats.samples, t.frame.stats.skipped, t.frame.stats.terminated, load_average());
+              t.frame.stats.samples, t.frame.stats.skipped, t.frame.stats.terminated, load_averages()[0]);
     }
     progress(fmt::format("ESS pose {} done", pose));
   }

@@ -443,6 +443,8 @@ VolumeRenderRunResult run_slicing_render(const VolumeRenderRunOptions& o, render
                 {"samples", frame.stats.samples},
                 {"samples_past_mask", frame.stats.classified},
                 {"samples_skipped_empty", frame.stats.skipped},
+                {"samples_visited", frame.stats.visited},
+                {"rays_terminated", frame.stats.terminated},
                 {"slices", frame.stats.slices},
                 {"slice_spacing", frame.stats.slice_spacing}};
   if (gradients)

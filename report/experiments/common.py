@@ -70,6 +70,13 @@ def yes(b):
     return "yes" if b else "NO"
 
 
+def load_text(loads):
+    """A bench record's load averages ([1, 5, 15 min]) as "1.23 0.98 0.75" ("?" if absent)."""
+    if not loads:
+        return "?"
+    return " ".join(f"{x:.2f}" for x in loads)
+
+
 def fmt_bool(b):
     return "yes" if b else "no"
 

@@ -15,7 +15,7 @@ matplotlib.use("Agg")
 import matplotlib.image as mpimg  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 
-from .common import write_csv, write_fragment, read, linfit
+from .common import write_csv, write_fragment, read, linfit, load_text
 
 SOURCE_HW = ("Athlon 3000+, 512 MB, ATI Radeon X1650 Pro, OpenGL/GLSL fragment shader (spec §5; every fps value "
              "lost in the transcript); the harness: this CPU, median of timed frames after warm-up")
@@ -277,7 +277,7 @@ def fog_seed002(exp: Path, args):
     cost_ok = r2_px > 0.98 and r2_li > 0.98
     verdicts.append(f"cost: R² lit pixels {r2_px:.3f}, lights {r2_li:.3f} (> 0.98: {'yes' if cost_ok else 'NO'}); "
                     f"shading over 1k-1M triangles spread {spread:.0%} (5 %: {'yes' if spread <= 0.05 else 'NO'}; "
-                    f"load average {record.get('load_average_after', {}).get('cost', '?')})")
+                    f"load average {load_text(record.get('load_average_after', {}).get('cost'))})")
 
     # ---- speed against ray marching ----
     sp = read(bench / "speed.csv")
@@ -314,7 +314,7 @@ def fog_seed002(exp: Path, args):
         speed_ok = speed_ok and p["ratio"] >= 30
     verdicts.append("speed against ray marching at equal error: " + "; ".join(parts) +
                     f" (goal ≥ 30× at p99: {'yes' if speed_ok else 'NO'}; load average "
-                    f"{record.get('load_average_after', {}).get('speed', '?')})")
+                    f"{load_text(record.get('load_average_after', {}).get('speed'))})")
     ok = ok and speed_ok
 
     write_fragment(exp, {
@@ -325,6 +325,6 @@ def fog_seed002(exp: Path, args):
         "notes": ["The thesis reports no accuracy and its frame-rate numbers are lost (spec §5): the goals are the "
                   "issue's, the references the spec's §3.",
                   f"bench mode {record['mode']}, {record['repeats']} timed repeats after {record['warmup']} warm-up, "
-                  f"load average at the start {record['load_average_start']}"],
+                  f"load average at the start {load_text(record.get('load_average_start'))}"],
         "source_hardware": SOURCE_HW,
     })

@@ -19,10 +19,53 @@ namespace {
 
 /// Per-tile counters, summed after the frame.
 struct TileCounts {
-  std::int64_t rays = 0, samples = 0, classified = 0, skipped = 0;
+  std::int64_t rays = 0, samples = 0, classified = 0, skipped = 0, terminated = 0, visited = 0;
 };
 
-constexpr int kCellShift = 3;  // 8 voxels per empty-space cell
+/// A TF evaluated as TransferFunction::alpha_at and ::evaluate do, bit for bit, without their
+/// out-of-line calls: α first, the colour only for visible samples (the constant kind's colour
+/// divided by 255 once here, as evaluate divides it per call: the same quotient).
+class InlineTf {
+ public:
+  explicit InlineTf(const TransferFunction& tf) : linear_(tf.kind() == TfKind::kPiecewiseLinear) {
+    if (linear_) {
+      curves_ = tf.curves();
+    } else {
+      ranges_ = tf.ranges();
+      for (const auto& r : ranges_) rgb01_.push_back(r.rgb / 255.0);
+    }
+  }
+  /// α(v); `piece` remembers the constant kind's range for rgb().
+  double alpha(double v, int& piece) const {
+    if (linear_) return curve_at(curves_[3], v);
+    for (std::size_t i = 0; i < ranges_.size(); ++i)
+      if (ranges_[i].contains(v)) return piece = int(i), ranges_[i].alpha;
+    return piece = -1, 0.0;
+  }
+  Eigen::Vector3d rgb(double v, int piece) const {
+    if (linear_) return {curve_at(curves_[0], v), curve_at(curves_[1], v), curve_at(curves_[2], v)};
+    return piece < 0 ? Eigen::Vector3d::Zero() : rgb01_[std::size_t(piece)];
+  }
+
+ private:
+  /// TfCurve::at with a forward scan for the segment (the point upper_bound finds).
+  static double curve_at(const TfCurve& c, double x) {
+    const auto& pts = c.points;
+    if (pts.empty()) return 0;
+    if (!(x > pts.front().x())) return pts.front().y();
+    if (x >= pts.back().x()) return pts.back().y();
+    std::size_t i = 1;
+    while (!(x < pts[i].x())) ++i;
+    const Eigen::Vector2d& b = pts[i];
+    const Eigen::Vector2d& a = pts[i - 1];
+    const double t = (x - a.x()) / (b.x() - a.x());
+    return a.y() + t * (b.y() - a.y());
+  }
+  bool linear_;
+  std::array<TfCurve, 4> curves_;
+  std::vector<TfRange> ranges_;
+  std::vector<Eigen::Vector3d> rgb01_;
+};
 
 }  // namespace
 
@@ -48,6 +91,10 @@ void check_slicing_settings(const Volume& volume, const SlicingSettings& s) {
   if (slicing_needs_gradients(s) && s.gradient.bits != 4 && s.gradient.bits != 8)
     bad(fmt::format("gradient bits must be 8 or 4 (got {})", s.gradient.bits));
   if (!s.background.allFinite()) bad("the background must be finite");
+  if (s.skip_cell != 2 && s.skip_cell != 4 && s.skip_cell != 8 && s.skip_cell != 16)
+    bad(fmt::format("skip_cell must be 2, 4, 8 or 16 voxels (got {})", s.skip_cell));
+  if (!(s.early_termination >= 0 && s.early_termination <= 1))
+    bad(fmt::format("early_termination must be in [0, 1] (0: off; got {})", s.early_termination));
 }
 
 SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& settings,
@@ -68,7 +115,8 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
     grad_.reset();
   }
   if (s_.skip_empty) {
-    // Min and max over each cell's voxels [8c, 8c + 8] (the +1 is the trilinear neighbour).
+    const int kCellShift = cell_shift_ = s_.skip_cell == 2 ? 1 : s_.skip_cell == 4 ? 2 : s_.skip_cell == 8 ? 3 : 4;
+    // Min and max over each cell's voxels [e c, e c + e] (e the cell edge; the + e is the trilinear neighbour).
     for (int a = 0; a < 3; ++a) cells_[std::size_t(a)] = ((volume.dims()[std::size_t(a)] - 1) >> kCellShift) + 1;
     live_.assign(std::size_t(cells_[0]) * cells_[1] * cells_[2], 0);
     std::array<bool, 4> used{true, false, false, false};
@@ -98,6 +146,27 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
           }
       });
     });
+    // Chebyshev distance to the nearest live cell: breadth-first search from every live cell over
+    // the 26 neighbours (exact for the chessboard metric), capped at 255.
+    dist_.assign(live_.size(), 255);
+    std::vector<int> queue;
+    for (std::size_t i = 0; i < live_.size(); ++i)
+      if (live_[i]) dist_[i] = 0, queue.push_back(int(i));
+    const int cx = cells_[0], cy = cells_[1], cz = cells_[2];
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const int c = queue[head];
+      const int d = dist_[std::size_t(c)] + 1;
+      if (d > 255) continue;
+      const int ci = c % cx, cj = (c / cx) % cy, ck = c / (cx * cy);
+      for (int dk = -1; dk <= 1; ++dk)
+        for (int dj = -1; dj <= 1; ++dj)
+          for (int di = -1; di <= 1; ++di) {
+            const int i = ci + di, j = cj + dj, k = ck + dk;
+            if (i < 0 || j < 0 || k < 0 || i >= cx || j >= cy || k >= cz) continue;
+            const std::size_t n = std::size_t(i) + std::size_t(cx) * (std::size_t(j) + std::size_t(cy) * k);
+            if (dist_[n] > d) dist_[n] = std::uint8_t(d), queue.push_back(int(n));
+          }
+    }
   }
 }
 
@@ -121,6 +190,9 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
   const bool lit = slicing_needs_gradients(s_);
   const bool use_mask = !s_.mask.empty();
   const bool skip = !live_.empty();
+  const int cell_shift = cell_shift_;
+  const std::size_t cells_x = std::size_t(cells_[0]), cells_y = std::size_t(cells_[1]);
+  const std::uint8_t* const dist_cells = dist_.data();  // the distance map answers "live" too (0)
   const std::array<int, 3> dims = volume_.dims();
   const double inv_range = 1.0 / (hi_ - lo_);
   const Eigen::Vector3d origin = volume_.origin(), inv_spacing = volume_.spacing().cwiseInverse();
@@ -130,6 +202,11 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
     for (int c = 0; c < 3; ++c) gch[std::size_t(c)] = grad_->channel(c);
     grad_scale = 1;
   }
+  std::vector<InlineTf> tfs;
+  for (const auto& tf : s_.tfs) tfs.emplace_back(tf);
+  const bool front_to_back =
+      s_.early_termination > 0 && s_.mode == SlicingMode::kBlend && s_.blend == BlendOperator::kOver;
+  const double stop_alpha = s_.early_termination;
   const int T = s_.tile;
   const int tiles_x = (W + T - 1) / T, tiles_y = (H + T - 1) / T;
   std::vector<TileCounts> counts(std::size_t(tiles_x) * tiles_y);
@@ -146,37 +223,85 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             ++cnt.rays;
             const double exponent = s_.opacity_correction ? (stack.spacing / rs.cos_psi) / h0 : 1.0;
             const Eigen::Vector3d to_eye = -ray.direction;
-            for (int k = rs.k_first; k <= rs.k_last; ++k) {
+            // The move of g (index units) from one visited plane to the next (t_k is linear in k and
+            // falls with k: back to front walks towards the eye).
+            const Eigen::Vector3d delta =
+                (front_to_back ? 1.0 : -1.0) * (stack.spacing / rs.cos_psi) * ray.direction.cwiseProduct(inv_spacing);
+            // The last α seen and its corrected value: std::pow only when α changes along the ray
+            // (a piecewise-constant TF repeats a handful of values; the same bits either way).
+            double last_a = -1, last_ac = 0;
+            const int n_samples = rs.k_last - rs.k_first + 1;
+            for (int step = 0; step < n_samples; ++step) {
+              const int k = front_to_back ? rs.k_last - step : rs.k_first + step;
               ++cnt.samples;
+              ++cnt.visited;
               const Eigen::Vector3d p = ray.origin + rs.t(stack, k) * ray.direction;
               const Eigen::Vector3d g = (p - origin).cwiseProduct(inv_spacing);
+              const float gx = float(g.x()), gy = float(g.y()), gz = float(g.z());
+              const float fx = std::floor(gx), fy = std::floor(gy), fz = std::floor(gz);
               if (skip) {
-                int c[3];
-                for (int a = 0; a < 3; ++a) {
-                  const int i = std::clamp(int(std::floor(float(g[a]))), 0, dims[a] - 1);
-                  c[a] = i >> kCellShift;
-                }
-                if (!live_[std::size_t(c[0]) +
-                           std::size_t(cells_[0]) * (std::size_t(c[1]) + std::size_t(cells_[1]) * c[2])]) {
+                const int c0 = std::clamp(int(fx), 0, dims[0] - 1) >> cell_shift;
+                const int c1 = std::clamp(int(fy), 0, dims[1] - 1) >> cell_shift;
+                const int c2 = std::clamp(int(fz), 0, dims[2] - 1) >> cell_shift;
+                const std::size_t cell = std::size_t(c0) + cells_x * (std::size_t(c1) + cells_y * std::size_t(c2));
+                const int dist = dist_cells[cell];  // 0: live
+                if (dist != 0) {
                   ++cnt.skipped;
+                  // Jump the run of empty planes: every cell within D - 1 of this one (max norm) is
+                  // empty, D = dist_ the distance to the nearest live cell; so is every sample whose
+                  // clamped voxel index lies in the box of those cells, [e (c - D + 1), e (c + D) - 1]
+                  // per axis (e the cell edge; a side at the volume's border reaches to infinity,
+                  // where clamping keeps the index in the box). With g moving by delta per plane, the
+                  // planes while g stays 0.01 index units inside that box (for the float rounding of
+                  // g and of t_k) are empty and are counted as skipped without being visited. On an
+                  // axis where g moves by more than 1e-6 per plane it moves monotonically (round-off
+                  // is ~1e-12), so only the side ahead bounds the run.
+                  const int r = dist - 1;
+                  const int cc[3] = {c0, c1, c2};
+                  double run = double(n_samples - 1 - step);
+                  for (int a = 0; a < 3; ++a) {
+                    const double d = delta[a];
+                    const bool open_hi = cc[a] + r >= cells_[std::size_t(a)] - 1, open_lo = cc[a] - r <= 0;
+                    const double hi = double((cc[a] + r + 1) << cell_shift), lo = double((cc[a] - r) << cell_shift);
+                    if (d > 1e-6) {
+                      if (!open_hi) run = std::min(run, (hi - 0.01 - g[a]) / d);
+                    } else if (d < -1e-6) {
+                      if (!open_lo) run = std::min(run, (g[a] - lo - 0.01) / -d);
+                    } else if ((!open_hi && g[a] > hi - 0.01) || (!open_lo && g[a] < lo + 0.01)) {
+                      // (Almost) still on this axis: t_k's round-off could move g either way across
+                      // a box side it sits on; jump only from 0.01 inside both sides.
+                      run = 0;
+                    }
+                  }
+                  if (run >= 1) {
+                    const int n = int(run);
+                    step += n;
+                    cnt.samples += n;
+                    cnt.skipped += n;
+                  }
                   continue;
                 }
               }
               const int m = use_mask ? s_.mask.lookup(p) : 1;
               if (m == 0) continue;
               ++cnt.classified;
-              const float f = samples.trilinear_clamped(float(g.x()), float(g.y()), float(g.z()));
-              const TransferFunction& tf = s_.tfs[std::size_t(m - 1)];
+              const int i0 = int(fx), j0 = int(fy), k0 = int(fz);
+              const float wx = gx - fx, wy = gy - fy, wz = gz - fz;
+              const float f = samples.trilinear_cell(i0, j0, k0, wx, wy, wz);
+              const InlineTf& tf = tfs[std::size_t(m - 1)];
               const double fn = (double(f) - lo_) * inv_range;
-              const double a = tf.alpha_at(fn);
+              int piece = -1;
+              const double a = tf.alpha(fn, piece);
               if (!(a > 0)) continue;
-              const TfValue tv = tf.evaluate(fn);
-              const double ac = exponent == 1.0 ? a : 1.0 - std::pow(1.0 - a, exponent);
-              Eigen::Vector3d c = tv.rgb;
+              double ac = a;
+              if (exponent != 1.0) {
+                if (a != last_a) last_a = a, last_ac = 1.0 - std::pow(1.0 - a, exponent);
+                ac = last_ac;
+              }
+              Eigen::Vector3d c = tf.rgb(fn, piece);
               if (lit) {
                 Eigen::Vector3d e;
-                for (int ch = 0; ch < 3; ++ch)
-                  e[ch] = gch[std::size_t(ch)].trilinear_clamped(float(g.x()), float(g.y()), float(g.z()));
+                for (int ch = 0; ch < 3; ++ch) e[ch] = gch[std::size_t(ch)].trilinear_cell(i0, j0, k0, wx, wy, wz);
                 const Eigen::Vector3d gd = (2.0 * e - Eigen::Vector3d::Ones()) * grad_scale;
                 const Eigen::Vector3d gw = gd.cwiseProduct(inv_spacing);  // index units -> world direction
                 if (gd.norm() > s_.light.gate && gw.norm() > 0) {
@@ -188,6 +313,16 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                   c = c * (s_.light.ambient + s_.light.diffuse * diff) +
                       Eigen::Vector3d::Constant(s_.light.specular * spec);
                 }
+              }
+              if (front_to_back) {
+                const double w = (1 - acc.A) * ac;
+                acc.C += w * c;
+                acc.A += w;
+                if (acc.A >= stop_alpha) {
+                  ++cnt.terminated;
+                  break;
+                }
+                continue;
               }
               switch (s_.mode) {
                 case SlicingMode::kBlend:
@@ -229,6 +364,8 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
     frame.stats.samples += c.samples;
     frame.stats.classified += c.classified;
     frame.stats.skipped += c.skipped;
+    frame.stats.terminated += c.terminated;
+    frame.stats.visited += c.visited;
   }
   const auto t1 = std::chrono::steady_clock::now();
   frame.rgb = apply_bloom(frame.raw, s_.post);
@@ -300,7 +437,14 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
   add("post.sigma/radius", fmt::format("{} half-res px, radius ceil(3 sigma)", num(s.post.sigma)));
   add("post.bloom_blend", fmt::format("additive, gain {}", num(s.post.gain)));
   add("post.render_target", "float32");
-  add("skip_empty", s.skip_empty ? "8^3 cells, exact (same image)" : "off");
+  add("skip_empty",
+      s.skip_empty ? fmt::format("{}^3 cells, runs of empty planes jumped, exact (same image)", s.skip_cell) : "off");
+  add("blend.early_termination",
+      s.early_termination > 0
+          ? (s.mode == SlicingMode::kBlend && s.blend == BlendOperator::kOver
+                 ? fmt::format("front to back, stop at A >= {} (beyond the source)", num(s.early_termination))
+                 : "off (only Blend over; ignored in this mode)")
+          : "off (the source's back-to-front order)");
   return r;
 }
 

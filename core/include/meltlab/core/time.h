@@ -2,6 +2,7 @@
 // Wall-clock timestamps for records (run.json, fit.json, done.json, summary.json): one format
 // everywhere, so records sort and compare as text; and the one stopwatch of timings.
 
+#include <array>
 #include <chrono>
 #include <string>
 
@@ -22,5 +23,9 @@ inline double ms_since(std::chrono::steady_clock::time_point t) {
 /// CPU time of the process (every thread), ms: on a shared machine a single-threaded frame's CPU
 /// time is steadier than its wall-clock time.
 double process_cpu_ms();
+
+/// The machine's 1-, 5- and 15-minute load averages ({-1, -1, -1} if unknown): recorded beside
+/// timings taken on shared cores.
+std::array<double, 3> load_averages();
 
 }  // namespace meltlab

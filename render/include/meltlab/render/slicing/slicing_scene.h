@@ -27,7 +27,9 @@
 //     bloom: {enabled: false, contrast: 1, brightness: 0, gamma: 1, threshold: 0.7, sigma: 2, gain: 1}
 //     tile: 16
 //     parallel: true
-//     skip_empty: true            # 8³ cells where no TF in use is visible are not fetched (same image)
+//     skip_empty: true            # cells where no TF in use is visible are not fetched (same image)
+//     skip_cell: 4                # edge of those cells in voxels: 2, 4, 8 or 16 (same image)
+//     early_termination: 0        # Blend over only: > 0 composites front to back and stops at A >= it
 
 #include <meltlab/render/slicing/slicing_renderer.h>
 
