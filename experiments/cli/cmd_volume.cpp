@@ -14,8 +14,9 @@
 namespace meltlab::cli {
 
 Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
-  auto* sub = app.add_subcommand(
-      "volume", "Volume ray casting (seeds 000, 001): generate volumes, render scenes, describe files");
+  auto* sub = app.add_subcommand("volume",
+                                 "Volume rendering (seeds 000, 001: ray casting; 003: slicing with a mask): generate "
+                                 "volumes, render scenes, describe files");
   sub->require_subcommand(1);
 
   // --- generate ---
@@ -105,7 +106,9 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
   gen->add_flag("--overwrite", g->overwrite, "Replace existing files");
 
   // --- render ---
-  auto* ren = sub->add_subcommand("render", "Render a volume scene (experiments/configs/volume/*.yaml) into a folder");
+  auto* ren = sub->add_subcommand(
+      "render",
+      "Render a volume scene (experiments/configs/volume/*.yaml; method: ray_casting or slicing) into a folder");
   auto r = std::make_shared<experiments::VolumeRenderRunOptions>();
   r->command_line = command_line;
   auto frames = std::make_shared<int>(0);
@@ -129,8 +132,9 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
   info->add_option("file", *info_file, "Volume file")->required();
 
   // --- bench ---
-  auto* bench =
-      sub->add_subcommand("bench", "Timing and accuracy studies for the report (tables, scaling, pareto, peer)");
+  auto* bench = sub->add_subcommand("bench",
+                                    "Timing and accuracy studies for the report (--study: seed 000 tables, scaling, "
+                                    "pareto, peer; seed001-*; seed003-*)");
   auto b = std::make_shared<experiments::VolumeBenchOptions>();
   b->command_line = command_line;
   auto full = std::make_shared<bool>(false);
