@@ -286,7 +286,7 @@ def fog_seed002(exp: Path, args):
     sp = read(bench / "speed.csv")
     sp_rows = [[r["scene"], r["method"], r["param"], float(r["ns_per_pixel"]), float(r["median"]), float(r["p99"]),
                 float(r["max"]), float(r["steps_per_pixel"])] for r in sp]
-    write_csv(exp / "speed.csv", ["scene", "method", "parameter", "ns per pixel (median of repeats)", "median E2",
+    write_csv(exp / "speed.csv", ["scene", "method", "parameter", "ns per pixel (one thread, CPU time, minimum of the runs)", "median E2",
                                   "p99 E2", "max E2", "march steps per pixel"], sp_rows)
     tables.append({"caption": "Speed against uniform-step ray marching (airlight only, same G-buffer)",
                    "csv": "speed.csv"})
