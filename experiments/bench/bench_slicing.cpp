@@ -155,6 +155,7 @@ void BM_PhantomBlend(benchmark::State& state) {
   s.quality_class = double(state.range(0)) / 100;
   s.skip_cell = int(state.range(1));
   s.early_termination = double(state.range(2)) / 1000;
+  if (state.range(3) > 0) s.tile = int(state.range(3));
   s.tfs[0] = phantom_tf();
   const render::SlicingRenderer r(phantom(), s);
   const auto cam = phantom_camera();
@@ -188,14 +189,18 @@ void BM_PhantomCombined(benchmark::State& state) {
 void BM_PhantomRayCast(benchmark::State& state) { ray_cast_frames(state, phantom(), phantom_camera(), phantom_tf()); }
 
 BENCHMARK(BM_PhantomBlend)
-    ->Args({50, 4, 0})
-    ->Args({100, 4, 0})
-    ->Args({200, 4, 0})
-    ->Args({100, 2, 0})
-    ->Args({100, 8, 0})
-    ->Args({100, 4, 990})
-    ->Args({50, 4, 990})
-    ->Args({200, 4, 990})
+    ->Args({50, 4, 0, 0})
+    ->Args({100, 4, 0, 0})
+    ->Args({200, 4, 0, 0})
+    ->Args({100, 2, 0, 0})
+    ->Args({100, 8, 0, 0})
+    ->Args({100, 4, 990, 0})
+    ->Args({50, 4, 990, 0})
+    ->Args({200, 4, 990, 0})
+    ->Args({100, 4, 0, 4})
+    ->Args({100, 4, 0, 8})
+    ->Args({100, 4, 0, 32})
+    ->Args({100, 4, 0, 64})
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()
     ->UseRealTime();
