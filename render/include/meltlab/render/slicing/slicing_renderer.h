@@ -94,6 +94,12 @@ struct SlicingSettings {
   /// and stops a ray once A >= the value (the rest could add at most (1 - A) to any channel of C).
   /// Ignored (logged as such) in the other modes and for the additive operator.
   double early_termination = 0;
+  /// Sample positions. false (default): per ray, the first plane's index coordinates g_0 from
+  /// t_k as below, the others g_0 + j Δg (Δg the move per plane; one fused multiply-add per axis,
+  /// no division), which differ from the exact ones by float round-off, |Δg| < 1e-9 voxel (see
+  /// slicing_speed_test). true: each sample at o + t_k v with t_k from its plane's depth (one
+  /// division per sample; the arithmetic before issue 17's second speed round, bit for bit).
+  bool exact_positions = false;
 };
 
 /// Whether a mode needs the gradient volume.
