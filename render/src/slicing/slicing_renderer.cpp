@@ -166,27 +166,35 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
           }
       });
     });
-    // Chebyshev distance to the nearest live cell: breadth-first search from every live cell over
-    // the 26 neighbours (exact for the chessboard metric), capped at 255.
-    dist_.assign(live_.size(), 255);
-    std::vector<int> queue;
-    for (std::size_t i = 0; i < live_.size(); ++i)
-      if (live_[i]) dist_[i] = 0, queue.push_back(int(i));
+    // Chebyshev distance to the nearest cell of a set: breadth-first search from every cell of it
+    // over the 26 neighbours (exact for the chessboard metric), capped at 255.
     const int cx = cells_[0], cy = cells_[1], cz = cells_[2];
-    for (std::size_t head = 0; head < queue.size(); ++head) {
-      const int c = queue[head];
-      const int d = dist_[std::size_t(c)] + 1;
-      if (d > 255) continue;
-      const int ci = c % cx, cj = (c / cx) % cy, ck = c / (cx * cy);
-      for (int dk = -1; dk <= 1; ++dk)
-        for (int dj = -1; dj <= 1; ++dj)
-          for (int di = -1; di <= 1; ++di) {
-            const int i = ci + di, j = cj + dj, k = ck + dk;
-            if (i < 0 || j < 0 || k < 0 || i >= cx || j >= cy || k >= cz) continue;
-            const std::size_t n = std::size_t(i) + std::size_t(cx) * (std::size_t(j) + std::size_t(cy) * k);
-            if (dist_[n] > d) dist_[n] = std::uint8_t(d), queue.push_back(int(n));
-          }
-    }
+    auto chebyshev = [&](bool to_live) {
+      std::vector<std::uint8_t> dist(live_.size(), 255);
+      std::vector<int> queue;
+      for (std::size_t i = 0; i < live_.size(); ++i)
+        if ((live_[i] != 0) == to_live) dist[i] = 0, queue.push_back(int(i));
+      for (std::size_t head = 0; head < queue.size(); ++head) {
+        const int c = queue[head];
+        const int d = dist[std::size_t(c)] + 1;
+        if (d > 255) continue;
+        const int ci = c % cx, cj = (c / cx) % cy, ck = c / (cx * cy);
+        for (int dk = -1; dk <= 1; ++dk)
+          for (int dj = -1; dj <= 1; ++dj)
+            for (int di = -1; di <= 1; ++di) {
+              const int i = ci + di, j = cj + dj, k = ck + dk;
+              if (i < 0 || j < 0 || k < 0 || i >= cx || j >= cy || k >= cz) continue;
+              const std::size_t n = std::size_t(i) + std::size_t(cx) * (std::size_t(j) + std::size_t(cy) * k);
+              if (dist[n] > d) dist[n] = std::uint8_t(d), queue.push_back(int(n));
+            }
+      }
+      return dist;
+    };
+    dist_ = chebyshev(true);
+    // For live cells, the radius of the cube of cells around them that are all live: the distance
+    // to the nearest empty cell minus one (254 where none is within the cap).
+    live_reach_ = chebyshev(false);
+    for (auto& r : live_reach_) r = std::uint8_t(r == 0 ? 0 : r - 1);
   }
 }
 
@@ -213,6 +221,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
   const int cell_shift = cell_shift_;
   const std::size_t cells_x = std::size_t(cells_[0]), cells_y = std::size_t(cells_[1]);
   const std::uint8_t* const dist_cells = dist_.data();  // the distance map answers "live" too (0)
+  const std::uint8_t* const live_reach = live_reach_.data();
   const std::array<int, 3> dims = volume_.dims();
   const double inv_range = 1.0 / (hi_ - lo_);
   const Eigen::Vector3d origin = volume_.origin(), inv_spacing = volume_.spacing().cwiseInverse();
@@ -278,6 +287,31 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             const Eigen::Vector3d g_first =
                 (ray.origin + rs.t(stack, k_start) * ray.direction - origin).cwiseProduct(inv_spacing);
             std::int64_t n_visited = 0, n_skipped = 0, n_classified = 0, n_jumped = 0;
+            // The planes from the current sample on while g stays 0.01 index units inside the cube
+            // of cells c ± r (c the current sample's cell, r in cells) along this ray, capped at
+            // `run`: the cube is [e (c - r), e (c + r + 1)) per axis (e the cell edge; a side at the
+            // volume's border reaches to infinity, where clamping keeps the index in the cube). The
+            // 0.01 absorbs the float rounding of g (~1e-12 for |g| < 4096) and of the reciprocal of
+            // dg. On an axis where g moves by more than 1e-6 per plane it moves monotonically, so
+            // only the side ahead bounds the run; on an (almost) still axis, t_k's round-off could
+            // move g either way across a side it sits on: no run unless 0.01 inside both sides.
+            const Eigen::Vector3d inv_delta = delta.cwiseInverse();
+            auto cube_run = [&](const int cc[3], int r, const Eigen::Vector3d& gs, double run) {
+              for (int a = 0; a < 3; ++a) {
+                const double d = delta[a];
+                const bool open_hi = cc[a] + r >= cells_[std::size_t(a)] - 1, open_lo = cc[a] - r <= 0;
+                const double hi = double((cc[a] + r + 1) << cell_shift), lo = double((cc[a] - r) << cell_shift);
+                if (d > 1e-6) {
+                  if (!open_hi) run = std::min(run, (hi - 0.01 - gs[a]) * inv_delta[a]);
+                } else if (d < -1e-6) {
+                  if (!open_lo) run = std::min(run, (lo + 0.01 - gs[a]) * inv_delta[a]);
+                } else if ((!open_hi && gs[a] > hi - 0.01) || (!open_lo && gs[a] < lo + 0.01)) {
+                  run = 0;
+                }
+              }
+              return run;
+            };
+            int live_until = 0;  // steps before this one lie in a live run
             for (int step = 0; step < n_samples; ++step) {
               const int k = kFrontToBack ? rs.k_last - step : rs.k_first + step;
               ++n_visited;
@@ -294,40 +328,20 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
               }
               const float gx = float(g.x()), gy = float(g.y()), gz = float(g.z());
               const float fx = std::floor(gx), fy = std::floor(gy), fz = std::floor(gz);
-              if (skip) {
+              if (skip && step >= live_until) {
                 const int c0 = std::clamp(int(fx), 0, dims[0] - 1) >> cell_shift;
                 const int c1 = std::clamp(int(fy), 0, dims[1] - 1) >> cell_shift;
                 const int c2 = std::clamp(int(fz), 0, dims[2] - 1) >> cell_shift;
                 const std::size_t cell = std::size_t(c0) + cells_x * (std::size_t(c1) + cells_y * std::size_t(c2));
                 const int dist = dist_cells[cell];  // 0: live
+                const int cc[3] = {c0, c1, c2};
                 if (dist != 0) {
                   ++n_skipped;
                   // Jump the run of empty planes: every cell within D - 1 of this one (max norm) is
-                  // empty, D = dist_ the distance to the nearest live cell; so is every sample whose
-                  // clamped voxel index lies in the box of those cells, [e (c - D + 1), e (c + D) - 1]
-                  // per axis (e the cell edge; a side at the volume's border reaches to infinity,
-                  // where clamping keeps the index in the box). With g moving by delta per plane, the
-                  // planes while g stays 0.01 index units inside that box (for the float rounding of
-                  // g and of t_k) are empty and are counted as skipped without being visited. On an
-                  // axis where g moves by more than 1e-6 per plane it moves monotonically (round-off
-                  // is ~1e-12), so only the side ahead bounds the run.
-                  const int r = dist - 1;
-                  const int cc[3] = {c0, c1, c2};
-                  double run = double(n_samples - 1 - step);
-                  for (int a = 0; a < 3; ++a) {
-                    const double d = delta[a];
-                    const bool open_hi = cc[a] + r >= cells_[std::size_t(a)] - 1, open_lo = cc[a] - r <= 0;
-                    const double hi = double((cc[a] + r + 1) << cell_shift), lo = double((cc[a] - r) << cell_shift);
-                    if (d > 1e-6) {
-                      if (!open_hi) run = std::min(run, (hi - 0.01 - g[a]) / d);
-                    } else if (d < -1e-6) {
-                      if (!open_lo) run = std::min(run, (g[a] - lo - 0.01) / -d);
-                    } else if ((!open_hi && g[a] > hi - 0.01) || (!open_lo && g[a] < lo + 0.01)) {
-                      // (Almost) still on this axis: t_k's round-off could move g either way across
-                      // a box side it sits on; jump only from 0.01 inside both sides.
-                      run = 0;
-                    }
-                  }
+                  // empty, D = dist_ the distance to the nearest live cell; the planes while g stays
+                  // 0.01 index units inside that cube (cube_run) are empty and are counted as
+                  // skipped without being visited.
+                  const double run = cube_run(cc, dist - 1, g, double(n_samples - 1 - step));
                   if (run >= 1) {
                     const int n = int(run);
                     step += n;
@@ -335,6 +349,12 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                   }
                   continue;
                 }
+                // A live run (the lead's "proximity clouds" in volume_integrator.cpp): every cell
+                // within R of this one is live (R = live_reach_), so the planes while g stays 0.01
+                // inside that cube are in live cells and are sampled without the cell test (the same
+                // samples, classifications and counts as testing each).
+                const double run = cube_run(cc, live_reach[cell], g, double(n_samples - 1 - step));
+                live_until = step + 1 + (run >= 1 ? int(run) : 0);
               }
               int m = 1;
               if constexpr (kMasked) {

@@ -173,6 +173,9 @@ class SlicingRenderer {
   std::vector<std::uint8_t> live_;     ///< 1 where a TF in use may be visible
   /// Chebyshev distance (in cells, capped at 255) from each cell to the nearest live cell (0: live).
   std::vector<std::uint8_t> dist_;
+  /// For a live cell, the radius (in cells) of the cube around it whose cells are all live: the
+  /// Chebyshev distance to the nearest empty cell minus one (0 for empty cells).
+  std::vector<std::uint8_t> live_reach_;
 };
 
 /// One frame (builds a SlicingRenderer).
