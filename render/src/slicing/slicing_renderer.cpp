@@ -20,7 +20,7 @@ namespace {
 
 /// Per-tile counters, summed after the frame.
 struct TileCounts {
-  std::int64_t rays = 0, samples = 0, classified = 0, skipped = 0, terminated = 0, visited = 0;
+  std::int64_t rays = 0, samples = 0, classified = 0, skipped = 0, terminated = 0, visited = 0, cell_tests = 0;
 };
 
 /// A TF evaluated as TransferFunction::alpha_at and ::evaluate do, bit for bit, without their
@@ -247,6 +247,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
   const Eigen::Vector3d background = s_.background;
   const bool opacity_correction = s_.opacity_correction;
   const bool exact_positions = s_.exact_positions;
+  const bool live_runs = s_.live_runs;
   int max_pieces = 1;
   for (const auto& tf : tfs) max_pieces = std::max(max_pieces, tf.pieces());
   visit_samples(volume_, [&](const auto samples) {
@@ -286,7 +287,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             const int k_start = kFrontToBack ? rs.k_last : rs.k_first;
             const Eigen::Vector3d g_first =
                 (ray.origin + rs.t(stack, k_start) * ray.direction - origin).cwiseProduct(inv_spacing);
-            std::int64_t n_visited = 0, n_skipped = 0, n_classified = 0, n_jumped = 0;
+            std::int64_t n_visited = 0, n_skipped = 0, n_classified = 0, n_jumped = 0, n_cell_tests = 0;
             // The planes from the current sample on while g stays 0.01 index units inside the cube
             // of cells c ± r (c the current sample's cell, r in cells) along this ray, capped at
             // `run`: the cube is [e (c - r), e (c + r + 1)) per axis (e the cell edge; a side at the
@@ -329,6 +330,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
               const float gx = float(g.x()), gy = float(g.y()), gz = float(g.z());
               const float fx = std::floor(gx), fy = std::floor(gy), fz = std::floor(gz);
               if (skip && step >= live_until) {
+                ++n_cell_tests;
                 const int c0 = std::clamp(int(fx), 0, dims[0] - 1) >> cell_shift;
                 const int c1 = std::clamp(int(fy), 0, dims[1] - 1) >> cell_shift;
                 const int c2 = std::clamp(int(fz), 0, dims[2] - 1) >> cell_shift;
@@ -353,8 +355,10 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                 // within R of this one is live (R = live_reach_), so the planes while g stays 0.01
                 // inside that cube are in live cells and are sampled without the cell test (the same
                 // samples, classifications and counts as testing each).
-                const double run = cube_run(cc, live_reach[cell], g, double(n_samples - 1 - step));
-                live_until = step + 1 + (run >= 1 ? int(run) : 0);
+                if (live_runs) {
+                  const double run = cube_run(cc, live_reach[cell], g, double(n_samples - 1 - step));
+                  live_until = step + 1 + (run >= 1 ? int(run) : 0);
+                }
               }
               int m = 1;
               if constexpr (kMasked) {
@@ -434,6 +438,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             cnt.visited += n_visited;
             cnt.skipped += n_skipped + n_jumped;
             cnt.classified += n_classified;
+            cnt.cell_tests += n_cell_tests;
           }
           Eigen::Vector3d out;
           if (mode == SlicingMode::kBlend)
@@ -483,6 +488,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
     frame.stats.skipped += c.skipped;
     frame.stats.terminated += c.terminated;
     frame.stats.visited += c.visited;
+    frame.stats.cell_tests += c.cell_tests;
   }
   const auto t1 = std::chrono::steady_clock::now();
   frame.rgb = apply_bloom(frame.raw, s_.post);
@@ -556,8 +562,9 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
   add("post.sigma/radius", fmt::format("{} half-res px, radius ceil(3 sigma)", num(s.post.sigma)));
   add("post.bloom_blend", fmt::format("additive, gain {}", num(s.post.gain)));
   add("post.render_target", "float32");
-  add("skip_empty",
-      s.skip_empty ? fmt::format("{}^3 cells, runs of empty planes jumped, exact (same image)", s.skip_cell) : "off");
+  add("skip_empty", s.skip_empty ? fmt::format("{}^3 cells, runs of empty planes jumped{}, exact (same image)",
+                                               s.skip_cell, s.live_runs ? " and of live planes run" : "")
+                                 : "off");
   add("blend.early_termination",
       s.early_termination > 0
           ? (s.mode == SlicingMode::kBlend && s.blend == BlendOperator::kOver

@@ -100,6 +100,12 @@ struct SlicingSettings {
   /// slicing_speed_test). true: each sample at o + t_k v with t_k from its plane's depth (one
   /// division per sample; the arithmetic before issue 17's second speed round, bit for bit).
   bool exact_positions = false;
+  /// Live runs (with skip_empty): from a sample in a live cell, the planes while the ray stays
+  /// 0.01 voxel inside the cube of cells around it that are all live (the Chebyshev distance to the
+  /// nearest empty cell minus one) are sampled without looking up their cells: the same samples,
+  /// counts and image as testing each. false: every sample's cell is looked up (for tests and
+  /// measurements).
+  bool live_runs = true;
 };
 
 /// Whether a mode needs the gradient volume.
@@ -112,6 +118,7 @@ struct SlicingStats {
   std::int64_t skipped = 0;     ///< samples in empty cells (not fetched)
   std::int64_t terminated = 0;  ///< rays stopped by early termination (their remaining samples not counted)
   std::int64_t visited = 0;     ///< samples whose position was computed (the others jumped in empty runs)
+  std::int64_t cell_tests = 0;  ///< visited samples whose empty-space cell was looked up (the others in live runs)
   int slices = 0;               ///< planes in the stack
   double slice_spacing = 0;     ///< Δd
   double render_ms = 0;         ///< sampling and compositing
