@@ -33,6 +33,15 @@ class InlineTf {
   explicit InlineTf(const TransferFunction& tf) : linear_(tf.kind() == TfKind::kPiecewiseLinear) {
     if (linear_) {
       curves_ = tf.curves();
+      shared_x_ = true;
+      for (const auto& c : curves_) {
+        if (c.points.empty() || c.points.size() != curves_[0].points.size()) {
+          shared_x_ = false;
+          break;
+        }
+        for (std::size_t i = 0; i < c.points.size(); ++i)
+          shared_x_ = shared_x_ && c.points[i].x() == curves_[0].points[i].x();
+      }
     } else {
       alpha_.push_back(0.0);
       rgb01_.push_back(Eigen::Vector3d::Zero());
@@ -59,10 +68,27 @@ class InlineTf {
   }
   double piece_alpha(int p) const { return alpha_[std::size_t(p)]; }
   const Eigen::Vector3d& piece_rgb(int p) const { return rgb01_[std::size_t(p)]; }
-  /// α(v) of the linear kind.
-  double alpha(double v) const { return curve_at(curves_[3], v); }
-  /// The colour of the linear kind.
-  Eigen::Vector3d rgb(double v) const {
+  /// Where a value falls among control points that the four curves share (the `points` rows of
+  /// a scene): i = -1 before the first, -2 at or after the last, else between i - 1 and i at t.
+  struct Segment {
+    int i = -1;
+    double t = 0;
+  };
+  /// α(v) of the linear kind; `seg` remembers where v fell when the curves share their points.
+  double alpha(double v, Segment& seg) const {
+    if (!shared_x_) return curve_at(curves_[3], v);
+    const auto& pts = curves_[3].points;
+    if (!(v > pts.front().x())) return seg.i = -1, pts.front().y();
+    if (v >= pts.back().x()) return seg.i = -2, pts.back().y();
+    std::size_t i = 1;
+    while (!(v < pts[i].x())) ++i;
+    seg.i = int(i), seg.t = (v - pts[i - 1].x()) / (pts[i].x() - pts[i - 1].x());
+    return at(curves_[3], seg);
+  }
+  /// The colour of the linear kind (the segment from alpha(): the same t, so the same bits as
+  /// curve_at per channel).
+  Eigen::Vector3d rgb(double v, const Segment& seg) const {
+    if (shared_x_) return {at(curves_[0], seg), at(curves_[1], seg), at(curves_[2], seg)};
     return {curve_at(curves_[0], v), curve_at(curves_[1], v), curve_at(curves_[2], v)};
   }
 
@@ -80,7 +106,16 @@ class InlineTf {
     const double t = (x - a.x()) / (b.x() - a.x());
     return a.y() + t * (b.y() - a.y());
   }
+  static double at(const TfCurve& c, const Segment& seg) {
+    const auto& pts = c.points;
+    if (seg.i == -1) return pts.front().y();
+    if (seg.i == -2) return pts.back().y();
+    const Eigen::Vector2d& b = pts[std::size_t(seg.i)];
+    const Eigen::Vector2d& a = pts[std::size_t(seg.i) - 1];
+    return a.y() + seg.t * (b.y() - a.y());
+  }
   bool linear_;
+  bool shared_x_ = false;  // the four curves have the same control x (one segment search per sample)
   std::array<TfCurve, 4> curves_;
   std::vector<double> lo_, hi_, alpha_;
   std::vector<char> lo_closed_, hi_closed_;
@@ -373,9 +408,10 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
               const InlineTf& tf = tfs[ti];
               const double fn = (double(f) - lo_) * inv_range;
               int piece = 0;
+              InlineTf::Segment seg;
               double a, ac;
               if (tf.linear()) {
-                a = tf.alpha(fn);
+                a = tf.alpha(fn, seg);
                 if (!(a > 0)) continue;
                 ac = a;
                 if (exponent != 1.0) {
@@ -394,7 +430,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                   ac = ac_piece[slot];
                 }
               }
-              Eigen::Vector3d c = tf.linear() ? tf.rgb(fn) : tf.piece_rgb(piece);
+              Eigen::Vector3d c = tf.linear() ? tf.rgb(fn, seg) : tf.piece_rgb(piece);
               if constexpr (kLit) {
                 Eigen::Vector3d e;
                 for (int ch = 0; ch < 3; ++ch) e[ch] = gch[std::size_t(ch)].trilinear_cell(i0, j0, k0, wx, wy, wz);
