@@ -2,7 +2,8 @@
 // jumping runs of empty planes changes no pixel for any cell size, mode, mask or camera; early ray
 // termination is off by default, ignored where it does not apply, equal to back to front up to
 // float round-off when it cannot stop early, and within its bound when it does; live runs change
-// no pixel or count; incremental sample positions equal the exact ones up to float round-off.
+// no pixel or count; incremental sample positions equal the exact ones up to float round-off; a
+// linear TF's shared control points give the bits of per-channel evaluation.
 
 #include <meltlab/core/error.h>
 #include <meltlab/render/slicing/slicing_renderer.h>
@@ -246,6 +247,40 @@ TEST(SlicingSpeed, IncrementalPositionsEqualExactOnesUpToFloatRoundOff) {
       EXPECT_GT(exact.stats.classified, 0) << what;
     }
   EXPECT_FALSE(SlicingSettings{}.exact_positions);  // the default is the incremental form
+}
+
+TEST(SlicingSpeed, CurvesSharingControlPointsGiveTheBitsOfPerChannelEvaluation) {
+  // A scene's `points` rows give four curves with the same x: the renderer then finds the segment
+  // once per sample. The same TF with a redundant point (x = 2, the end value) on the red curve
+  // only is evaluated per channel (TfCurve::at's way); on [0, 1] both are the same function with
+  // the same segments and t, so every pixel must agree bit for bit.
+  const double rows[5][5] = {{0.2, 0.9, 0.5, 0.1, 0},
+                             {0.35, 0.8, 0.6, 0.2, 0.3},
+                             {0.5, 0.3, 0.9, 0.4, 0.05},
+                             {0.8, 0.6, 0.6, 0.9, 0.5},
+                             {1, 1, 0.2, 0.5, 0.7}};
+  std::array<TfCurve, 4> shared;
+  for (const auto& r : rows)
+    for (int c = 0; c < 4; ++c) shared[std::size_t(c)].points.emplace_back(r[0], r[c + 1]);
+  std::array<TfCurve, 4> per_channel = shared;
+  per_channel[0].points.emplace_back(2.0, rows[4][1]);
+  const Volume& v = phantom();
+  for (const Camera& cam : cameras(v.domain()))
+    for (int variant : {0, 3}) {  // Blend, combined (lit)
+      SlicingSettings s = variant_settings(v, variant);
+      s.tfs[0] = TransferFunction::piecewise_linear(shared, "shared");
+      const SlicingRenderer a_renderer(v, s);
+      const SlicingFrame a = a_renderer.render(cam);
+      s.tfs[0] = TransferFunction::piecewise_linear(per_channel, "per_channel");
+      const SlicingFrame b =
+          SlicingRenderer(
+              v, s, a_renderer.gradients() ? std::optional<GradientVolume>(*a_renderer.gradients()) : std::nullopt)
+              .render(cam);
+      EXPECT_EQ(a.raw, b.raw) << variant;
+      EXPECT_EQ(a.alpha, b.alpha) << variant;
+      EXPECT_GT(a.stats.classified, 0) << variant;
+      EXPECT_GT(max_abs_diff(a.raw, ImageF(a.raw.width(), a.raw.height(), 3)), 0.05) << variant;  // not blank
+    }
 }
 
 TEST(SlicingSpeed, BadCellSizeOrTerminationThresholdIsRefused) {
