@@ -572,20 +572,24 @@ void study_cost(const FogBenchOptions& o, const fs::path& dir, json& record) {
     for (std::size_t i = 0; i < n; ++i) t[i] = timers[i].result();
     return t;
   };
+  // The analytic G-buffers of some scenes, then their shading round-robin.
+  auto shade_scenes = [&](const std::vector<fog::FogScene>& scenes, std::vector<fog::ShadeStats>& stats) {
+    std::vector<fog::GBuffer> gbufs;
+    for (const auto& s : scenes) gbufs.push_back(fog::trace_analytic(s));
+    std::vector<const fog::GBuffer*> gs;
+    std::vector<const fog::FogScene*> ss;
+    for (std::size_t i = 0; i < scenes.size(); ++i) gs.push_back(&gbufs[i]), ss.push_back(&scenes[i]);
+    return shade_round_robin(gs, ss, stats);
+  };
   std::vector<double> lit, t_lit, lights, t_lights;
   {
     const std::vector<std::pair<int, int>> sizes =
         o.quick ? std::vector<std::pair<int, int>>{{160, 120}, {320, 240}, {480, 360}, {640, 480}, {800, 600}}
                 : std::vector<std::pair<int, int>>{{320, 240}, {640, 480}, {800, 600}, {1024, 768}, {1280, 960}};
     std::vector<fog::FogScene> scenes;
-    std::vector<fog::GBuffer> gbufs;
     for (auto [w, h] : sizes) scenes.push_back(fog::scene_sphere(0.1, w, h));
-    for (const auto& s : scenes) gbufs.push_back(fog::trace_analytic(s));
-    std::vector<const fog::GBuffer*> gs;
-    std::vector<const fog::FogScene*> ss;
-    for (std::size_t i = 0; i < scenes.size(); ++i) gs.push_back(&gbufs[i]), ss.push_back(&scenes[i]);
     std::vector<fog::ShadeStats> st;
-    const auto t = shade_round_robin(gs, ss, st);
+    const auto t = shade_scenes(scenes, st);
     for (std::size_t i = 0; i < sizes.size(); ++i) {
       const int px = sizes[i].first * sizes[i].second;
       csv.row("pixels,{},{},{},0,0,{:.3f},{:.3f}", px, st[i].lit_pixels, px, t[i].wall_ms, t[i].cpu_ms);
@@ -598,14 +602,9 @@ void study_cost(const FogBenchOptions& o, const fs::path& dir, json& record) {
     const int w = o.quick ? 240 : 480, h = o.quick ? 180 : 360;
     const std::vector<int> counts{1, 2, 4, 6, 8, 10, 12, 14, 16};
     std::vector<fog::FogScene> scenes;
-    std::vector<fog::GBuffer> gbufs;
     for (int k : counts) scenes.push_back(fog::scene_street(0.04, w, h, k));
-    for (const auto& s : scenes) gbufs.push_back(fog::trace_analytic(s));
-    std::vector<const fog::GBuffer*> gs;
-    std::vector<const fog::FogScene*> ss;
-    for (std::size_t i = 0; i < scenes.size(); ++i) gs.push_back(&gbufs[i]), ss.push_back(&scenes[i]);
     std::vector<fog::ShadeStats> st;
-    const auto t = shade_round_robin(gs, ss, st);
+    const auto t = shade_scenes(scenes, st);
     for (std::size_t i = 0; i < counts.size(); ++i) {
       csv.row("lights,{},{},{},0,0,{:.3f},{:.3f}", counts[i], st[i].lit_pixels, w * h, t[i].wall_ms, t[i].cpu_ms);
       lights.push_back(counts[i]);
