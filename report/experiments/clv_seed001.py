@@ -102,17 +102,22 @@ def clv_seed001(exp: Path, args):
     verdicts.append(f"GOAL ERT+ESS >= 20x over none on {v800}, one thread (source 12x): the source's one-level ESS "
                     f"{sp['ert_ess']:.1f}x, multi-level {sp.get('ert_ess_ml', 0):.1f}x: {yes(goal1)}")
     ok = ok and order_ok and goal1
+    # Target 9 on the minimum CPU time of the frames where the record has it (one-sided noise).
+    def cpu_min(v, m, mem):
+        r = next((x for x in tab if x["table"] == "5.2" and x["volume"] == v and x["method"] == m
+                  and x["memory"] == mem), None)
+        return float(r["cpu_min_ms"]) if r and r.get("cpu_min_ms") else cpu(v, m, mem)
     mem_rows = []
     for v in vols:
         for m in METHODS:
-            a, b = cpu(v, m, "ram"), cpu(v, m, "mmap")
+            a, b = cpu_min(v, m, "ram"), cpu_min(v, m, "mmap")
             if a and b:
                 mem_rows.append((v, m, abs(b - a) / a))
     worst = max(mem_rows, key=lambda x: x[2])
     mem_ok = all(x[2] < 0.05 for x in mem_rows)
     cold = {r["method"]: r for r in t52 if "cold" in r["method"] or "not_evicted" in r["method"]}
     cold_txt = ", ".join(f"{k}: {float(r['wall_ms']):.0f} ms wall" for k, r in cold.items())
-    verdicts.append(f"T9 |mmap - RAM| / RAM (CPU, warm pages) at most {100 * worst[2]:.1f} % ({worst[0]} {worst[1]}; "
+    verdicts.append(f"T9 |mmap - RAM| / RAM (minimum CPU time of interleaved frames, warm pages) at most {100 * worst[2]:.1f} % ({worst[0]} {worst[1]}; "
                     f"< 5 %: {yes(mem_ok)}); cold first frame: {cold_txt or 'not measured'}")
     ok = ok and mem_ok
 
