@@ -152,14 +152,8 @@ void slicing_counters(benchmark::State& state, const render::SlicingStats& st, d
       double(st.samples) * 1e-9, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 
-// args: QC x 100, empty-space cell edge (voxels), early termination x 1000 (0: off)
-void BM_PhantomBlend(benchmark::State& state) {
-  render::SlicingSettings s;
-  s.quality_class = double(state.range(0)) / 100;
-  s.skip_cell = int(state.range(1));
-  s.early_termination = double(state.range(2)) / 1000;
-  if (state.range(3) > 0) s.tile = int(state.range(3));
-  s.tfs[0] = phantom_tf();
+/// Frames of the phantom at its camera with settings s, and the renderer's counters.
+void time_phantom(benchmark::State& state, const render::SlicingSettings& s) {
   const render::SlicingRenderer r(phantom(), s);
   const auto cam = phantom_camera();
   render::SlicingFrame f;
@@ -168,6 +162,17 @@ void BM_PhantomBlend(benchmark::State& state) {
     benchmark::DoNotOptimize(f.rgb.data());
   }
   slicing_counters(state, f.stats, coverage(f.alpha));
+}
+
+// args: QC x 100, empty-space cell edge (voxels), early termination x 1000 (0: off)
+void BM_PhantomBlend(benchmark::State& state) {
+  render::SlicingSettings s;
+  s.quality_class = double(state.range(0)) / 100;
+  s.skip_cell = int(state.range(1));
+  s.early_termination = double(state.range(2)) / 1000;
+  if (state.range(3) > 0) s.tile = int(state.range(3));
+  s.tfs[0] = phantom_tf();
+  time_phantom(state, s);
 }
 
 /// The scene's piecewise-linear TF (experiments/configs/volume/slicing_phantom_ones.yaml, "head").
@@ -185,14 +190,7 @@ void BM_PhantomBlendLinear(benchmark::State& state) {
   render::SlicingSettings s;
   s.quality_class = double(state.range(0)) / 100;
   s.tfs[0] = phantom_linear_tf();
-  const render::SlicingRenderer r(phantom(), s);
-  const auto cam = phantom_camera();
-  render::SlicingFrame f;
-  for (auto _ : state) {
-    f = r.render(cam);
-    benchmark::DoNotOptimize(f.rgb.data());
-  }
-  slicing_counters(state, f.stats, coverage(f.alpha));
+  time_phantom(state, s);
 }
 
 // args: QC x 100, empty-space cell edge (voxels)
