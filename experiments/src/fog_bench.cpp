@@ -123,10 +123,11 @@ std::vector<double> per_pixel(const fog::GBuffer& g, Fn fn) {
   return out;
 }
 
-double airlight_sum(const fog::FogScene& s, const Vec3& eye, const fog::GBufferPixel& px, const fog::FogFunctions& fn,
-                    const fog::FogModelOptions& o) {
+// `lights`: the scene's lights prepared once per frame (fog::prepare_lights), as a renderer does.
+double airlight_sum(const fog::FogScene& s, const std::vector<fog::PreparedLight>& lights, const Vec3& eye,
+                    const fog::GBufferPixel& px, const fog::FogFunctions& fn, const fog::FogModelOptions& o) {
   double sum = 0;
-  for (const auto& l : s.lights) sum += l.intensity * fog::airlight_unit(eye, px.dir, px.m, l, s.medium, fn, o);
+  for (const auto& l : lights) sum += l.light.intensity * fog::airlight_unit(eye, px.dir, px.m, l, s.medium, fn, o);
   return sum;
 }
 
@@ -306,7 +307,9 @@ void study_e2(const FogBenchOptions& o, const fs::path& dir, json& record) {
         }
         return out;
       }
-      return per_pixel(g, [&](const fog::GBufferPixel& px) { return airlight_sum(c.scene, g.eye, px, fn, model); });
+      const auto lights = fog::prepare_lights(c.scene.lights);
+      return per_pixel(
+          g, [&](const fog::GBufferPixel& px) { return airlight_sum(c.scene, lights, g.eye, px, fn, model); });
     });
   }
   // S4: random rays.
@@ -671,10 +674,12 @@ void study_speed(const FogBenchOptions& o, const fs::path& dir, json& record) {
     for (int n : {16, 64, 256}) {
       const fog::FogFunctions fn = airlight_tables(fog::TableFunction::kH, kDefaultDesign, n).functions();
       std::vector<double> val;
-      const double ms =
-          time_one_thread(o.warmup, std::max(o.repeats, 5), [&] {
-            val = per_pixel(g, [&](const fog::GBufferPixel& p) { return airlight_sum(c.scene, g.eye, p, fn, model); });
-          }).cpu_ms;
+      const double ms = time_one_thread(o.warmup, std::max(o.repeats, 5), [&] {
+                          const auto lights = fog::prepare_lights(c.scene.lights);
+                          val = per_pixel(g, [&](const fog::GBufferPixel& p) {
+                            return airlight_sum(c.scene, lights, g.eye, p, fn, model);
+                          });
+                        }).cpu_ms;
       const ErrorStats e = relative_errors(val, ref);
       csv.row("{},analytic,N={},{},{},{:.3f},{:.1f},{:.6g},{:.6g},{:.6g},{:.6g},0", c.name, n, g.pixels.size(), e.count,
               ms, 1e6 * ms / px, e.median, e.p99, e.max, e.mean);

@@ -221,6 +221,22 @@ TEST(SampleBilinear, ClampReadsTheBorderAndRepeatTiles) {
   EXPECT_DOUBLE_EQ(sample_bilinear(img, 1.0, -0.5, 0, clamp, repeat), 60.0);
 }
 
+TEST(SampleBilinear, InsideIsBitwiseTheClampedLookupForPointsInside) {
+  // Every point of a grid over [0, w-1] x [0, h-1] with the edges themselves, a one-row and a
+  // one-column image (the degenerate axes), and values of mixed sign and scale.
+  for (const auto& [w, h] : {std::pair{7, 5}, std::pair{1, 4}, std::pair{6, 1}, std::pair{2, 2}}) {
+    const ImageF img =
+        pattern<float>(w, h, 1, [](int x, int y, int) { return std::sin(1.3f * x + 0.7f * y) * (1 + 1000.0f * y); });
+    for (int i = 0; i <= 40; ++i)
+      for (int j = 0; j <= 40; ++j) {
+        const double x = (w - 1) * i / 40.0, y = (h - 1) * j / 40.0;
+        ASSERT_EQ(sample_bilinear_inside(img, x, y),
+                  sample_bilinear(img, x, y, 0, ImageWrap::kClamp, ImageWrap::kClamp))
+            << w << "x" << h << " at " << x << ", " << y;
+      }
+  }
+}
+
 TEST(SampleBilinear, RgbIsBitwiseThePerChannelLookup) {
   const ImageF img = pattern<float>(5, 4, 3, [](int x, int y, int c) { return std::sin(1.3f * x + 0.7f * y + c); });
   for (double x : {-1.3, 0.0, 0.37, 2.5, 4.9, 7.1})

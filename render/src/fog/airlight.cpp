@@ -28,10 +28,11 @@ double table_f(const FogTable& t, double u, double v, LookupCounts* counts) {
   return f;
 }
 
-// H at (u, v) from the table (fog_tables.h's h_lookup: K / h_scale, K continued beyond u_max).
-double table_h(const FogTable& t, double u, double v, LookupCounts* counts) {
+// H at (u, v) from the table (fog_tables.h's h_lookup: K / h_scale, K continued beyond u_max),
+// u as its row.
+double table_h(const FogTable& t, const HRow& row, double v, double scale, LookupCounts* counts) {
   bool clamped = false;
-  const double h = h_lookup(t, u, v, &clamped);
+  const double h = h_lookup(t, row, v, scale, &clamped);
   if (counts) {
     ++counts->lookups;
     if (clamped) ++counts->clamped;
@@ -79,6 +80,30 @@ double Spotlight::intensity_at(const Vec3& x) const {
   return 0.0;
 }
 
+PreparedLight::PreparedLight(const Spotlight& l) : light(l), axis(l.axis.normalized()) {
+  cos_half.reserve(l.profile.size());
+  weight.reserve(l.profile.size());
+  for (std::size_t k = 0; k < l.profile.size(); ++k) {
+    cos_half.push_back(std::cos(l.profile[k].half_angle_rad));
+    weight.push_back(l.profile[k].intensity - (k + 1 < l.profile.size() ? l.profile[k + 1].intensity : 0.0));
+  }
+}
+
+double PreparedLight::intensity_at(const Vec3& x) const {
+  if (light.kind == LightKind::kPoint) return 1.0;
+  const Vec3 d = x - light.position;
+  const double n = d.norm();
+  if (n == 0) return light.profile.empty() ? 0.0 : light.profile.front().intensity;
+  const double c = std::clamp(axis.dot(d) / n, -1.0, 1.0);
+  for (std::size_t k = 0; k < cos_half.size(); ++k)
+    if (c >= cos_half[k]) return light.profile[k].intensity;
+  return 0.0;
+}
+
+std::vector<PreparedLight> prepare_lights(const std::vector<Spotlight>& lights) {
+  return {lights.begin(), lights.end()};
+}
+
 RayLight ray_light(const Vec3& V, const Vec3& S, double h_min_rel) {
   RayLight g;
   g.l = S.norm();
@@ -99,10 +124,11 @@ double airlight_interval(const RayLight& g, const FogMedium& medium, double a, d
   const double va = airlight_v(g, a), vb = airlight_v(g, b);
   if (fn.h) {
     const double kt = medium.kt;
+    const HRow row = h_row(*fn.h, u);  // one row for both ends (same u)
     auto term = [&](double x, double v) {
       if (std::isinf(x)) return 0.0;
-      const double d = std::hypot(g.h, x - g.t);
-      return std::exp(-kt * (x + d)) * table_h(*fn.h, u, v, counts);
+      const double z = x - g.t, d = std::hypot(g.h, z);
+      return std::exp(-kt * (x + d)) * table_h(*fn.h, row, v, h_scale_along(kt, g.h, z), counts);
     };
     const double diff = term(a, va) - term(b, vb);
     return diff > 0 ? medium.albedo * kt / (2 * kPi * g.h) * diff : 0.0;
@@ -114,29 +140,39 @@ double airlight_interval(const RayLight& g, const FogMedium& medium, double a, d
 
 double airlight_unit(const Vec3& origin, const Vec3& V, double m, const Spotlight& light, const FogMedium& medium,
                      const FogFunctions& fn, const FogModelOptions& o, LookupCounts* counts) {
+  return airlight_unit(origin, V, m, PreparedLight(light), medium, fn, o, counts);
+}
+
+double airlight_unit(const Vec3& origin, const Vec3& V, double m, const PreparedLight& light, const FogMedium& medium,
+                     const FogFunctions& fn, const FogModelOptions& o, LookupCounts* counts) {
   if (!(m > 0) || !(medium.kt > 0)) return 0.0;
-  const Vec3 S = light.position - origin;
-  const RayLight g = ray_light(V, S, o.h_min_rel);
-  if (light.kind == LightKind::kPoint) return airlight_interval(g, medium, 0.0, m, fn, counts);
+  const Vec3 S = light.light.position - origin;
+  if (light.light.kind == LightKind::kPoint)
+    return airlight_interval(ray_light(V, S, o.h_min_rel), medium, 0.0, m, fn, counts);
+  // The ray's light geometry only once a cone lights part of the ray (most pixels of a scene see
+  // no cone, or not every one).
+  RayLight g;
+  bool have_g = false;
   Cone cone;
   cone.apex = S;
-  cone.axis = light.axis.normalized();
+  cone.axis = light.axis;
   double sum = 0;
-  for (std::size_t k = 0; k < light.profile.size(); ++k) {
-    const double weight =
-        light.profile[k].intensity - (k + 1 < light.profile.size() ? light.profile[k + 1].intensity : 0.0);
+  for (std::size_t k = 0; k < light.cos_half.size(); ++k) {
+    const double weight = light.weight[k];
     if (weight == 0) continue;
-    cone.cos_half = std::cos(light.profile[k].half_angle_rad);
+    cone.cos_half = light.cos_half[k];
     if (o.cone_solver == ConeSolver::kSource) {
       const Interval s = segment_in_cone_source(V, m, cone);
       // The listing's F(v_b) - F(v_a) as it comes (negative when its a > b).
       if (s.b != s.a) {
+        if (!have_g) g = ray_light(V, S, o.h_min_rel), have_g = true;
         const double sign = s.b > s.a ? 1.0 : -1.0;
         sum += weight * sign * airlight_interval(g, medium, std::min(s.a, s.b), std::max(s.a, s.b), fn, counts);
       }
       continue;
     }
     const ConeSegments seg = segment_in_cone(V, m, cone);
+    if (seg.count > 0 && !have_g) g = ray_light(V, S, o.h_min_rel), have_g = true;
     for (int i = 0; i < seg.count; ++i)
       sum += weight * airlight_interval(g, medium, seg.parts[static_cast<std::size_t>(i)].a,
                                         seg.parts[static_cast<std::size_t>(i)].b, fn, counts);
@@ -164,12 +200,19 @@ double airlight_point_sun(const Vec3& origin, const Vec3& V, double m, const Vec
 SurfaceTerms surface_terms(const Vec3& p, const Vec3& N, const Vec3& view_dir, const Spotlight& light,
                            const FogMedium& medium, const FogMaterial& mat, const FogFunctions& fn,
                            const FogModelOptions& o, LookupCounts* counts) {
+  return surface_terms(p, N, view_dir, PreparedLight(light), medium, mat, fn, o, counts);
+}
+
+SurfaceTerms surface_terms(const Vec3& p, const Vec3& N, const Vec3& view_dir, const PreparedLight& prepared,
+                           const FogMedium& medium, const FogMaterial& mat, const FogFunctions& fn,
+                           const FogModelOptions& o, LookupCounts* counts) {
   SurfaceTerms s;
+  const Spotlight& light = prepared.light;
   const Vec3 d = light.position - p;
   const double l = d.norm();
   if (!(l > 0)) return s;
   const Vec3 L = d / l;
-  const double i_here = light.intensity_at(p);
+  const double i_here = prepared.intensity_at(p);
   if (o.surface_only_in_cone && i_here == 0) return s;
   // Outside the cone (only_in_cone off) the fog term still sees the cone's intensity.
   const double i_fog = (i_here > 0 || light.profile.empty()) ? i_here : light.profile.front().intensity;
@@ -197,17 +240,24 @@ SurfaceTerms surface_terms(const Vec3& p, const Vec3& N, const Vec3& view_dir, c
 Rgb fog_radiance(const Vec3& origin, const Vec3& V, double m, const SurfaceHit* surface,
                  const std::vector<Spotlight>& lights, const FogMedium& medium, const FogFunctions& fn,
                  const FogModelOptions& o, LookupCounts* counts) {
+  return fog_radiance(origin, V, m, surface, prepare_lights(lights), medium, fn, o, counts);
+}
+
+Rgb fog_radiance(const Vec3& origin, const Vec3& V, double m, const SurfaceHit* surface,
+                 const std::vector<PreparedLight>& lights, const FogMedium& medium, const FogFunctions& fn,
+                 const FogModelOptions& o, LookupCounts* counts) {
   Rgb out = Rgb::Zero();
   const double view_att =
       o.view_attenuation == ViewAttenuation::kApply && std::isfinite(m) ? std::exp(-medium.kt * m) : 1.0;
-  for (const Spotlight& light : lights) {
+  for (const PreparedLight& prepared : lights) {
+    const Spotlight& light = prepared.light;
     const Rgb I = light.colour * light.intensity;
     double air = 0;
-    if (o.airlight) air = airlight_unit(origin, V, m, light, medium, fn, o, counts);
+    if (o.airlight) air = airlight_unit(origin, V, m, prepared, medium, fn, o, counts);
     Rgb c = Rgb::Constant(air);
     if (surface && surface->material && (o.surface_direct || o.surface_fog)) {
       const SurfaceTerms s =
-          surface_terms(surface->p, surface->normal, V, light, medium, *surface->material, fn, o, counts);
+          surface_terms(surface->p, surface->normal, V, prepared, medium, *surface->material, fn, o, counts);
       c += view_att * (s.diffuse() * surface->material->diffuse_colour + Rgb::Constant(s.specular()));
     }
     out += c.cwiseProduct(I);

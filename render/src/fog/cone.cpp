@@ -28,16 +28,19 @@ Quadratic cone_quadratic(const Vec3& V, const Cone& cone) {
 }
 
 // Real roots of c2 s² + 2 c1 s + c0 = 0 (stable form); returns their number (0..2).
-int real_roots(const Quadratic& q, double& r0, double& r1) {
+// `slope` = |the quadratic's derivative at the roots| / 2 (√disc, or |c1| in the linear case).
+int real_roots(const Quadratic& q, double& r0, double& r1, double& slope) {
   const double scale = std::max({std::abs(q.c0), std::abs(q.c1), 1e-300});
   if (std::abs(q.c2) <= kLinearEps * scale) {
     if (q.c1 == 0) return 0;
     r0 = -q.c0 / (2 * q.c1);
+    slope = std::abs(q.c1);
     return 1;
   }
   const double disc = q.c1 * q.c1 - q.c0 * q.c2;
   if (disc < 0) return 0;
   const double root = std::sqrt(disc);
+  slope = root;
   const double k = -(q.c1 + std::copysign(root, q.c1));  // no cancellation
   if (k == 0) {                                          // c1 = c0 = 0: a double root at 0
     r0 = r1 = 0;
@@ -69,6 +72,32 @@ double polish_root(const Vec3& V, const Cone& cone, double s) {
   return s;
 }
 
+// A quadratic root needs the polish when its rounding error may exceed kPolishTol × (|s| + |S|).
+// The coefficients carry absolute errors of about ε (c2), ε|S| (c1) and ε|S|² (c0) — each is a
+// difference of products of unit vectors and S —, so a root moves by about
+// δs ≈ kRootErrorFactor·ε (|s| + |S|)² / (2 slope) (slope = |c2 s + c1| = √disc at either root;
+// the factor 8 covers the few roundings per coefficient). Rays through or near the apex (a
+// double root, slope → 0) and grazing rays get the polish, the others skip its three square roots
+// per step. 1e-12 is far below every use (the cone-crossing test's 1e-9 m, the airlight's E2 of
+// 1e-4 against R-air).
+constexpr double kPolishTol = 1e-12;
+constexpr double kRootErrorFactor = 8;
+
+bool needs_polish(double s, double apex_distance, double slope) {
+  const double w = std::abs(s) + apex_distance;
+  return kRootErrorFactor * std::numeric_limits<double>::epsilon() * w * w > kPolishTol * w * 2 * slope;
+}
+
+// inside_cone without its square root: D·d >= c|d| as a comparison of squares (for c >= 0 both
+// sides must be non-negative; for c < 0 a non-negative D·d always passes). Only midpoints of knot
+// intervals are tested, never points on the cone, where the two forms could round differently.
+bool lit_midpoint(const Cone& cone, const Vec3& x) {
+  const Vec3 d = x - cone.apex;
+  const double dd = cone.axis.dot(d), c = cone.cos_half;
+  const double lhs = dd * dd, rhs = c * c * d.squaredNorm();
+  return c >= 0 ? dd >= 0 && lhs >= rhs : dd >= 0 || lhs <= rhs;
+}
+
 }  // namespace
 
 bool inside_cone(const Cone& cone, const Vec3& x) {
@@ -79,13 +108,15 @@ bool inside_cone(const Cone& cone, const Vec3& x) {
 ConeSegments segment_in_cone(const Vec3& V, double m, const Cone& cone) {
   ConeSegments out;
   if (!(m > 0)) return out;
-  double r[2];
-  const int n = real_roots(cone_quadratic(V, cone), r[0], r[1]);
+  double r[2], slope = 0;
+  const int n = real_roots(cone_quadratic(V, cone), r[0], r[1], slope);
+  const double apex_distance = cone.apex.cwiseAbs().sum();  // >= |S| (needs_polish: conservative)
   std::array<double, 4> knots{};
   int k = 0;
   knots[static_cast<std::size_t>(k++)] = 0.0;
   for (int i = 0; i < n; ++i) {
-    const double root = std::isfinite(r[i]) ? polish_root(V, cone, r[i]) : r[i];
+    const double root =
+        std::isfinite(r[i]) && needs_polish(r[i], apex_distance, slope) ? polish_root(V, cone, r[i]) : r[i];
     if (root > 0 && root < m) knots[static_cast<std::size_t>(k++)] = root;
   }
   knots[static_cast<std::size_t>(k++)] = m;
@@ -97,7 +128,7 @@ ConeSegments segment_in_cone(const Vec3& V, double m, const Cone& cone) {
     if (!(hi > lo)) continue;
     // The midpoint of an unbounded last interval: any point beyond the last root will do.
     const double mid = std::isfinite(hi) ? 0.5 * (lo + hi) : 2 * lo + 1;
-    if (!inside_cone(cone, mid * V)) continue;
+    if (!lit_midpoint(cone, mid * V)) continue;
     if (out.count > 0 && out.parts[static_cast<std::size_t>(out.count) - 1].b == lo)
       out.parts[static_cast<std::size_t>(out.count) - 1].b = hi;  // a root where the ray only touches
     else if (out.count < 2)

@@ -213,11 +213,11 @@ sim::IndexedMesh scene_mesh(const FogScene& scene, int sphere_triangles, double 
 ImageF shade_fog(const GBuffer& g, const FogScene& scene, const FogFunctions& fn, const FogModelOptions& o,
                  ShadeStats* stats) {
   tbb::combinable<ShadeStats> local;
+  const std::vector<PreparedLight> lights = prepare_lights(scene.lights);
   ImageF img = shade_with(g, [&](const GBufferPixel& px) {
     ShadeStats& st = local.local();
     const SurfaceHit hit{px.p, px.normal, &scene.material};
-    const Rgb c =
-        fog_radiance(g.eye, px.dir, px.m, px.hit ? &hit : nullptr, scene.lights, scene.medium, fn, o, &st.lookups);
+    const Rgb c = fog_radiance(g.eye, px.dir, px.m, px.hit ? &hit : nullptr, lights, scene.medium, fn, o, &st.lookups);
     if (c.maxCoeff() > 0) ++st.lit_pixels;
     return c;
   });

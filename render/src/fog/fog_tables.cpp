@@ -163,7 +163,7 @@ double FogTable::lookup(double xv, double yv, bool* clamped) const {
   bool c = false;
   const double ix = x.index(xv, c), iy = y.index(yv, c);
   if (clamped && c) *clamped = true;
-  return sample_bilinear(values, ix, iy, 0, ImageWrap::kClamp, ImageWrap::kClamp);
+  return sample_bilinear_inside(values, ix, iy);  // index() keeps both inside the nodes
 }
 
 std::string FogTable::describe() const {
@@ -219,14 +219,29 @@ FogTable h_table(const TableOptions& o) {
 
 double h_scale(double u, double v) { return 1 + u * std::tan(v); }
 
-double h_lookup(const FogTable& t, double u, double v, bool* clamped) {
-  if (v >= 0.5 * kPi) return 0.0;
-  bool c = false;
+double h_scale_along(double kt, double h, double z) {
+  const double d = std::hypot(h, z);
+  return 1 + kt * (z >= 0 ? z + d : h * h / (d - z));
+}
+
+HRow h_row(const FogTable& t, double u) {
+  HRow r;
   // Beyond u_max K is continued as K(u_max, v): K tends to a function of v alone as u grows.
-  const double k = t.lookup(v, std::min(u, t.y.hi), &c);
-  if (u > t.y.hi) c = true;
+  r.index = t.y.index(std::min(u, t.y.hi), r.clamped);
+  if (u > t.y.hi) r.clamped = true;
+  return r;
+}
+
+double h_lookup(const FogTable& t, const HRow& row, double v, double scale, bool* clamped) {
+  if (v >= 0.5 * kPi) return 0.0;
+  bool c = row.clamped;
+  const double k = sample_bilinear_inside(t.values, t.x.index(v, c), row.index);
   if (clamped && c) *clamped = true;
-  return k / h_scale(u, v);
+  return k / scale;
+}
+
+double h_lookup(const FogTable& t, double u, double v, bool* clamped) {
+  return h_lookup(t, h_row(t, u), v, h_scale(u, v), clamped);
 }
 
 double ring_weight(int n, double phi, double theta) {

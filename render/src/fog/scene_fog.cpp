@@ -116,7 +116,8 @@ std::vector<std::pair<std::string, std::string>> describe_scene_fog(const SceneF
   return out;
 }
 
-FogShader::FogShader(SceneFog fog, const std::vector<double>& phong_exponents) : fog_(std::move(fog)) {
+FogShader::FogShader(SceneFog fog, const std::vector<double>& phong_exponents)
+    : fog_(std::move(fog)), lights_(prepare_lights(fog_.spotlights)) {
   airlight_ = build_fog_tables(fog_.tables, fog_.function, 1, false);
   airlight_.g_diffuse = g_table(1, fog_.tables);
   for (double n : phong_exponents) {
@@ -140,7 +141,7 @@ Rgb FogShader::apply(const Rgb& shaded, const Vec3& origin, const Vec3& dir, dou
     fn.g_specular = &it->second;
   }
   const double att = fog_.model.view_attenuation == ViewAttenuation::kApply ? std::exp(-fog_.medium.kt * dist) : 1.0;
-  return att * shaded + fog_radiance(origin, dir, dist, hit, fog_.spotlights, fog_.medium, fn, fog_.model);
+  return att * shaded + fog_radiance(origin, dir, dist, hit, lights_, fog_.medium, fn, fog_.model);
 }
 
 std::vector<std::string> FogShader::describe() const {

@@ -283,5 +283,23 @@ TEST(HTable, TheDefaultAxesResolveTheCornerUToZeroVToHalfPi) {
   EXPECT_GT(old64, 0.10) << "the √u table was expected to miss the corner";
 }
 
+TEST(HTable, TheScaleAlongTheRayIsOnePlusUTanV) {
+  // h_scale_along (the airlight's form, no tangent) against h_scale(k_t h, π/4 + ½ atan(z/h)) over
+  // z/h from -1e6 to 1e6 (the light far ahead of / behind the point) and k_t h from 1e-4 to 20.
+  // The two are the same number computed two ways: tan of the half-angle sum loses about
+  // |z/h| ulps when v is near π/2 (tan's condition number there), so the bound is relative to
+  // 1e-12·max(1, |z|/h) — and it must hold for z < 0 too, where z + d cancels.
+  for (double kt : {1e-3, 0.04, 0.3})
+    for (double h : {1e-3, 0.5, 7.0})
+      for (int i = -60; i <= 60; ++i) {
+        const double z = (i < 0 ? -1 : 1) * h * std::pow(10.0, std::abs(i) / 10.0) * (i == 0 ? 0 : 1);
+        const double v = 0.25 * kPi + 0.5 * std::atan(z / h);
+        const double want = h_scale(kt * h, v), got = h_scale_along(kt, h, z);
+        ASSERT_NEAR(got, want, 1e-12 * std::max(1.0, std::abs(z) / h) * want) << kt << " " << h << " " << z;
+      }
+  // z → -∞: 1 + k_t h²/(2|z|) → 1; a cancelling z + d would give 1 + k_t·0 or noise.
+  EXPECT_DOUBLE_EQ(h_scale_along(0.1, 1.0, -1e9), 1 + 0.1 / 2e9);
+}
+
 }  // namespace
 }  // namespace meltlab::render::fog

@@ -112,6 +112,35 @@ TEST(Airlight, ReducesToSunEtAlsPointLight) {
     }
 }
 
+TEST(PreparedLight, ItsIntensityIsTheSpotlightsOnRingsAndEdges) {
+  // The per-frame constants (unit axis, cos θ_k) must give the spotlight's own ring intensity
+  // bit for bit, on random points and on points placed exactly at each ring's angle (where a
+  // different cosine or axis rounding would pick the neighbouring ring).
+  Spotlight light = test_light();
+  light.axis = Vec3(-0.3, -0.6, -1);  // not unit: both normalise it
+  light.profile = {ConeStep{10 * kDeg, 3.0}, ConeStep{20 * kDeg, 2.0}, ConeStep{30 * kDeg, 1.0}};
+  const PreparedLight prepared(light);
+  const Vec3 axis = light.axis.normalized(), side = axis.unitOrthogonal();
+  int checked = 0;
+  for (const RayConfig& c : random_ray_configs(2000, 5)) {
+    ASSERT_EQ(prepared.intensity_at(c.origin), light.intensity_at(c.origin));
+    ++checked;
+  }
+  for (const ConeStep& ring : light.profile)
+    for (double d : {0.5, 3.0, 40.0})
+      for (double eps : {-1e-15, 0.0, 1e-15}) {
+        const double a = ring.half_angle_rad + eps;
+        const Vec3 x = light.position + d * (std::cos(a) * axis + std::sin(a) * side);
+        ASSERT_EQ(prepared.intensity_at(x), light.intensity_at(x)) << a;
+        ++checked;
+      }
+  EXPECT_EQ(checked, 2027);
+  // The weights are the steps I_k - I_{k+1}.
+  ASSERT_EQ(prepared.weight.size(), 3u);
+  EXPECT_EQ(prepared.weight[0], 1.0);
+  EXPECT_EQ(prepared.weight[2], 1.0);
+}
+
 TEST(Airlight, NestedConesAreLinearAndMatchRair) {
   // Three rings 10°/20°/30° with intensities 3, 2, 1: the sum of cone airlights weighted by the
   // steps, against R-air with the stepped indicator.

@@ -12,6 +12,8 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
+
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -73,6 +75,19 @@ enum class ImageWrap {
 /// Bilinear lookup of channel c at continuous pixel coordinates (x, y), pixel centres at
 /// integers, with the given addressing per axis.
 double sample_bilinear(const ImageF& image, double x, double y, int c, ImageWrap wrap_x, ImageWrap wrap_y);
+
+/// sample_bilinear with clamping for a point already inside [0, width-1] x [0, height-1] (the
+/// caller clamped it: tables whose coordinates come from a clamped node index), inline and
+/// without the addressing: bitwise the same value (at x = width-1 it weighs the last two columns
+/// 0 and 1, which is the last column exactly).
+inline double sample_bilinear_inside(const ImageF& image, double x, double y, int c = 0) {
+  const int i0 = image.width() > 1 ? std::min(static_cast<int>(x), image.width() - 2) : 0;
+  const int j0 = image.height() > 1 ? std::min(static_cast<int>(y), image.height() - 2) : 0;
+  const int i1 = image.width() > 1 ? i0 + 1 : 0, j1 = image.height() > 1 ? j0 + 1 : 0;
+  const double fx = x - i0, fy = y - j0;
+  auto v = [&](int i, int j) { return static_cast<double>(image.at(i, j, c)); };
+  return (1 - fy) * ((1 - fx) * v(i0, j0) + fx * v(i1, j0)) + fy * ((1 - fx) * v(i0, j1) + fx * v(i1, j1));
+}
 
 /// Bilinear lookup of channels 0..2 at (x, y), as sample_bilinear per channel (bitwise the
 /// same values) with the neighbour indices computed once: the renderer's texture lookups.

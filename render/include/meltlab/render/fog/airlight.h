@@ -71,6 +71,22 @@ struct Spotlight {
   double intensity_at(const Vec3& x) const;
 };
 
+/// The constants of one light that every pixel of a frame shares — the unit axis and, per ring,
+/// cos θ_k and the weight I_k - I_{k+1} of the nested cones — so that a pixel takes no cosine
+/// and no normalisation: prepare once per frame (fog_frame, FogShader), shade many pixels. The
+/// Spotlight overloads below prepare per call (the same numbers, bit for bit).
+struct PreparedLight {
+  Spotlight light;
+  Vec3 axis = Vec3(0, 0, -1);    ///< light.axis normalised
+  std::vector<double> cos_half;  ///< cos of each ring's half-angle
+  std::vector<double> weight;    ///< I_k - I_{k+1} (I past the last ring: 0)
+
+  explicit PreparedLight(const Spotlight& l);
+  /// Spotlight::intensity_at(x) from the cached constants.
+  double intensity_at(const Vec3& x) const;
+};
+std::vector<PreparedLight> prepare_lights(const std::vector<Spotlight>& lights);
+
 /// Which F/G a model evaluation uses: the tables (the fast path) or, where a pointer is null,
 /// the accurate routines (airlight_f_between, surface_g).
 struct FogFunctions {
@@ -130,6 +146,9 @@ double airlight_interval(const RayLight& g, const FogMedium& medium, double a, d
 double airlight_unit(const Vec3& origin, const Vec3& view_dir, double m, const Spotlight& light,
                      const FogMedium& medium, const FogFunctions& fn, const FogModelOptions& o,
                      LookupCounts* counts = nullptr);
+double airlight_unit(const Vec3& origin, const Vec3& view_dir, double m, const PreparedLight& light,
+                     const FogMedium& medium, const FogFunctions& fn, const FogModelOptions& o,
+                     LookupCounts* counts = nullptr);
 
 /// Sun et al.'s point-light airlight A0 [F(A1, v_m) - F(A1, φ/2)] (φ from acos, as the paper).
 double airlight_point_sun(const Vec3& origin, const Vec3& view_dir, double m, const Vec3& light_position,
@@ -154,6 +173,9 @@ struct SurfaceTerms {
 SurfaceTerms surface_terms(const Vec3& p, const Vec3& normal, const Vec3& view_dir, const Spotlight& light,
                            const FogMedium& medium, const FogMaterial& material, const FogFunctions& fn,
                            const FogModelOptions& o, LookupCounts* counts = nullptr);
+SurfaceTerms surface_terms(const Vec3& p, const Vec3& normal, const Vec3& view_dir, const PreparedLight& light,
+                           const FogMedium& medium, const FogMaterial& material, const FogFunctions& fn,
+                           const FogModelOptions& o, LookupCounts* counts = nullptr);
 
 /// A visible surface point for fog_radiance.
 struct SurfaceHit {
@@ -165,6 +187,9 @@ struct SurfaceHit {
 /// view attenuation (`surface` = nullptr: the ray sees nothing within m).
 Rgb fog_radiance(const Vec3& origin, const Vec3& view_dir, double m, const SurfaceHit* surface,
                  const std::vector<Spotlight>& lights, const FogMedium& medium, const FogFunctions& fn,
+                 const FogModelOptions& o, LookupCounts* counts = nullptr);
+Rgb fog_radiance(const Vec3& origin, const Vec3& view_dir, double m, const SurfaceHit* surface,
+                 const std::vector<PreparedLight>& lights, const FogMedium& medium, const FogFunctions& fn,
                  const FogModelOptions& o, LookupCounts* counts = nullptr);
 
 /// The options as "fsa.*" lines for the run record.

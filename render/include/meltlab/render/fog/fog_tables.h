@@ -106,10 +106,26 @@ FogTable h_table(const TableOptions& o);
 
 /// 1 + u tan v, the scale between H and the H table's K.
 double h_scale(double u, double v);
+/// The same scale at the point of a view ray at z = x - t from the foot point, h from the light
+/// (u = k_t h, v = π/4 + ½ atan(z/h)), without a tangent: tan v = (z + d)/h, d = √(h² + z²), so
+/// h_scale = 1 + k_t (z + d), taken as 1 + k_t h²/(d - z) for z < 0 (no cancellation).
+double h_scale_along(double kt, double h, double z);
 
 /// H(u, v) from an h_table: K bilinearly, divided by h_scale (0 at v >= π/2). Beyond u_max, K is
 /// continued as K(u_max, v) (K tends to a function of v alone as u grows) and `clamped` is set.
 double h_lookup(const FogTable& t, double u, double v, bool* clamped = nullptr);
+
+/// The u part of an H lookup (the row coordinate of u = k_t h, clamped to u_max), shared by the
+/// lookups of one ray and light: both ends of an airlight interval have the same u, and u's
+/// warp (a cube root by default) is the most costly part of a lookup.
+struct HRow {
+  double index = 0;      ///< continuous row index of min(u, u_max)
+  bool clamped = false;  ///< u beyond the table's domain
+};
+HRow h_row(const FogTable& t, double u);
+/// H at (row, v) with `scale` = h_scale(u, v) given by the caller (who may know tan v without a
+/// tangent: airlight.cpp). h_lookup(t, u, v) is h_lookup(t, h_row(t, u), v, h_scale(u, v)).
+double h_lookup(const FogTable& t, const HRow& row, double v, double scale, bool* clamped = nullptr);
 
 /// G_n(T, θ) accurately (a single value; about 1 ms). exponent >= 1 (1 = Lambert's G_0).
 double surface_g(int exponent, double T, double theta);

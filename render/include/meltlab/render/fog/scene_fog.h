@@ -82,8 +82,9 @@ class FogShader {
 
  private:
   SceneFog fog_;
-  FogTableSet airlight_;              ///< the airlight table (and G_1 as g_diffuse)
-  std::map<int, FogTable> specular_;  ///< G_n per exponent
+  std::vector<PreparedLight> lights_;  ///< fog_.spotlights with their per-frame constants
+  FogTableSet airlight_;               ///< the airlight table (and G_1 as g_diffuse)
+  std::map<int, FogTable> specular_;   ///< G_n per exponent
 };
 
 }  // namespace meltlab::render::fog
