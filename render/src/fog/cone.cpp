@@ -91,8 +91,7 @@ bool needs_polish(double s, double apex_distance, double slope) {
 // inside_cone without its square root: D·d >= c|d| as a comparison of squares (for c >= 0 both
 // sides must be non-negative; for c < 0 a non-negative D·d always passes). Only midpoints of knot
 // intervals are tested; they lie on the cone only for a ray along a generator, where the two forms
-// may round differently — and either answer is a lit set of measure zero (ConeSegment.HandBuiltCases
-// checks that ray).
+// may round differently (ConeSegment.HandBuiltCases checks that such a ray is lit, as before).
 bool lit_midpoint(const Cone& cone, const Vec3& x) {
   const Vec3 d = x - cone.apex;
   const double dd = cone.axis.dot(d), c = cone.cos_half;
