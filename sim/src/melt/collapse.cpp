@@ -83,9 +83,9 @@ void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec,
       }
       if (edge_key[t] > skip_above || !alive[t]) continue;
       const Triangle& tri = m.triangle[t];
-      const Vec3<Real>& pa = m.position[static_cast<std::size_t>(tri[0])];
-      const Vec3<Real>& pb = m.position[static_cast<std::size_t>(tri[1])];
-      const Vec3<Real>& pc = m.position[static_cast<std::size_t>(tri[2])];
+      const Vec3<Real> pa = m.position[static_cast<std::size_t>(tri[0])];
+      const Vec3<Real> pb = m.position[static_cast<std::size_t>(tri[1])];
+      const Vec3<Real> pc = m.position[static_cast<std::size_t>(tri[2])];
       const Vec3<Real> ab = pb - pa, bc = pc - pb, ca = pa - pc;
       const Real l2[3] = {ab.x() * ab.x() + ab.y() * ab.y() + ab.z() * ab.z(),
                           bc.x() * bc.x() + bc.y() * bc.y() + bc.z() * bc.z(),
@@ -134,14 +134,17 @@ void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec,
     }
     ++ws.cluster_size[r];
     if (merge == MergeMode::kSequentialPairwise)
-      m.position[r] = (m.position[ks] + m.position[r]) / Real(2);
+      m.position.set(r, (m.position[ks] + m.position[r]) / Real(2));
     else
-      m.position[r] += m.position[ks];
+      m.position.set(r, m.position[r] + m.position[ks]);
     m.vertex_alive[ks] = 0;
   }
   for (Index r : ws.touched_roots) {
     auto& size = ws.cluster_size[static_cast<std::size_t>(r)];
-    if (merge == MergeMode::kClusterMean) m.position[static_cast<std::size_t>(r)] /= static_cast<Real>(size);
+    if (merge == MergeMode::kClusterMean) {
+      const auto rs = static_cast<std::size_t>(r);
+      m.position.set(rs, m.position[rs] / static_cast<Real>(size));
+    }
     size = 0;
   }
 

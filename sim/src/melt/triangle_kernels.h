@@ -12,7 +12,6 @@
 #include <cmath>
 #include <limits>
 #include <cstddef>
-#include <cstring>
 
 namespace meltlab::sim {
 
@@ -43,33 +42,23 @@ inline Real inverse_length(Real n2) {
 template <class Real>
 inline void triangle_block_terms(const TriMesh<Real>& m, std::size_t first, std::size_t count,
                                  TriangleBlockTerms<Real>& out) {
-  // Corner positions as four-number records (x, y, z, pad): one 16/32-byte copy per corner
-  // that reads the next vertex's x as padding — every vertex but the last has a next one.
-  Real p[3][kTriangleBlock][4];
-  const std::size_t nv = m.vertex_slots();
-  static_assert(sizeof(Vec3<Real>) == 3 * sizeof(Real), "positions must be packed xyz triples");
-  const Real* positions = nv > 0 ? m.position[0].data() : nullptr;
+  // Corner positions gathered from the position columns into x, y, z arrays for the
+  // arithmetic below, which vectorises over them.
+  Real px[3][kTriangleBlock], py[3][kTriangleBlock], pz[3][kTriangleBlock];
+  const Real* X = m.position.x().data();
+  const Real* Y = m.position.y().data();
+  const Real* Z = m.position.z().data();
   out.count = count;
   for (std::size_t i = 0; i < count; ++i) {
     const std::size_t t = first + i;
     const bool alive = m.triangle_alive[t] != 0;
     for (std::size_t k = 0; k < 3; ++k) {
       const std::size_t v = alive ? static_cast<std::size_t>(m.triangle[t][k]) : 0;
-      if (v + 1 < nv) [[likely]]
-        std::memcpy(p[k][i], positions + 3 * v, 4 * sizeof(Real));
-      else
-        std::memcpy(p[k][i], positions + 3 * v, 3 * sizeof(Real));
+      px[k][i] = X[v];
+      py[k][i] = Y[v];
+      pz[k][i] = Z[v];
     }
   }
-  // Split into x, y, z arrays for the arithmetic below, which vectorises over them (reading
-  // the records in place there measured slower).
-  Real px[3][kTriangleBlock], py[3][kTriangleBlock], pz[3][kTriangleBlock];
-  for (std::size_t k = 0; k < 3; ++k)
-    for (std::size_t i = 0; i < count; ++i) {
-      px[k][i] = p[k][i][0];
-      py[k][i] = p[k][i][1];
-      pz[k][i] = p[k][i][2];
-    }
   for (std::size_t i = 0; i < count; ++i) {
     const Real abx = px[1][i] - px[0][i], aby = py[1][i] - py[0][i], abz = pz[1][i] - pz[0][i];
     const Real bcx = px[2][i] - px[1][i], bcy = py[2][i] - py[1][i], bcz = pz[2][i] - pz[1][i];

@@ -3,6 +3,7 @@
 // per-triangle unit edges) and helpers shared by the passes. Not installed.
 
 #include "adjacency.h"
+#include "deform_schedule.h"
 #include "lanes.h"
 
 #include <meltlab/sim/melt.h>
@@ -44,13 +45,17 @@ static_assert(sizeof(VertexSums<float>) == kLanes * sizeof(float));
 static_assert(sizeof(VertexSums<double>) == kLanes * sizeof(double));
 
 struct MeltWorkspace {
-  VertexTriangles adj;  ///< triangles of every vertex, ascending; kept up to date by every pass
+  VertexTriangles adj;      ///< triangles of every vertex, ascending; kept up to date by every pass
+  DeformSchedule schedule;  ///< the order of the deformation sweep (deform_schedule.h)
+  /// Parts of the deformation sweep: 0 = one per thread TBB may use (1 for a serial cycle or
+  /// a small mesh); tests set it to exercise other partitions (any count gives the same mesh).
+  std::size_t deform_parts = 0;
 
-  // Parallel deform: per-triangle terms (unit normal + 3 unit edges), one record per triangle
-  // so a vertex's gather touches one cache line per triangle.
+  // Deform: terms (unit normal + 3 unit edges) of the triangles whose corners include a halo
+  // vertex of a parallel sweep, indexed by triangle slot (only those slots are written).
   std::vector<TriangleTerms<float>> terms_f;
   std::vector<TriangleTerms<double>> terms_d;
-  // Deform: per-vertex sums (serial scatter or parallel gather), read by the vertex moves.
+  // Deform: per-vertex sums, all zero between cycles (each group clears its records when it moves).
   std::vector<VertexSums<float>> sums_f;
   std::vector<VertexSums<double>> sums_d;
 
