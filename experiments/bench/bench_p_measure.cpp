@@ -20,50 +20,17 @@
 #include <cmath>
 #include <map>
 #include <mutex>
-#include <numbers>
+
+#include "shapes.h"  // tests/support: the discs and their closed forms
 
 namespace {
 
 using namespace meltlab::verify;
+using meltlab::verify::testing::disc_coverage;
+using meltlab::verify::testing::disc_mask;
+using meltlab::verify::testing::disc_pair_P;
 
 constexpr int kSuper = 4;
-
-double lens_area(double r, double d) {
-  return 2 * r * r * std::acos(d / (2 * r)) - 0.5 * d * std::sqrt(4 * r * r - d * d);
-}
-double disc_pair_P(double r, double d) {
-  const double a = std::numbers::pi * r * r, i = lens_area(r, d);
-  return (2 * a - 2 * i) / (2 * a - i);
-}
-
-cv::Mat disc_mask(int w, int h, double cx, double cy, double r) {
-  cv::Mat m(h, w, CV_8UC1, cv::Scalar(0));
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      if ((x - cx) * (x - cx) + (y - cy) * (y - cy) < r * r) m.at<std::uint8_t>(y, x) = 255;
-  return m;
-}
-
-cv::Mat disc_coverage(int w, int h, double cx, double cy, double r, int s) {
-  cv::Mat m(h, w, CV_32FC1, cv::Scalar(0));
-  const double band = std::sqrt(0.5);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const double d = std::hypot(x - cx, y - cy);
-      if (d <= r - band) {
-        m.at<float>(y, x) = 1.0f;
-      } else if (d < r + band) {
-        int n = 0;
-        for (int j = 0; j < s; ++j)
-          for (int i = 0; i < s; ++i) {
-            const double px = x - 0.5 + (i + 0.5) / s, py = y - 0.5 + (j + 0.5) / s;
-            n += (px - cx) * (px - cx) + (py - cy) * (py - cy) < r * r;
-          }
-        m.at<float>(y, x) = static_cast<float>(n) / static_cast<float>(s * s);
-      }
-    }
-  return m;
-}
 
 struct Inputs {
   double r = 0, d = 0, P = 0;

@@ -54,10 +54,6 @@ json similarity_json(const verify::Similarity2D& t) {
           {"ty_px", t.translation.y()}};
 }
 
-void require(bool ok, const std::string& message) {
-  if (!ok) throw InputError(message);
-}
-
 }  // namespace
 
 verify::CompareResult compare_and_write(const verify::ObservationSequence& obs, sim::MeshSequence& meshes,

@@ -26,10 +26,6 @@ using nlohmann::json;
 
 namespace {
 
-void require(bool ok, const std::string& what) {
-  if (!ok) throw InputError(what);
-}
-
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
@@ -67,10 +63,7 @@ std::string csv_text(const std::vector<std::string>& rows, const std::string& he
   return s;
 }
 
-}  // namespace
-
-RenderRunResult run_render(const RenderRunOptions& o) {
-  // ---- validate everything before touching the output folder ----
+void check_options(const RenderRunOptions& o) {
   require(o.cycles >= 0, fmt::format("--cycles: must be >= 0 (got {})", o.cycles));
   require(o.every >= 1, fmt::format("--every: must be >= 1 (got {})", o.every));
   require(o.mask_resolution >= 16 && o.mask_resolution <= 8192,
@@ -87,6 +80,111 @@ RenderRunResult run_render(const RenderRunOptions& o) {
     require(!o.figure_cycles.empty(), "--figure-cycles: give at least one cycle");
     for (auto c : o.figure_cycles) require(c >= 0, fmt::format("--figure-cycles: cycles must be >= 0 (got {})", c));
   }
+}
+
+// The mesh with its up axis turned to +z and, with place_on_ground, lifted by `lift` so its
+// lowest point is on the ground z = 0. Cyclic axis permutations keep the orientation
+// (outward normals stay outward).
+sim::IndexedMesh standing_mesh(sim::IndexedMesh mesh, const RenderRunOptions& o, double& lift) {
+  if (o.up == 'y')
+    for (auto& v : mesh.V) v = sim::Vec3<double>(v.z(), v.x(), v.y());  // (x, y, z) -> (z, x, y): +y becomes +z
+  else if (o.up == 'x')
+    for (auto& v : mesh.V) v = sim::Vec3<double>(v.y(), v.z(), v.x());  // +x becomes +z
+  lift = 0;
+  if (o.place_on_ground && !mesh.V.empty()) {
+    double zmin = mesh.V[0].z();
+    for (const auto& v : mesh.V) zmin = std::min(zmin, v.z());
+    lift = -zmin;
+    for (auto& v : mesh.V) v.z() += lift;
+  }
+  return mesh;
+}
+
+// The liquid stage (nullptr: sublimation).
+std::unique_ptr<sim::LiquidMask> liquid_mask(const RenderRunOptions& o, const sim::IndexedMesh& mesh) {
+  if (!o.liquid) return nullptr;
+  sim::LiquidMaskParams mp = sim::LiquidMaskParams::around(mesh, o.mask_resolution, o.mask_extent);
+  mp.threshold = o.threshold;
+  mp.far_fraction = o.far_fraction;
+  mp.blend = o.blend;
+  auto mask = std::make_unique<sim::LiquidMask>(mp);
+  if (o.threshold_texture) mask->set_threshold_texture(relief_threshold(mp.width, mp.height, o.threshold));
+  return mask;
+}
+
+// Fig. 7.6: the mask at `cycle` as liquid/mask_<cycle>.png; returns its mask_sums.csv row.
+std::string write_mask_figure(const fs::path& dir, const sim::LiquidMask& mask, std::int64_t cycle, int digits,
+                              std::int64_t triangles) {
+  const std::string name = fmt::format("mask_{:0{}}.png", cycle, digits);
+  render::write_gray_png(dir / "liquid" / name, mask.values(), mask.params().width, mask.params().height,
+                         mask.params().deposit_value);
+  return fmt::format("{},{},{:.9g},{},{:.9g}", cycle, triangles, mask.total(), mask.wet_count(),
+                     static_cast<double>(mask.max_value()));
+}
+
+// A frame of the melting mesh `m` at `cycle` into frames/; returns its frames.csv row.
+std::string write_frame(const fs::path& dir, render::IceRenderer& renderer, const sim::TriMesh<double>& m,
+                        const sim::LiquidMask* mask, std::int64_t cycle, int digits, std::int64_t triangles) {
+  renderer.set_mesh(m);
+  const render::RgbImage img = renderer.render();
+  const auto& st = renderer.last_stats();
+  const std::string stem = fmt::format("frame_{:0{}}", cycle, digits);
+  const render::RenderOutputs& out = renderer.scene().outputs;
+  if (out.exr) render::write_exr(dir / "frames" / (stem + ".exr"), img);
+  if (out.png) render::write_png(dir / "frames" / (stem + ".png"), img, out.exposure, out.gamma);
+  const char* bvh = st.bvh == render::BvhUpdate::kRefit     ? "refit"
+                    : st.bvh == render::BvhUpdate::kRebuild ? "rebuild"
+                                                            : "none";
+  return fmt::format("{},{},{},{:.3f},{:.3f},{:.9g},{}", cycle, triangles, bvh, st.bvh_ms, st.trace_ms,
+                     mask ? mask->total() : 0.0, mask ? mask->wet_count() : 0);
+}
+
+// render.json without the provenance.
+json run_record(const RenderRunOptions& o, const PreparedSimulation& prepared, double lift, std::int64_t last,
+                const RenderRunResult& result, const sim::LiquidMask* mask, const render::IceRenderer* renderer,
+                int threads) {
+  json j;
+  j["mesh"] = prepared.mesh_json;
+  j["mesh_up_axis"] = std::string(1, o.up);
+  j["mesh_lift_z"] = lift;
+  j["melt"] = {
+      {"kg", prepared.params.kg}, {"kE", prepared.params.kE}, {"kN", prepared.params.kN}, {"kr", prepared.params.kr}};
+  j["cycles"] = {{"requested", last}, {"run", result.cycles_run}, {"melted_at_cycle", result.melted_at_cycle}};
+  if (mask) {
+    const auto& mp = mask->params();
+    j["liquid"] = {{"mask_resolution", mp.width},
+                   {"mask_format", "float32, one channel"},
+                   {"texel_size", mp.texel_size},
+                   {"origin", {mp.origin.x(), mp.origin.y()}},
+                   {"p_threshold", static_cast<double>(mp.threshold)},
+                   {"threshold_texture", o.threshold_texture ? "relief value noise in [p/2, 3p/2]" : "none"},
+                   {"deposit_far_fraction", mp.far_fraction},
+                   {"deposit_slab", "z_min .. z_min + far_fraction (z_max - z_min) of the live mesh, every cycle"},
+                   {"deposit_value", static_cast<double>(mp.deposit_value)},
+                   {"deposit_blend", mp.blend == sim::DepositBlend::kOverwrite ? "overwrite" : "add"},
+                   {"liquid_steps_per_cycle", "1 spread + 1 deposit"},
+                   {"border_mode", "zero"}};
+  } else {
+    j["liquid"] = "off (no liquid stage)";
+  }
+  if (!renderer) {
+    j["liquid_figure_cycles"] = o.figure_cycles;
+  } else {
+    j["scene"] = render_scene_json(renderer->scene());
+    j["camera"] = camera_json(renderer->camera());
+    j["skipped"] = renderer->plan().skipped;
+    j["frames"] = result.frames;
+    j["median_trace_ms"] = result.median_trace_ms;
+  }
+  j["threads"] = threads;
+  return j;
+}
+
+}  // namespace
+
+RenderRunResult run_render(const RenderRunOptions& o) {
+  // ---- validate everything before touching the output folder ----
+  check_options(o);
   render::RenderScene scene =
       o.scene_file.empty() ? render::RenderScene{} : render::load_render_scene(o.scene_file.string());
   if (o.width > 0) scene.width = o.width;
@@ -96,44 +194,19 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   Provenance provenance = start_provenance("render", o.command_line);
   const fs::path& dir = folder.path();
 
-  // ---- set up ----
-  sim::IndexedMesh mesh = prepared->mesh;
-  // Cyclic axis permutations keep the orientation (outward normals stay outward).
-  if (o.up == 'y')
-    for (auto& v : mesh.V) v = sim::Vec3<double>(v.z(), v.x(), v.y());  // (x, y, z) -> (z, x, y): +y becomes +z
-  else if (o.up == 'x')
-    for (auto& v : mesh.V) v = sim::Vec3<double>(v.y(), v.z(), v.x());  // +x becomes +z
+  // ---- set up: the mesh on the ground, the melt, the liquid, the renderer ----
   double lift = 0;
-  if (o.place_on_ground && !mesh.V.empty()) {
-    double zmin = mesh.V[0].z();
-    for (const auto& v : mesh.V) zmin = std::min(zmin, v.z());
-    lift = -zmin;
-    for (auto& v : mesh.V) v.z() += lift;
-  }
+  const sim::IndexedMesh mesh = standing_mesh(prepared->mesh, o, lift);
   const int threads = o.melt.threads == 0 ? tbb::info::default_concurrency() : o.melt.threads;
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   const sim::Execution exec = threads == 1 ? sim::Execution::kSerial : sim::Execution::kParallel;
   sim::MeltSimulator<double> simulator(sim::TriMesh<double>::from_indexed(mesh), prepared->params, prepared->kl, exec);
-
-  std::unique_ptr<sim::LiquidMask> mask;
-  if (o.liquid) {
-    sim::LiquidMaskParams mp = sim::LiquidMaskParams::around(mesh, o.mask_resolution, o.mask_extent);
-    mp.threshold = o.threshold;
-    mp.far_fraction = o.far_fraction;
-    mp.blend = o.blend;
-    mask = std::make_unique<sim::LiquidMask>(mp);
-    if (o.threshold_texture) mask->set_threshold_texture(relief_threshold(mp.width, mp.height, o.threshold));
-  }
+  std::unique_ptr<sim::LiquidMask> mask = liquid_mask(o, mesh);
   create_output_directories(dir, "--out");
-
-  RenderRunResult result;
-  json frames_json = json::array();
-  std::vector<std::string> rows;
-  std::vector<double> trace_ms;
   const bool figure = o.liquid_figure;
   const std::int64_t last = figure ? *std::max_element(o.figure_cycles.begin(), o.figure_cycles.end()) : o.cycles;
   const std::set<std::int64_t> figure_at(o.figure_cycles.begin(), o.figure_cycles.end());
-  const int width = std::max(6, static_cast<int>(std::to_string(last).size()));
+  const int digits = std::max(6, static_cast<int>(std::to_string(last).size()));
   std::unique_ptr<render::IceRenderer> renderer;
   if (!figure) {
     create_output_directories(dir / "frames", "--out");
@@ -142,31 +215,17 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   }
   if (figure) create_output_directories(dir / "liquid", "--out");
 
+  // ---- the melt, a frame (or a mask) at the cycles asked for ----
+  RenderRunResult result;
+  std::vector<std::string> rows;
+  std::vector<double> trace_ms;
   for (std::int64_t cycle = 0;; ++cycle) {
     const auto& m = simulator.mesh();
     const auto triangles = static_cast<std::int64_t>(m.live_triangle_count());
-    if (figure && figure_at.count(cycle)) {
-      const std::string name = fmt::format("mask_{:0{}}.png", cycle, width);
-      render::write_gray_png(dir / "liquid" / name, mask->values(), mask->params().width, mask->params().height,
-                             mask->params().deposit_value);
-      rows.push_back(fmt::format("{},{},{:.9g},{},{:.9g}", cycle, triangles, mask->total(), mask->wet_count(),
-                                 static_cast<double>(mask->max_value())));
-    }
+    if (figure && figure_at.count(cycle)) rows.push_back(write_mask_figure(dir, *mask, cycle, digits, triangles));
     if (!figure && (cycle % o.every == 0 || cycle == last)) {
-      renderer->set_mesh(m);
-      const render::RgbImage img = renderer->render();
-      const auto& st = renderer->last_stats();
-      const std::string stem = fmt::format("frame_{:0{}}", cycle, width);
-      if (renderer->scene().outputs.exr) render::write_exr(dir / "frames" / (stem + ".exr"), img);
-      if (renderer->scene().outputs.png)
-        render::write_png(dir / "frames" / (stem + ".png"), img, renderer->scene().outputs.exposure,
-                          renderer->scene().outputs.gamma);
-      const char* bvh = st.bvh == render::BvhUpdate::kRefit     ? "refit"
-                        : st.bvh == render::BvhUpdate::kRebuild ? "rebuild"
-                                                                : "none";
-      rows.push_back(fmt::format("{},{},{},{:.3f},{:.3f},{:.9g},{}", cycle, triangles, bvh, st.bvh_ms, st.trace_ms,
-                                 mask ? mask->total() : 0.0, mask ? mask->wet_count() : 0));
-      trace_ms.push_back(st.trace_ms);
+      rows.push_back(write_frame(dir, *renderer, m, mask.get(), cycle, digits, triangles));
+      trace_ms.push_back(renderer->last_stats().trace_ms);
       ++result.frames;
     }
     if (cycle >= last) break;
@@ -187,42 +246,7 @@ RenderRunResult run_render(const RenderRunOptions& o) {
                           csv_text(rows, "cycle,triangles,bvh_update,bvh_ms,trace_ms,mask_sum,wet_texels"));
   }
   result.median_trace_ms = median(trace_ms);
-  json j;
-  j["mesh"] = prepared->mesh_json;
-  j["mesh_up_axis"] = std::string(1, o.up);
-  j["mesh_lift_z"] = lift;
-  j["melt"] = {{"kg", prepared->params.kg},
-               {"kE", prepared->params.kE},
-               {"kN", prepared->params.kN},
-               {"kr", prepared->params.kr}};
-  j["cycles"] = {{"requested", last}, {"run", result.cycles_run}, {"melted_at_cycle", result.melted_at_cycle}};
-  if (mask) {
-    const auto& mp = mask->params();
-    j["liquid"] = {{"mask_resolution", mp.width},
-                   {"mask_format", "float32, one channel"},
-                   {"texel_size", mp.texel_size},
-                   {"origin", {mp.origin.x(), mp.origin.y()}},
-                   {"p_threshold", static_cast<double>(mp.threshold)},
-                   {"threshold_texture", o.threshold_texture ? "relief value noise in [p/2, 3p/2]" : "none"},
-                   {"deposit_far_fraction", mp.far_fraction},
-                   {"deposit_slab", "z_min .. z_min + far_fraction (z_max - z_min) of the live mesh, every cycle"},
-                   {"deposit_value", static_cast<double>(mp.deposit_value)},
-                   {"deposit_blend", mp.blend == sim::DepositBlend::kOverwrite ? "overwrite" : "add"},
-                   {"liquid_steps_per_cycle", "1 spread + 1 deposit"},
-                   {"border_mode", "zero"}};
-  } else {
-    j["liquid"] = "off (no liquid stage)";
-  }
-  if (figure) {
-    j["liquid_figure_cycles"] = o.figure_cycles;
-  } else {
-    j["scene"] = render_scene_json(renderer->scene());
-    j["camera"] = camera_json(renderer->camera());
-    j["skipped"] = renderer->plan().skipped;
-    j["frames"] = result.frames;
-    j["median_trace_ms"] = result.median_trace_ms;
-  }
-  j["threads"] = threads;
+  json j = run_record(o, *prepared, lift, last, result, mask.get(), renderer.get(), threads);
   j["provenance"] = finish_provenance(provenance);
   result.run_json = j;
   write_text_atomically(dir / "render.json", j.dump(2) + "\n");

@@ -1,4 +1,5 @@
 #include <meltlab/experiments/sequence_manifest.h>
+#include <meltlab/experiments/provenance.h>
 #include <meltlab/experiments/render_json.h>
 #include <meltlab/core/atomic_file.h>
 
@@ -22,6 +23,16 @@ void write_sequence_manifest(const std::filesystem::path& dir, const SequenceMan
   out << "frames:\n";
   for (const std::string& image : m.images) out << "  - {image: " << json(image).dump() << "}\n";
   write_text_atomically(dir / "manifest.yaml", out.str());
+}
+
+void finish_generated_sequence(RunFolder& folder, nlohmann::json truth, Provenance& provenance,
+                               SequenceManifest manifest) {
+  const std::filesystem::path& dir = folder.path();
+  truth["provenance"] = finish_provenance(provenance);
+  write_text_atomically(dir / "truth" / "truth.json", truth.dump(2) + "\n");
+  manifest.ground_truth = "truth/truth.json";
+  write_sequence_manifest(dir, manifest);
+  folder.commit();
 }
 
 }  // namespace meltlab::experiments

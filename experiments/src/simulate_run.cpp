@@ -27,18 +27,6 @@ using nlohmann::json;
 
 namespace {
 
-const char* name_of(sim::DeformMode m) {
-  switch (m) {
-    case sim::DeformMode::kCombined:
-      return "combined";
-    case sim::DeformMode::kNormalOnly:
-      return "normal";
-    case sim::DeformMode::kEdgeOnly:
-      return "edge";
-  }
-  return "?";
-}
-
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
@@ -46,10 +34,6 @@ double percentile(std::vector<double> v, double q) {
   const auto i = static_cast<std::size_t>(pos);
   const double f = pos - static_cast<double>(i);
   return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
-}
-
-void require(bool ok, const std::string& what) {
-  if (!ok) throw InputError(what);
 }
 
 }  // namespace
@@ -257,6 +241,118 @@ struct StatsWriter {
   }
 };
 
+// The checks of a run (--check-every, --check-intersections-every) and what they found.
+struct RunChecks {
+  std::int64_t topology_checks = 0, intersection_checks = 0, first_intersection = -1;
+  json intersections = json::array();
+
+  // Throws InvariantError on an invalid mesh.
+  template <class Real>
+  void check_topology(std::int64_t cycle, const sim::TriMesh<Real>& mesh) {
+    ++topology_checks;
+    const sim::TopologyReport topo = sim::check_topology(mesh);
+    if (!topo.valid())
+      throw InvariantError(
+          fmt::format("cycle {}: invalid topology: {}", cycle,
+                      topo.problems.empty() ? "Euler counts inconsistent" : topo.problems.front().describe()));
+  }
+  template <class Real>
+  void check_intersections(std::int64_t cycle, const sim::TriMesh<Real>& mesh, std::int64_t triangles) {
+    const sim::SelfIntersectionReport si = sim::self_intersections(mesh, 1000);
+    intersections.push_back({{"cycle", cycle}, {"intersecting_pairs", si.pairs}, {"triangles", triangles}});
+    if (si.intersects && first_intersection < 0) first_intersection = cycle;
+  }
+  json to_json(const SimulateOptions& o) const {
+    return {{"topology_every", o.check_every},
+            {"topology_checks", topology_checks},
+            {"intersections_every", o.intersect_every},
+            {"intersection_checks", intersection_checks},
+            {"first_self_intersection_cycle", first_intersection},
+            {"intersections", intersections}};
+  }
+};
+
+// The time of each cycle and of each pass (excluding statistics, checks and snapshots).
+struct CycleTimes {
+  std::vector<double> cycle_ms;
+  double pass_ms[4] = {0, 0, 0, 0};  ///< sums: deform, collapse, glued, repair
+
+  void add(const sim::CycleReport& r, double ms) {
+    cycle_ms.push_back(ms);
+    pass_ms[0] += r.deform_ms, pass_ms[1] += r.collapse_ms, pass_ms[2] += r.glued_ms, pass_ms[3] += r.repair_ms;
+  }
+  json to_json(double total_s) const {
+    const auto n = static_cast<double>(std::max<std::size_t>(1, cycle_ms.size()));
+    return {{"total_s", total_s},
+            {"cycle_ms_mean", cycle_ms.empty() ? 0.0 : std::accumulate(cycle_ms.begin(), cycle_ms.end(), 0.0) / n},
+            {"cycle_ms_median", percentile(cycle_ms, 0.5)},
+            {"cycle_ms_p95", percentile(cycle_ms, 0.95)},
+            {"cycle_ms_max", cycle_ms.empty() ? 0.0 : *std::max_element(cycle_ms.begin(), cycle_ms.end())},
+            {"pass_ms_mean",
+             {{"deform", pass_ms[0] / n},
+              {"collapse", pass_ms[1] / n},
+              {"glued", pass_ms[2] / n},
+              {"repair", pass_ms[3] / n}}},
+            {"note", "cycle times exclude statistics, checks and snapshots"}};
+  }
+};
+
+// The resolved melt parameters and the open choices of the model, for run.json.
+json parameters_json(const PreparedSimulation& p) {
+  const SimulateOptions& o = p.opt;
+  return {
+      {"kg", p.params.kg},
+      {"kE", p.params.kE},
+      {"kN", p.params.kN},
+      {"kr", p.params.kr},
+      {"units", o.relative_units ? "relative to L0" : "absolute"},
+      {"L0_mean_edge_length", p.mean_edge_length},
+      {"as_given", {{"kg", o.kg}, {"kE", o.kE}, {"kN", o.kN.value_or(o.kE / 100.0)}, {"kr", o.kr}}},
+      {"deform", enum_name(o.deform, kDeformNames)},
+      {"sign_test_tie", o.tie == sim::TieRule::kLessEqual ? "<= (Alg. 1)" : "< (Eq. 3.6)"},
+      {"M_E_mode", o.edge_sum == sim::EdgeSumMode::kMean ? "mean" : "sum"},
+      {"merge_position_mode", o.merge == sim::MergeMode::kClusterMean ? "cluster_mean" : "sequential_pairwise"},
+      {"reindex_conflict_policy", "smallest target"},
+      {"edge_test_order", "ab, bc, ca; at most one edge per triangle per pass"},
+      {"zero_guard", "zero vectors contribute nothing"},
+      {"orphan_vertex_policy", "deleted"},
+      {"topology_repair", o.repair_topology},
+      {"remnant_check_every", p.params.remnant_check_every},
+      {"compact_below", p.params.compact_below},
+      {"initial_sort", "rotate min-index first before cycle 1"},
+      {"glued_detection", "vertex count 2 (Alg. 3) + link test in the repair"},
+      {"kl", json::parse(p.kl->describe_json())},
+      {"kl_file", p.opt.kl_file.string()},
+      {"kl_file_hash", p.opt.kl_file.empty() ? std::string() : file_hash(p.opt.kl_file)},
+  };
+}
+
+// run.json without the error and the provenance.
+template <class Real>
+json run_record(const PreparedSimulation& p, const SimulateResult& result, const sim::TriMesh<Real>& final_mesh,
+                int threads, sim::Execution exec, std::int64_t inverted_removed, const CycleTimes& times,
+                double total_s, const RunChecks& checks, const std::vector<std::string>& snapshots) {
+  const SimulateOptions& o = p.opt;
+  return {
+      {"options", options_to_json(p.opt)},
+      {"status", result.status},
+      {"mesh", p.mesh_json},
+      {"parameters", parameters_json(p)},
+      {"precision", std::is_same_v<Real, float> ? "float" : "double"},
+      {"threads", threads},
+      {"execution", exec == sim::Execution::kSerial ? "serial" : "parallel"},
+      {"cycles_requested", o.cycles},
+      {"cycles_run", result.cycles_run},
+      {"empty_at_cycle", result.empty_at_cycle},
+      {"final", {{"vertices", final_mesh.live_vertex_count()}, {"triangles", final_mesh.live_triangle_count()}}},
+      {"inverted_parts_removed", inverted_removed},
+      {"timing", times.to_json(total_s)},
+      {"checks", checks.to_json(o)},
+      {"outputs", {{"stats", "stats.csv"}, {"snapshots", snapshots}}},
+      {"stats_every", o.stats_every},
+  };
+}
+
 template <class Real>
 SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const SimulateProgress&)>& progress,
                          const std::atomic<bool>* stop) {
@@ -279,23 +375,20 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
     snapshots.push_back("snapshots/" + name);
   };
 
+  // ---- cycle 0 ----
   SimulateResult result;
   result.status = "completed";
-  std::vector<double> cycle_ms;
-  cycle_ms.reserve(static_cast<std::size_t>(std::min<std::int64_t>(o.cycles, 1 << 20)));
-  double sum_pass[4] = {0, 0, 0, 0};
+  CycleTimes times;
+  times.cycle_ms.reserve(static_cast<std::size_t>(std::min<std::int64_t>(o.cycles, 1 << 20)));
   std::int64_t inverted_removed = 0;
-  std::int64_t checks = 0, intersect_checks = 0, first_intersection = -1;
-  json intersections = json::array();
-  if (o.intersect_every > 0) {
-    const sim::SelfIntersectionReport si = sim::self_intersections(simulator.mesh(), 1000);
-    intersections.push_back(
-        {{"cycle", 0}, {"intersecting_pairs", si.pairs}, {"triangles", simulator.mesh().live_triangle_count()}});
-    if (si.intersects) first_intersection = 0;
-  }
+  RunChecks checks;
+  if (o.intersect_every > 0)
+    checks.check_intersections(0, simulator.mesh(), static_cast<std::int64_t>(simulator.mesh().live_triangle_count()));
   sim::CycleReport last;
   stats.row(0, simulator.mesh(), last, 0.0);
   snapshot(0);
+
+  // ---- the cycles: step, statistics, checks, snapshots, progress ----
   bool last_row_written = true, last_snapshot_written = true;
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
@@ -311,29 +404,18 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
       const auto t0 = Clock::now();
       last = simulator.step();
       const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-      cycle_ms.push_back(ms);
+      times.add(last, ms);
       inverted_removed += last.inverted_parts_removed;
-      sum_pass[0] += last.deform_ms, sum_pass[1] += last.collapse_ms, sum_pass[2] += last.glued_ms,
-          sum_pass[3] += last.repair_ms;
       const bool empty = last.live_triangles == 0;
       last_row_written = last_snapshot_written = false;
       if (c % o.stats_every == 0 || empty) {
         stats.row(c, simulator.mesh(), last, ms);
         last_row_written = true;
       }
-      if (o.check_every > 0 && (c % o.check_every == 0 || empty)) {
-        ++checks;
-        const sim::TopologyReport topo = sim::check_topology(simulator.mesh());
-        if (!topo.valid())
-          throw InvariantError(
-              fmt::format("cycle {}: invalid topology: {}", c,
-                          topo.problems.empty() ? "Euler counts inconsistent" : topo.problems.front().describe()));
-      }
+      if (o.check_every > 0 && (c % o.check_every == 0 || empty)) checks.check_topology(c, simulator.mesh());
       if (o.intersect_every > 0 && (c % o.intersect_every == 0)) {
-        ++intersect_checks;
-        const sim::SelfIntersectionReport si = sim::self_intersections(simulator.mesh(), 1000);
-        intersections.push_back({{"cycle", c}, {"intersecting_pairs", si.pairs}, {"triangles", last.live_triangles}});
-        if (si.intersects && first_intersection < 0) first_intersection = c;
+        ++checks.intersection_checks;
+        checks.check_intersections(c, simulator.mesh(), static_cast<std::int64_t>(last.live_triangles));
       }
       if (o.snapshot_every > 0 && c % o.snapshot_every == 0) {
         snapshot(c);
@@ -357,76 +439,18 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
     result.status = "failed";
     result.error = e.what();
   }
+
+  // ---- the last row and snapshot, run.json ----
   result.cycles_run = c;
-  if (!last_row_written && c > 0) stats.row(c, simulator.mesh(), last, cycle_ms.empty() ? 0.0 : cycle_ms.back());
+  if (!last_row_written && c > 0)
+    stats.row(c, simulator.mesh(), last, times.cycle_ms.empty() ? 0.0 : times.cycle_ms.back());
   if (!last_snapshot_written) snapshot(c);
   stats.finish();
   if (progress) progress({c, o.cycles, last.live_triangles, 0.0});
   const double total_s = std::chrono::duration<double>(Clock::now() - t_start).count();
-
-  const auto n = static_cast<double>(std::max<std::size_t>(1, cycle_ms.size()));
-  json params = {
-      {"kg", p.params.kg},
-      {"kE", p.params.kE},
-      {"kN", p.params.kN},
-      {"kr", p.params.kr},
-      {"units", o.relative_units ? "relative to L0" : "absolute"},
-      {"L0_mean_edge_length", p.mean_edge_length},
-      {"as_given", {{"kg", o.kg}, {"kE", o.kE}, {"kN", o.kN.value_or(o.kE / 100.0)}, {"kr", o.kr}}},
-      {"deform", name_of(o.deform)},
-      {"sign_test_tie", o.tie == sim::TieRule::kLessEqual ? "<= (Alg. 1)" : "< (Eq. 3.6)"},
-      {"M_E_mode", o.edge_sum == sim::EdgeSumMode::kMean ? "mean" : "sum"},
-      {"merge_position_mode", o.merge == sim::MergeMode::kClusterMean ? "cluster_mean" : "sequential_pairwise"},
-      {"reindex_conflict_policy", "smallest target"},
-      {"edge_test_order", "ab, bc, ca; at most one edge per triangle per pass"},
-      {"zero_guard", "zero vectors contribute nothing"},
-      {"orphan_vertex_policy", "deleted"},
-      {"topology_repair", o.repair_topology},
-      {"remnant_check_every", p.params.remnant_check_every},
-      {"compact_below", p.params.compact_below},
-      {"initial_sort", "rotate min-index first before cycle 1"},
-      {"glued_detection", "vertex count 2 (Alg. 3) + link test in the repair"},
-      {"kl", json::parse(p.kl->describe_json())},
-      {"kl_file", p.opt.kl_file.string()},
-      {"kl_file_hash", p.opt.kl_file.empty() ? std::string() : file_hash(p.opt.kl_file)},
-  };
   provenance.timings_s.emplace_back("cycles", total_s);
-  json run = {
-      {"options", options_to_json(p.opt)},
-      {"status", result.status},
-      {"mesh", p.mesh_json},
-      {"parameters", params},
-      {"precision", std::is_same_v<Real, float> ? "float" : "double"},
-      {"threads", threads},
-      {"execution", exec == sim::Execution::kSerial ? "serial" : "parallel"},
-      {"cycles_requested", o.cycles},
-      {"cycles_run", c},
-      {"empty_at_cycle", result.empty_at_cycle},
-      {"final",
-       {{"vertices", simulator.mesh().live_vertex_count()}, {"triangles", simulator.mesh().live_triangle_count()}}},
-      {"inverted_parts_removed", inverted_removed},
-      {"timing",
-       {{"total_s", total_s},
-        {"cycle_ms_mean", cycle_ms.empty() ? 0.0 : std::accumulate(cycle_ms.begin(), cycle_ms.end(), 0.0) / n},
-        {"cycle_ms_median", percentile(cycle_ms, 0.5)},
-        {"cycle_ms_p95", percentile(cycle_ms, 0.95)},
-        {"cycle_ms_max", cycle_ms.empty() ? 0.0 : *std::max_element(cycle_ms.begin(), cycle_ms.end())},
-        {"pass_ms_mean",
-         {{"deform", sum_pass[0] / n},
-          {"collapse", sum_pass[1] / n},
-          {"glued", sum_pass[2] / n},
-          {"repair", sum_pass[3] / n}}},
-        {"note", "cycle times exclude statistics, checks and snapshots"}}},
-      {"checks",
-       {{"topology_every", o.check_every},
-        {"topology_checks", checks},
-        {"intersections_every", o.intersect_every},
-        {"intersection_checks", intersect_checks},
-        {"first_self_intersection_cycle", first_intersection},
-        {"intersections", intersections}}},
-      {"outputs", {{"stats", "stats.csv"}, {"snapshots", snapshots}}},
-      {"stats_every", o.stats_every},
-  };
+  json run =
+      run_record(p, result, simulator.mesh(), threads, exec, inverted_removed, times, total_s, checks, snapshots);
   if (!result.error.empty()) run["error"] = result.error;
   run["provenance"] = finish_provenance(provenance);
   write_text_atomically(dir / "run.json", run.dump(2) + "\n");

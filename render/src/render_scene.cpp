@@ -38,13 +38,18 @@ Vec3d vec3(const ConfigSection& c, const std::string& key, const Vec3d& fallback
   return v;
 }
 
+// The Phong coefficients of a material (Eq. 2.13): ambient, diffuse, specular and exponent.
+void read_phong(const ConfigSection& c, double& ca, double& cd, double& cs, double& n_spec) {
+  ca = c.get_in_range("ca", ca, 0.0, 100.0);
+  cd = c.get_in_range("cd", cd, 0.0, 100.0);
+  cs = c.get_in_range("cs", cs, 0.0, 100.0);
+  n_spec = c.get_in_range("n_spec", n_spec, 0.0, 1e6);
+}
+
 void read_ice(const ConfigSection& is, const std::filesystem::path& base, IceMaterial& m) {
   m.model = is.get_choice("model", "monograph", {"monograph", "physical"}) == "physical" ? IceModel::kPhysical
                                                                                          : IceModel::kMonograph;
-  m.ca = is.get_in_range("ca", m.ca, 0.0, 100.0);
-  m.cd = is.get_in_range("cd", m.cd, 0.0, 100.0);
-  m.cs = is.get_in_range("cs", m.cs, 0.0, 100.0);
-  m.n_spec = is.get_in_range("n_spec", m.n_spec, 0.0, 1e6);
+  read_phong(is, m.ca, m.cd, m.cs, m.n_spec);
   m.cr = is.get_in_range("cr", m.cr, 0.0, 100.0);
   m.ct = is.get_in_range("ct", m.ct, 0.0, 100.0);
   m.fresnel =
@@ -78,10 +83,7 @@ void read_ground(const ConfigSection& gs, const std::filesystem::path& base, Gro
   g.tile = gs.get_in_range("tile", g.tile, 0.0, kInf);
   g.textured = gs.get("textured", g.textured);
   g.texture_file = image_file(gs, "texture", base);
-  g.ca = gs.get_in_range("ca", g.ca, 0.0, 100.0);
-  g.cd = gs.get_in_range("cd", g.cd, 0.0, 100.0);
-  g.cs = gs.get_in_range("cs", g.cs, 0.0, 100.0);
-  g.n_spec = gs.get_in_range("n_spec", g.n_spec, 0.0, 1e6);
+  read_phong(gs, g.ca, g.cd, g.cs, g.n_spec);
   g.a = gs.get_in_range("a", g.a, 0.0, 100.0);
   g.cr = gs.get_in_range("cr", g.cr, 0.0, 100.0);
   g.tilt_s = gs.get_in_range("tilt_s", g.tilt_s, 0.0, 100.0);

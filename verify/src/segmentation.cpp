@@ -192,45 +192,42 @@ void fill_holes(cv::Mat& mask) {
   }
 }
 
-}  // namespace
-
-Segmentation segment_image(const cv::Mat& image, const SegmentationSettings& settings,
-                           const std::optional<cv::Rect>& roi) {
-  using Method = SegmentationSettings::Method;
-  if (image.empty()) throw InputError("segmentation: empty image");
-  if (const std::string problem = detail::segmentation_settings_problem(settings); !problem.empty()) {
-    throw InputError("segmentation." + problem);
-  }
+// The part of the image segmented: the whole image or the checked ROI.
+cv::Rect segmented_area(const cv::Mat& image, const std::optional<cv::Rect>& roi) {
   const cv::Rect whole(0, 0, image.cols, image.rows);
-  cv::Rect area = whole;
-  if (roi) {
-    if (roi->width <= 0 || roi->height <= 0 || (*roi & whole) != *roi) {
-      throw InputError(fmt::format("segmentation: roi [{}, {}, {}, {}] is not inside the {}x{} image", roi->x, roi->y,
-                                   roi->width, roi->height, image.cols, image.rows));
-    }
-    area = *roi;
+  if (!roi) return whole;
+  if (roi->width <= 0 || roi->height <= 0 || (*roi & whole) != *roi) {
+    throw InputError(fmt::format("segmentation: roi [{}, {}, {}, {}] is not inside the {}x{} image", roi->x, roi->y,
+                                 roi->width, roi->height, image.cols, image.rows));
   }
+  return *roi;
+}
 
+// The signed score of the method (object where score > 0) and the image whose inside and
+// outside means must differ; sets out.threshold_used.
+struct Score {
+  cv::Mat score, contrast_of;
+};
+Score signed_score(const cv::Mat& image, const SegmentationSettings& settings, const cv::Rect& area,
+                   Segmentation& out) {
+  using Method = SegmentationSettings::Method;
   cv::Mat c = channel_of(image, settings);
   const bool invert = settings.object_darker && settings.method != Method::kBackground;
   if (invert) c = 255.0 - c;
-
-  // The signed score: object where score > 0.
-  Segmentation out;
-  cv::Mat score;
-  cv::Mat contrast_of = c;  // the image whose inside/outside means must differ
+  Score s;
+  s.contrast_of = c;
   switch (settings.method) {
     case Method::kOtsu: {
       cv::Mat c8;
       c(area).convertTo(c8, CV_8U);  // rounds and saturates
       const double t = cv::threshold(c8, c8, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
-      score = c - t;
+      s.score = c - t;
       out.threshold_used = invert ? 255.0 - t : t;
       break;
     }
     case Method::kGlobal: {
       const double t = invert ? 255.0 - settings.threshold : settings.threshold;
-      score = c - t;
+      s.score = c - t;
       out.threshold_used = settings.threshold;
       break;
     }
@@ -239,7 +236,7 @@ Segmentation segment_image(const cv::Mat& image, const SegmentationSettings& set
       const int b = settings.adaptive_block_px;
       cv::boxFilter(c, local, CV_32F, cv::Size(b, b), cv::Point(-1, -1), true, cv::BORDER_REPLICATE);
       local -= settings.adaptive_offset;
-      score = c - local;
+      s.score = c - local;
       const double mean_t = cv::mean(local(area))[0];
       out.threshold_used = invert ? 255.0 - mean_t : mean_t;
       break;
@@ -253,50 +250,54 @@ Segmentation segment_image(const cv::Mat& image, const SegmentationSettings& set
       const cv::Mat bg = channel_of(bg_image, settings);
       cv::Mat diff;
       cv::absdiff(c, bg, diff);
-      score = diff - settings.background_difference;
-      contrast_of = diff;
+      s.score = diff - settings.background_difference;
+      s.contrast_of = diff;
       out.threshold_used = settings.background_difference;
       break;
     }
   }
+  return s;
+}
 
-  // Threshold inside the ROI.
-  cv::Mat mask = cv::Mat::zeros(image.size(), CV_8UC1);
+// The object mask: the score thresholded inside the ROI, opened and closed (outside the image
+// counts as neutral; the ROI border as ground), its components selected, its holes filled.
+cv::Mat object_mask(const cv::Mat& score, const cv::Rect& area, const SegmentationSettings& settings) {
+  const cv::Rect whole(0, 0, score.cols, score.rows);
+  cv::Mat mask = cv::Mat::zeros(score.size(), CV_8UC1);
   {
     cv::Mat inside = score(area) > 0;
     inside.copyTo(mask(area));
   }
-  // Morphology (outside the image counts as neutral; the ROI border as ground).
   if (settings.open_radius_px > 0)
     cv::morphologyEx(mask, mask, cv::MORPH_OPEN, ellipse_kernel(settings.open_radius_px));
   if (settings.close_radius_px > 0) {
     cv::morphologyEx(mask, mask, cv::MORPH_CLOSE, ellipse_kernel(settings.close_radius_px));
     if (area != whole) {
-      cv::Mat clipped = cv::Mat::zeros(image.size(), CV_8UC1);
+      cv::Mat clipped = cv::Mat::zeros(score.size(), CV_8UC1);
       mask(area).copyTo(clipped(area));
       mask = clipped;
     }
   }
   mask = select_components(mask, settings.largest_component, settings.min_component_px);
   if (settings.fill_holes) fill_holes(mask);
-  // Is there an object at all? Compare the means inside and outside the mask within the ROI.
-  {
-    const cv::Mat m = mask(area), v = contrast_of(area);
-    const double n_in = cv::countNonZero(m), n_all = static_cast<double>(area.area());
-    if (n_in > 0 && n_in < n_all) {
-      cv::Mat outside;
-      cv::bitwise_not(m, outside);
-      out.contrast = cv::mean(v, m)[0] - cv::mean(v, outside)[0];
-    } else {
-      out.contrast = 0;
-    }
-    if (n_in > 0 && settings.min_contrast > 0 && out.contrast < settings.min_contrast) mask.setTo(0);
-  }
-  out.area_px = cv::countNonZero(mask);
+  return mask;
+}
 
-  // Probability: linear in the score near the boundary, on the mask's side of 0.5 at every
-  // pixel centre. Where mask and score disagree (morphology, removed components, filled
-  // holes) the pixel gets 0.75 / 0.25, i.e. a boundary about half-way to its neighbours.
+// Is there an object at all? The difference of the means of `contrast_of` inside and outside
+// the mask within the ROI (0 if either side is empty).
+double object_contrast(const cv::Mat& mask, const cv::Mat& contrast_of, const cv::Rect& area) {
+  const cv::Mat m = mask(area), v = contrast_of(area);
+  const double n_in = cv::countNonZero(m), n_all = static_cast<double>(area.area());
+  if (!(n_in > 0 && n_in < n_all)) return 0;
+  cv::Mat outside;
+  cv::bitwise_not(m, outside);
+  return cv::mean(v, m)[0] - cv::mean(v, outside)[0];
+}
+
+// Probability: linear in the score near the boundary, on the mask's side of 0.5 at every
+// pixel centre. Where mask and score disagree (morphology, removed components, filled
+// holes) the pixel gets 0.75 / 0.25, i.e. a boundary about half-way to its neighbours.
+cv::Mat object_probability(const cv::Mat& score, const cv::Mat& mask, const cv::Rect& area) {
   double score_scale = 1.0;
   {
     double lo = 0, hi = 0;
@@ -304,11 +305,11 @@ Segmentation segment_image(const cv::Mat& image, const SegmentationSettings& set
     score_scale = std::max({1.0, std::abs(lo), std::abs(hi)});
   }
   constexpr float kEps = 1e-4F;
-  out.probability = cv::Mat::zeros(image.size(), CV_32FC1);
+  cv::Mat probability = cv::Mat::zeros(score.size(), CV_32FC1);
   for (int y = area.y; y < area.y + area.height; ++y) {
     const float* s = score.ptr<float>(y);
     const unsigned char* m = mask.ptr<unsigned char>(y);
-    float* p = out.probability.ptr<float>(y);
+    float* p = probability.ptr<float>(y);
     for (int x = area.x; x < area.x + area.width; ++x) {
       const float v = static_cast<float>(0.5 + 0.5 * std::clamp(static_cast<double>(s[x]) / score_scale, -1.0, 1.0));
       if (m[x]) {
@@ -318,6 +319,26 @@ Segmentation segment_image(const cv::Mat& image, const SegmentationSettings& set
       }
     }
   }
+  return probability;
+}
+
+}  // namespace
+
+Segmentation segment_image(const cv::Mat& image, const SegmentationSettings& settings,
+                           const std::optional<cv::Rect>& roi) {
+  if (image.empty()) throw InputError("segmentation: empty image");
+  if (const std::string problem = detail::segmentation_settings_problem(settings); !problem.empty()) {
+    throw InputError("segmentation." + problem);
+  }
+  const cv::Rect area = segmented_area(image, roi);
+  Segmentation out;
+  const Score s = signed_score(image, settings, area, out);
+  cv::Mat mask = object_mask(s.score, area, settings);
+  out.contrast = object_contrast(mask, s.contrast_of, area);
+  if (cv::countNonZero(mask(area)) > 0 && settings.min_contrast > 0 && out.contrast < settings.min_contrast)
+    mask.setTo(0);
+  out.area_px = cv::countNonZero(mask);
+  out.probability = object_probability(s.score, mask, area);
   out.region = out.area_px > 0 ? region_from_image(out.probability, 0.5) : Region{};
   out.mask = std::move(mask);
   return out;

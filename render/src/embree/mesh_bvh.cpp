@@ -97,7 +97,8 @@ BvhUpdate MeshBvh::load(std::vector<float> positions, std::vector<std::uint32_t>
   lower_ = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   upper_ = -lower_;
   auto P = [&](std::uint32_t v) {
-    return Eigen::Vector3f(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]);
+    const std::size_t at = std::size_t{3} * v;  // in size_t: 3·v overflows uint32 above 1.4 G vertices
+    return Eigen::Vector3f(positions[at], positions[at + 1], positions[at + 2]);
   };
   for (std::size_t t = 0; t < nt; ++t) {
     const std::uint32_t a = index[3 * t], b = index[3 * t + 1], c = index[3 * t + 2];
@@ -185,13 +186,13 @@ bool MeshBvh::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, doub
 }
 
 Eigen::Vector3d MeshBvh::corner_position(std::uint32_t prim, int k) const {
-  const std::uint32_t v = index_[3 * prim + static_cast<std::uint32_t>(k)];
-  return {static_cast<double>(vertex_[3 * v]), static_cast<double>(vertex_[3 * v + 1]),
-          static_cast<double>(vertex_[3 * v + 2])};
+  const std::uint32_t v = index_[std::size_t{3} * prim + static_cast<std::size_t>(k)];
+  const std::size_t at = std::size_t{3} * v;
+  return {static_cast<double>(vertex_[at]), static_cast<double>(vertex_[at + 1]), static_cast<double>(vertex_[at + 2])};
 }
 
 Eigen::Vector3d MeshBvh::corner_normal(std::uint32_t prim, int k) const {
-  return normal_[index_[3 * prim + static_cast<std::uint32_t>(k)]].cast<double>();
+  return normal_[index_[std::size_t{3} * prim + static_cast<std::size_t>(k)]].cast<double>();
 }
 
 Eigen::Vector3d MeshBvh::interpolated_normal(const MeshHit& hit) const {

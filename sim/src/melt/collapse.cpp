@@ -49,19 +49,19 @@ std::vector<Index> flatten_merge_targets(const std::vector<Index>& target) {
   return root;
 }
 
+namespace {
+
+// Mark: every vertex's merge target (m.reindex, itself if none) from the short edges of the
+// live triangles. Triangles whose edge key shows they cannot have an edge below kr yet are
+// skipped (see MeltWorkspace::edge_key); the others are tested exactly and their key
+// refreshed. Returns whether anything was marked.
 template <class Real>
-void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec, MeltWorkspace& ws,
-                   CycleReport& report) {
-  prepare_workspace(ws, m);
+bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace& ws) {
   const std::size_t nv = m.vertex_slots();
   const std::size_t nt = m.triangle_slots();
   const auto kr2 = static_cast<Real>(kr * kr);
   std::vector<Index>& target = m.reindex;
   for (std::size_t v = 0; v < nv; ++v) target[v] = static_cast<Index>(v);
-
-  // ---- mark ----
-  // Triangles whose edge key shows they cannot have an edge below kr yet are skipped (see
-  // MeltWorkspace::edge_key); the others are tested exactly and their key refreshed.
   if (ws.edge_key.size() != nt) ws.edge_key.assign(nt, -std::numeric_limits<double>::infinity());
   ws.shrink_bound += 2.0 * ws.cycle_move_bound;
   ws.cycle_move_bound = 0.0;
@@ -111,19 +111,29 @@ void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec,
     if (local_mark) any_mark.store(true, std::memory_order_relaxed);
   };
   for_range(exec, nt, mark_range);
-  if (!any_mark.load()) return;
+  return any_mark.load();
+}
 
-  // ---- flatten chains, list merged vertices ----
+// Flatten chains (ws.root, and m.reindex = the monograph's i after flattening) and list the
+// merged vertices (ws.merged, ascending).
+template <class Real>
+void flatten_and_list_merged(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report) {
+  const std::size_t nv = m.vertex_slots();
+  std::vector<Index>& target = m.reindex;
   std::vector<Index>& root = ws.root;
   const std::int64_t merged = flatten_chains(target.data(), root.data(), nv);
   report.merged_vertices += merged;
   ws.merged.clear();
   for (std::size_t v = 0; v < nv; ++v) {
-    target[v] = root[v];  // the monograph's i after flattening
+    target[v] = root[v];
     if (root[v] != static_cast<Index>(v)) ws.merged.push_back(static_cast<Index>(v));
   }
+}
 
-  // ---- merge positions, members in ascending order ----
+// Merge positions into the roots, members in ascending order (ws.touched_roots: the roots).
+template <class Real>
+void merge_positions(TriMesh<Real>& m, MergeMode merge, MeltWorkspace& ws) {
+  const std::vector<Index>& root = ws.root;
   ws.touched_roots.clear();
   for (Index k : ws.merged) {
     const auto ks = static_cast<std::size_t>(k);
@@ -147,8 +157,13 @@ void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec,
     }
     size = 0;
   }
+}
 
-  // ---- re-point the triangles of merged vertices ----
+// Re-point the triangles of merged vertices (ws.affected) to the roots: degenerate ones die,
+// the others are rotated min-index first; their vertices are marked dirty.
+template <class Real>
+void repoint_triangles(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report) {
+  const std::vector<Index>& root = ws.root;
   std::vector<Index>& affected = ws.affected;
   affected.clear();
   for (Index k : ws.merged)
@@ -171,11 +186,15 @@ void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec,
     }
   }
   report.degenerate_triangles += degenerate;
-  constexpr double kRetest = -std::numeric_limits<double>::infinity();
+}
 
-  // ---- update the triangle lists: roots take their members' triangles ----
+// Update the triangle lists (roots take their members' triangles) and the edge keys: the
+// re-pointed triangles and every triangle of a moved root are tested exactly next cycle.
+template <class Real>
+void update_triangle_lists(TriMesh<Real>& m, MeltWorkspace& ws) {
+  constexpr double kRetest = -std::numeric_limits<double>::infinity();
   for (Index k : ws.merged) {
-    const Index r = root[static_cast<std::size_t>(k)];
+    const Index r = ws.root[static_cast<std::size_t>(k)];
     // Append k's triangles to r's list (sorted merge, duplicates removed), then drop k's.
     std::vector<Index>& merged_list = ws.scratch;
     merged_list.clear();
@@ -186,10 +205,22 @@ void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec,
     ws.adj.assign(k, {});
   }
   for (Index v : ws.dirty_list) refresh_list(ws, m, v);
-  // Re-pointed triangles and every triangle of a moved root are tested exactly next cycle.
-  for (Index t : affected) ws.edge_key[static_cast<std::size_t>(t)] = kRetest;
+  for (Index t : ws.affected) ws.edge_key[static_cast<std::size_t>(t)] = kRetest;
   for (Index r : ws.touched_roots)
     for (Index t : ws.adj.of(r)) ws.edge_key[static_cast<std::size_t>(t)] = kRetest;
+}
+
+}  // namespace
+
+template <class Real>
+void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec, MeltWorkspace& ws,
+                   CycleReport& report) {
+  prepare_workspace(ws, m);
+  if (!mark_short_edges(m, kr, exec, ws)) return;
+  flatten_and_list_merged(m, ws, report);
+  merge_positions(m, merge, ws);
+  repoint_triangles(m, ws, report);
+  update_triangle_lists(m, ws);
 }
 
 template <class Real>

@@ -147,15 +147,114 @@ namespace {
 constexpr int kDir[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
 }
 
-void EnthalpySolver::step(double dt) {
-  const int nx = H_.nx, ny = H_.ny, nz = H_.nz;
-  const double h = H_.h_m, A0 = h * h, V = h * h * h;
-  const double rho = p_.density_kg_m3, rhoL = rho * p_.latent_heat_J_kg;
-  const double Ta = p_.air_temperature_C, Tg = p_.ground_temperature_C;
+// The heat exchange of one H2O cell during a step (the model in enthalpy.h): conduction from
+// its H2O neighbours, and the conductances and lamp power of its exposed faces and of the ground.
+struct EnthalpySolver::CellExchange {
+  double q_cond = 0;  ///< conduction from the neighbours, W
+  double G_air = 0;   ///< convection conductance of the exposed faces, W/K
+  double G_rad = 0;   ///< linearised ambient radiation conductance, W/K
+  double P_lamp = 0;  ///< absorbed lamp power, W
+  double G_gr = 0;    ///< ground contact conductance, W/K
+};
+
+// Sub-cell bits (see header) of cell (i, j, k) with 0 < b < 1: a sheet on the ground gets the
+// missing part of its top face (added to x), an isolated chunk elsewhere the area of a compact
+// chunk. Returns the chunk's area factor for the faces (1 for anything else).
+double EnthalpySolver::subcell_bits(int i, int j, int k, CellExchange& x) const {
+  const double bc = b_[H_.index(i, j, k)];
+  if (!(bc < 1.0 && bc > 0)) return 1.0;
+  if (k == 0 && p_.ground_contact) {
+    const double b_above = H_.nz > 1 ? b_[H_.index(i, j, 1)] : 0.0;
+    if (b_above < bc) {
+      const double A0 = H_.h_m * H_.h_m;
+      const double lamp = p_.lamp_absorptivity * p_.lamp_irradiance_W_m2;
+      const double A_up = A0 * (1.0 - bc) * (bc - b_above) / bc;
+      x.G_air += p_.h_up_W_m2K * A_up;
+      x.G_rad += h_rad_ * A_up;
+      if (lamp > 0) x.P_lamp += lamp * std::max(0.0, lamp_dir_.z()) * A_up;
+    }
+    return 1.0;
+  }
+  for (int d = 0; d < 6; ++d) {
+    const int ii = i + kDir[d][0], jj = j + kDir[d][1], kk = k + kDir[d][2];
+    if (H_.inside(ii, jj, kk) && b_[H_.index(ii, jj, kk)] > bc) return 1.0;  // not a peak
+  }
+  return 1.0 / std::cbrt(bc);
+}
+
+EnthalpySolver::CellExchange EnthalpySolver::cell_exchange(int i, int j, int k) const {
+  const double h = H_.h_m, A0 = h * h;
   const bool dirichlet = std::isinf(p_.ground_conductance_W_m2K);
   const double inv_G = dirichlet ? 0.0 : 1.0 / p_.ground_conductance_W_m2K;
   const double lamp = p_.lamp_absorptivity * p_.lamp_irradiance_W_m2;
+  const std::size_t c = H_.index(i, j, k);
+  const double sc = s_.value[c], Tc = T_[c], kc = k_[c], bc = b_[c];
+  CellExchange x;
+  const double chunk = subcell_bits(i, j, k, x);
+  for (int d = 0; d < 6; ++d) {
+    const int ii = i + kDir[d][0], jj = j + kDir[d][1], kk = k + kDir[d][2];
+    if (!H_.inside(ii, jj, kk)) {
+      if (d == 4 && p_.ground_contact) {
+        const double area = A0 * sc;  // footprint of the cell's ice and retained water
+        x.G_gr += area / (inv_G + 0.5 * h / kc);
+      }
+      continue;  // other grid faces: insulated
+    }
+    // Conduction through the face (two half cells in series, the smaller content open).
+    const std::size_t n = H_.index(ii, jj, kk);
+    const double sn = s_.value[n];
+    if (sn > 0) {
+      const double kn = k_[n];
+      const double K = std::min(sc, sn) * h * (2.0 * (kc * kn) / (kc + kn));
+      x.q_cond += K * (T_[n] - Tc);
+    }
+    // The exposed area of the face: |Δb|, weighted by the smoothed normal's component.
+    const double bn = b_[n];
+    if (bn == bc) continue;
+    // the face's heat goes to the outer (lower b) cell if it holds H2O, else to the inner one
+    const bool receive = bn > bc || !(sn > 0);
+    if (!receive) continue;
+    const int axis = d / 2;
+    const double sign = (d % 2) ? 1.0 : -1.0;  // +1: neighbour on the + side
+    Eigen::Vector3d g(gx_[c] + gx_[n], gy_[c] + gy_[n], gz_[c] + gz_[n]);
+    if (!(g[axis] * sign * (bn - bc) > 0)) g[axis] = sign * (bn - bc) / h;  // smoothed normal disagrees with the jump
+    const double gn = g.norm();
+    if (!(gn > 0)) continue;
+    const double area = chunk * A0 * std::abs(bn - bc) * std::abs(g[axis]) / gn;
+    const Eigen::Vector3d nout = -g / gn;
+    const double nz_ = nout.z();
+    const double hc = p_.h_vertical_W_m2K * (1.0 - std::abs(nz_)) + p_.h_up_W_m2K * std::max(nz_, 0.0) +
+                      p_.h_down_W_m2K * std::max(-nz_, 0.0);
+    x.G_air += hc * area;
+    x.G_rad += h_rad_ * area;
+    if (lamp > 0) x.P_lamp += lamp * std::max(0.0, nout.dot(lamp_dir_)) * area;
+  }
+  return x;
+}
 
+// Point-implicit boundary exchange of cell c: the exact solution of H + dt G T(H) / V = R,
+// T piecewise linear in H (solid, mushy, liquid).
+double EnthalpySolver::implicit_enthalpy(std::size_t c, const CellExchange& x, double dt) const {
+  const double h = H_.h_m, V = h * h * h;
+  const double rho = p_.density_kg_m3, rhoL = rho * p_.latent_heat_J_kg;
+  const double Ta = p_.air_temperature_C, Tg = p_.ground_temperature_C;
+  const double sc = s_.value[c];
+  const double Gt = x.G_air + x.G_rad + x.G_gr;
+  const double R = H_.value[c] + dt / V * (x.q_cond + x.P_lamp + (x.G_air + x.G_rad) * Ta + x.G_gr * Tg);
+  const double a = dt * Gt / V;
+  const double lat = sc * rhoL;
+  if (R < 0) return R / (1.0 + a / (sc * rho * p_.c_ice_J_kgK));
+  if (R <= lat) return R;
+  return lat + (R - lat) / (1.0 + a / (sc * rho * p_.c_water_J_kgK));
+}
+
+void EnthalpySolver::step(double dt) {
+  const int nx = H_.nx, ny = H_.ny, nz = H_.nz;
+  const double h = H_.h_m, V = h * h * h;
+  const double rhoL = p_.density_kg_m3 * p_.latent_heat_J_kg;
+  const double Ta = p_.air_temperature_C, Tg = p_.ground_temperature_C;
+
+  // Every H2O cell from the previous state; the energy booked per z-slab.
   for_each_slab(nz, p_.parallel, [&](int k) {
     double conv = 0, rad = 0, lmp = 0, gr = 0, dlat = 0, dsens = 0;
     for (int j = 0; j < ny; ++j)
@@ -167,83 +266,14 @@ void EnthalpySolver::step(double dt) {
           H_next_[c] = 0;
           continue;
         }
-        const double Tc = T_[c], kc = k_[c], bc = b_[c];
-        double q_cond = 0, G_air = 0, G_rad = 0, P_lamp = 0, G_gr = 0;
-        // sub-cell bits (see header): a sheet on the ground gets the missing part of its top
-        // face, an isolated chunk elsewhere the area of a compact chunk
-        double chunk = 1.0;
-        if (bc < 1.0 && bc > 0) {
-          if (k == 0 && p_.ground_contact) {
-            const double b_above = nz > 1 ? b_[H_.index(i, j, 1)] : 0.0;
-            if (b_above < bc) {
-              const double A_up = A0 * (1.0 - bc) * (bc - b_above) / bc;
-              G_air += p_.h_up_W_m2K * A_up;
-              G_rad += h_rad_ * A_up;
-              if (lamp > 0) P_lamp += lamp * std::max(0.0, lamp_dir_.z()) * A_up;
-            }
-          } else {
-            bool peak = true;
-            for (int d = 0; d < 6 && peak; ++d) {
-              const int ii = i + kDir[d][0], jj = j + kDir[d][1], kk = k + kDir[d][2];
-              if (H_.inside(ii, jj, kk) && b_[H_.index(ii, jj, kk)] > bc) peak = false;
-            }
-            if (peak) chunk = 1.0 / std::cbrt(bc);
-          }
-        }
-        for (int d = 0; d < 6; ++d) {
-          const int ii = i + kDir[d][0], jj = j + kDir[d][1], kk = k + kDir[d][2];
-          if (!H_.inside(ii, jj, kk)) {
-            if (d == 4 && p_.ground_contact) {
-              const double area = A0 * sc;  // footprint of the cell's ice and retained water
-              G_gr += area / (inv_G + 0.5 * h / kc);
-            }
-            continue;  // other grid faces: insulated
-          }
-          const std::size_t n = H_.index(ii, jj, kk);
-          const double sn = s_.value[n];
-          if (sn > 0) {
-            const double kn = k_[n];
-            const double K = std::min(sc, sn) * h * (2.0 * (kc * kn) / (kc + kn));
-            q_cond += K * (T_[n] - Tc);
-          }
-          const double bn = b_[n];
-          if (bn == bc) continue;
-          // the face's heat goes to the outer (lower b) cell if it holds H2O, else to the inner one
-          const bool receive = bn > bc || !(sn > 0);
-          if (!receive) continue;
-          const int axis = d / 2;
-          const double sign = (d % 2) ? 1.0 : -1.0;  // +1: neighbour on the + side
-          Eigen::Vector3d g(gx_[c] + gx_[n], gy_[c] + gy_[n], gz_[c] + gz_[n]);
-          if (!(g[axis] * sign * (bn - bc) > 0))
-            g[axis] = sign * (bn - bc) / h;  // smoothed normal disagrees with the jump
-          const double gn = g.norm();
-          if (!(gn > 0)) continue;
-          const double area = chunk * A0 * std::abs(bn - bc) * std::abs(g[axis]) / gn;
-          const Eigen::Vector3d nout = -g / gn;
-          const double nz_ = nout.z();
-          const double hc = p_.h_vertical_W_m2K * (1.0 - std::abs(nz_)) + p_.h_up_W_m2K * std::max(nz_, 0.0) +
-                            p_.h_down_W_m2K * std::max(-nz_, 0.0);
-          G_air += hc * area;
-          G_rad += h_rad_ * area;
-          if (lamp > 0) P_lamp += lamp * std::max(0.0, nout.dot(lamp_dir_)) * area;
-        }
-        // point-implicit boundary exchange: H + dt G T(H) / V = R, T piecewise linear in H
-        const double Gt = G_air + G_rad + G_gr;
-        const double R = H_.value[c] + dt / V * (q_cond + P_lamp + (G_air + G_rad) * Ta + G_gr * Tg);
-        const double a = dt * Gt / V;
-        const double lat = sc * rhoL;
-        double Hn;
-        if (R < 0)
-          Hn = R / (1.0 + a / (sc * rho * p_.c_ice_J_kgK));
-        else if (R <= lat)
-          Hn = R;
-        else
-          Hn = lat + (R - lat) / (1.0 + a / (sc * rho * p_.c_water_J_kgK));
+        const CellExchange x = cell_exchange(i, j, k);
+        double Hn = implicit_enthalpy(c, x, dt);
         const double Tn = temperature_of(Hn, sc);
-        conv += dt * G_air * (Ta - Tn);
-        rad += dt * G_rad * (Ta - Tn);
-        lmp += dt * P_lamp;
-        gr += dt * G_gr * (Tg - Tn);
+        conv += dt * x.G_air * (Ta - Tn);
+        rad += dt * x.G_rad * (Ta - Tn);
+        lmp += dt * x.P_lamp;
+        gr += dt * x.G_gr * (Tg - Tn);
+        const double lat = sc * rhoL;
         if (p_.drain_meltwater && Hn >= lat) {
           dlat += lat * V;
           dsens += (Hn - lat) * V;
@@ -259,6 +289,7 @@ void EnthalpySolver::step(double dt) {
     slab_drain_lat_[static_cast<std::size_t>(k)] = dlat;
     slab_drain_sens_[static_cast<std::size_t>(k)] = dsens;
   });
+  // The ledger in slab order (deterministic whatever the threads), then the new state.
   for (std::size_t k = 0; k < static_cast<std::size_t>(nz); ++k) {
     ledger_.convection_J += slab_conv_[k];
     ledger_.ambient_radiation_J += slab_rad_[k];

@@ -1,10 +1,12 @@
-// Filtered texture lookups (texture/filtered.h), cube-map environments (texture/assets.h),
+// Filtered texture lookups (texture/filtered.h) and the one lookup interface over them and
+// the bilinear ones (texture/lookup.h), cube-map environments (texture/assets.h),
 // the ray differentials that give the footprints (material/optics.h, MeshBvh), and the point of it all:
 // MIP-mapping brings a 1-sample-per-pixel frame closer to a supersampled one.
 
 #include <meltlab/datasets/procedural.h>
 #include <meltlab/render/embree/mesh_bvh.h>
 #include <meltlab/render/texture/filtered.h>
+#include <meltlab/render/texture/lookup.h>
 #include <meltlab/render/integrator/ice_surface.h>
 #include <meltlab/render/material/optics.h>
 #include <meltlab/render/texture/assets.h>
@@ -83,6 +85,61 @@ TEST(FilteredTextures, WideFootprintAveragesAFineCheckerboard) {
     EXPECT_NEAR(ft.texture(id, (i + 0.5) / 64, (j + 0.5) / 64, Vector2d::Zero(), Vector2d::Zero()).x(), (i + j) % 2,
                 kFloatLookupTol);
   }
+}
+
+TEST(TextureLookup, BilinearIsTheCoreLookupWhateverTheFootprint) {
+  const RgbImage tex = random_image(64, 32, 6), env = random_image(64, 32, 7);
+  TextureFactory factory(TextureFilter::kBilinear);
+  ASSERT_FALSE(factory.uses_footprints());
+  const auto image = factory.image(tex, "tex");
+  const auto environment = factory.environment(env, "env");
+  const Differential2 wide{Vector2d(0.3, 0.1), Vector2d(-0.2, 0.4)};
+  const Differential wide_dir{Vector3d(0.1, 0.2, 0.0), Vector3d(0.0, -0.3, 0.1)};
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> u(-1.5, 2.5), g(-1.0, 1.0);
+  for (int k = 0; k < 200; ++k) {
+    const Vector2d st(u(rng), u(rng));
+    const Vector3d want = sample_bilinear_rgb(tex, st.x() * tex.width() - 0.5, st.y() * tex.height() - 0.5,
+                                              ImageWrap::kRepeat, ImageWrap::kRepeat);
+    EXPECT_EQ(image->lookup(st, nullptr), want);
+    EXPECT_EQ(image->lookup(st, &wide), want);
+    const Vector3d dir(g(rng), g(rng), g(rng));
+    EXPECT_EQ(environment->lookup(dir, nullptr), sample_latlong(env, dir));
+    EXPECT_EQ(environment->lookup(dir, &wide_dir), sample_latlong(env, dir));
+  }
+}
+
+TEST(TextureLookup, BothFiltersAgreeWithoutAFootprint) {
+  const RgbImage tex = random_image(32, 32, 9), env = random_image(64, 32, 10);
+  TextureFactory bilinear(TextureFilter::kBilinear), mipmap(TextureFilter::kMipmap);
+  ASSERT_TRUE(mipmap.uses_footprints());
+  const auto b_image = bilinear.image(tex, "tex"), m_image = mipmap.image(tex, "tex");
+  const auto b_env = bilinear.environment(env, "env"), m_env = mipmap.environment(env, "env");
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.5, 2.5), g(-1.0, 1.0);
+  for (int k = 0; k < 200; ++k) {
+    const Vector2d st(u(rng), u(rng));
+    EXPECT_NEAR((m_image->lookup(st, nullptr) - b_image->lookup(st, nullptr)).norm(), 0.0, kFloatLookupTol);
+    const Vector3d dir(g(rng), g(rng), g(rng));
+    if (std::abs(dir.normalized().z()) > 0.95) continue;  // OpenImageIO blends towards the pole's average near it
+    EXPECT_NEAR((m_env->lookup(dir, nullptr) - b_env->lookup(dir, nullptr)).norm(), 0.0, kFloatLookupTol);
+  }
+  // A wide footprint on the MIP-mapped texture reads a coarser level: a different value.
+  const Differential2 wide{Vector2d(0.5, 0.0), Vector2d(0.0, 0.5)};
+  const Vector2d st(0.3, 0.6);
+  EXPECT_GT((m_image->lookup(st, &wide) - b_image->lookup(st, nullptr)).norm(), 0.01);
+}
+
+TEST(TextureLookup, ProjectionReadsThePlaneAcrossTheAxis) {
+  const auto image = TextureFactory(TextureFilter::kBilinear).image(random_image(16, 16, 12), "tex");
+  const Vector3d x(0.3, -0.7, 1.9);
+  const double tile = 0.5;
+  EXPECT_EQ(lookup_projected(*image, x, 0, tile, nullptr), image->lookup(Vector2d(x.y(), x.z()) / tile, nullptr));
+  EXPECT_EQ(lookup_projected(*image, x, 1, tile, nullptr), image->lookup(Vector2d(x.x(), x.z()) / tile, nullptr));
+  EXPECT_EQ(lookup_projected(*image, x, 2, tile, nullptr), image->lookup(Vector2d(x.x(), x.y()) / tile, nullptr));
+  EXPECT_EQ(dominant_axis(Vector3d(0.9, -0.1, 0.3)), 0);
+  EXPECT_EQ(dominant_axis(Vector3d(0.2, -0.9, 0.3)), 1);
+  EXPECT_EQ(dominant_axis(Vector3d(0.2, 0.1, -0.5)), 2);
 }
 
 TEST(RayDifferentials, ReflectAndRefractMatchFiniteDifferences) {

@@ -39,6 +39,12 @@ class InvariantError : public Error {
   using Error::Error;
 };
 
+/// Throws InputError(message) unless `ok`: the checks of options and values before a run
+/// touches its output folder.
+inline void require(bool ok, const std::string& message) {
+  if (!ok) throw InputError(message);
+}
+
 /// Joins the lines of a library's message into one ("a; b"), without trailing blanks: meltlab's
 /// errors are one line, whatever a library (or a hostile input echoed by it) puts in them.
 inline std::string one_line(const std::string& text) {

@@ -22,7 +22,8 @@
 // sum is taken in the same order (a vertex sums its triangles in ascending triangle index;
 // a merge cluster sums its members in ascending vertex index), and every conflict is
 // resolved by an order-independent rule (a vertex marked for merging by several triangles
-// takes the smallest target). See melt.cpp for the details and the open choices of §12.
+// takes the smallest target). The sources in sim/src/melt/ (deform.cpp, collapse.cpp, glued.cpp,
+// repair.cpp, remnants.cpp, compact.cpp, simulator.cpp) give the details and the open choices of §12.
 
 #include <meltlab/sim/kl_field.h>
 #include <meltlab/sim/mesh.h>
@@ -110,7 +111,7 @@ struct CycleReport {
   }
 };
 
-struct MeltWorkspace;  // scratch arrays kept across cycles (defined in melt.cpp)
+struct MeltWorkspace;  // scratch arrays kept across cycles (defined in sim/src/melt/workspace.h)
 
 /// Runs the melt cycle on a mesh it owns. Keeps its scratch buffers across cycles, so a
 /// cycle allocates nothing once the arrays have grown to size.

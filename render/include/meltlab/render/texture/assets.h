@@ -19,6 +19,8 @@
 
 namespace meltlab::render {
 
+/// A linear RGB colour (radiance, a texel, a material's weights per channel).
+using Rgb = Eigen::Vector3d;
 /// Linear RGB float image: meltlab's image type with 3 channels (lookups: sample_bilinear_rgb).
 using RgbImage = ImageF;
 /// A w x h RGB image of zeros.

@@ -195,7 +195,13 @@ class EnthalpySolver {
   double surface_area_m2() const;
 
  private:
+  struct CellExchange;  ///< what one cell exchanges during a step (enthalpy.cpp)
+
+  /// One explicit step: every H2O cell's exchange, its point-implicit update, the ledger.
   void step(double dt);
+  CellExchange cell_exchange(int i, int j, int k) const;
+  double subcell_bits(int i, int j, int k, CellExchange& x) const;
+  double implicit_enthalpy(std::size_t c, const CellExchange& x, double dt) const;
   void refresh_derived();
   void settle();
   double temperature_of(double H, double s) const;

@@ -1,5 +1,6 @@
 #pragma once
-// Shapes with closed-form areas for the verify_metrics tests.
+// Shapes with closed-form areas: the verify metrics tests and the P-measure benchmark
+// (experiments/bench/bench_p_measure.cpp).
 
 #include <meltlab/verify/region.h>
 
