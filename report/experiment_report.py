@@ -5,7 +5,8 @@ earlier steps did not, and writes EXP_DIR/report.json, the fragment that
 report/build_report.py puts into the HTML report.
 
 usage: experiment_report.py KIND EXP_DIR [ARGS...]
-KIND: tab_2_3 | cycle_time CYCLES | deform_variants | split | kl_field | chapter8 MOLD | fit | physics_fit MOLD |
+KIND: tab_2_3 | cycle_time CYCLES | deform_variants | split | kl_field | chapter8 MOLD | fit | fit_coverage |
+      physics_fit MOLD |
       melt_away | liquid_figure | melt_scene | texture_filter FACTOR | stress_summary |
       module_studies | runs (generic: every simulate run folder in EXP_DIR) | vlr_seed000 | sweep (meltlab sweep)
 
@@ -20,7 +21,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-KINDS = ("tab_2_3", "cycle_time", "deform_variants", "split", "kl_field", "chapter8", "fit", "physics_fit", "melt_away", "liquid_figure", "melt_scene", "texture_filter", "stress_summary", "module_studies", "runs", "vlr_seed000", "sweep")
+KINDS = ("tab_2_3", "cycle_time", "deform_variants", "split", "kl_field", "chapter8", "fit", "fit_coverage", "physics_fit", "melt_away", "liquid_figure", "melt_scene", "texture_filter", "stress_summary", "module_studies", "runs", "vlr_seed000", "sweep")
 
 
 def main(argv):

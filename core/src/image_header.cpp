@@ -21,13 +21,58 @@ std::uint32_t be32(const unsigned char* p) {
   return (std::uint32_t(p[0]) << 24) | (std::uint32_t(p[1]) << 16) | (std::uint32_t(p[2]) << 8) | std::uint32_t(p[3]);
 }
 
+/// How many bytes OpenEXR's reader consumes for an attribute value of `type` that declares `size`:
+/// OpenEXR reads a value of a known fixed-size type (box2i, float, ...) at its natural size and a
+/// channel list up to its terminating empty name, whatever the declared size; only strings, vectors
+/// and unknown (opaque) types take the declared size — and allocate it. A preview reads its width
+/// and height and then allocates 4·w·h bytes. Returns nullopt when the value runs beyond what we
+/// read; throws for a preview larger than the file.
+std::optional<std::size_t> exr_value_length(std::string_view type, const std::string& b, std::size_t value,
+                                            std::uint32_t size, std::int64_t file_size, const std::string& file,
+                                            std::string_view name) {
+  static const std::pair<std::string_view, std::size_t> kFixed[] = {
+      {"box2i", 16},      {"box2f", 16},   {"chromaticities", 32},
+      {"compression", 1}, {"double", 8},   {"envmap", 1},
+      {"float", 4},       {"int", 4},      {"keycode", 28},
+      {"lineOrder", 1},   {"m33f", 36},    {"m33d", 72},
+      {"m44f", 64},       {"m44d", 128},   {"rational", 8},
+      {"tiledesc", 9},    {"timecode", 8}, {"v2i", 8},
+      {"v2f", 8},         {"v2d", 16},     {"v3i", 12},
+      {"v3f", 12},        {"v3d", 24},     {"deepImageState", 1}};
+  for (const auto& [t, n] : kFixed)
+    if (type == t) return n;
+  const auto* p = reinterpret_cast<const unsigned char*>(b.data());
+  if (type == "chlist") {
+    std::size_t c = value;
+    while (true) {
+      if (c >= b.size()) return std::nullopt;
+      if (b[c] == '\0') return c + 1 - value;
+      const std::size_t ce = b.find('\0', c);
+      if (ce == std::string::npos || ce + 17 > b.size()) return std::nullopt;
+      c = ce + 17;
+    }
+  }
+  if (type == "preview") {
+    if (value + 8 > b.size()) return std::nullopt;
+    const std::int64_t w = le32(p + value), h = le32(p + value + 4);
+    const std::int64_t bytes = checked_mul(checked_mul(w, h), 4);
+    if (bytes < 0 || bytes > file_size)
+      throw InputError(fmt::format("{}: corrupt OpenEXR header: preview '{}' of {}x{} pixels is larger than the file",
+                                   file, name, w, h));
+    return std::size_t(8 + bytes);
+  }
+  return size;  // string, stringvector, floatvector, idmanifest, opaque: the declared size
+}
+
 // OpenEXR: magic 76 2f 31 01, a 4-byte version (flag 0x1000: multi-part, headers follow one another
 // until an empty one), then per header attributes "name\0type\0" + int32 size + value, until an empty
 // name. dataWindow is a box2i (xMin yMin xMax yMax, int32 each).
 // Every attribute of every header that lies within what we read is checked, not only those up to
 // dataWindow: one that declares more bytes than the file holds is refused here, since OpenEXR
 // allocates the declared size before it notices (fuzzed files of 460 and 823 bytes asked for 1.6
-// and 1.9 GB, the second in an attribute after dataWindow).
+// and 1.9 GB, the second in an attribute after dataWindow). The walk follows OpenEXR's reader
+// (exr_value_length), not the declared sizes: a fuzzed channel list whose declared size disagreed
+// with its contents led OpenEXR to an attribute (1.9 GB) that a size-based walk never saw.
 std::optional<DeclaredImageSize> exr_size(const std::string& b, std::int64_t file_size, const std::string& file) {
   const auto* p = reinterpret_cast<const unsigned char*>(b.data());
   const bool multipart = (le32(p + 4) & 0x1000u) != 0;
@@ -64,6 +109,9 @@ std::optional<DeclaredImageSize> exr_size(const std::string& b, std::int64_t fil
       throw InputError(fmt::format(
           "{}: corrupt OpenEXR header: attribute '{}' declares {} bytes, more than the file holds", file, name, size));
     if (size > b.size() - value) return finish();  // beyond what we read: cannot say
+    const std::string_view type(b.data() + name_end + 1, type_end - name_end - 1);
+    const auto consumed = exr_value_length(type, b, value, size, file_size, file, name);
+    if (!consumed) return finish();
     if (first_header && name == "compression" && size == 1) compression = p[value];
     if (first_header && name == "channels") {
       // chlist: per channel "name\0", int32 pixel type (0 uint, 1 half, 2 float), 4 bytes, int32
@@ -73,8 +121,8 @@ std::optional<DeclaredImageSize> exr_size(const std::string& b, std::int64_t fil
       while (c < end && b[c] != '\0') {
         const std::size_t ce = b.find('\0', c);
         if (ce == std::string::npos || ce + 17 > end) break;
-        const std::uint32_t type = le32(p + ce + 1);
-        bytes_per_pixel += type == 1 ? 2 : 4;
+        const std::uint32_t pixel_type = le32(p + ce + 1);
+        bytes_per_pixel += pixel_type == 1 ? 2 : 4;
         c = ce + 17;
       }
     }
@@ -84,7 +132,7 @@ std::optional<DeclaredImageSize> exr_size(const std::string& b, std::int64_t fil
                  y1 = static_cast<std::int32_t>(le32(p + value + 12));
       size_found = DeclaredImageSize{std::int64_t{x1} - x0 + 1, std::int64_t{y1} - y0 + 1};
     }
-    at = value + size;
+    at = value + *consumed;
   }
   return finish();
 }
@@ -108,7 +156,10 @@ std::optional<DeclaredImageSize> declared_image_size(const std::filesystem::path
     const int depth = p[24], colour = p[25];
     const int samples = colour == 0 || colour == 3 ? 1 : colour == 2 ? 3 : colour == 4 ? 2 : colour == 6 ? 4 : 0;
     const std::int64_t px = checked_mul(d.width, d.height);
-    if (samples > 0 && depth > 0 && px > 0) d.sample_bytes = px / 8 * samples * depth;
+    // Checked: a fuzzed header declared 0xdbdbdbdb x 0x23000075 (UBSan found px/8 * 48 overflowing);
+    // an overflow leaves the size unknown, and the pixel limit refuses such a header anyway.
+    if (samples > 0 && depth > 0 && px > 0)
+      d.sample_bytes = std::max<std::int64_t>(0, checked_mul(px / 8, samples * depth));
     return d;
   }
   return std::nullopt;

@@ -438,6 +438,32 @@ IndexedMesh sphere_with_triangles(int triangles, double radius) {
   return uv_sphere(best_segments, best_bands + 1, radius);
 }
 
+IndexedMesh cylinder(double radius, double height, int segments) {
+  detail::require_positive_length("cylinder", "radius", radius);
+  detail::require_positive_length("cylinder", "height", height);
+  detail::require_at_least("cylinder", "segments", segments, 3);
+  detail::require_triangle_budget("cylinder", 4 * static_cast<std::int64_t>(segments));
+  IndexedMesh m;
+  const int n = segments;
+  for (const double z : {-0.5 * height, 0.5 * height})
+    for (int i = 0; i < n; ++i) {
+      const double a = 2.0 * kPi * i / n;
+      m.V.emplace_back(radius * std::cos(a), radius * std::sin(a), z);
+    }
+  const auto bottom = static_cast<Index>(2 * n), top = static_cast<Index>(2 * n + 1);
+  m.V.emplace_back(0.0, 0.0, -0.5 * height);
+  m.V.emplace_back(0.0, 0.0, 0.5 * height);
+  auto b = [&](int i) { return static_cast<Index>(i % n); };
+  auto t = [&](int i) { return static_cast<Index>(n + i % n); };
+  for (int i = 0; i < n; ++i) {
+    m.F.push_back({top, t(i), t(i + 1)});       // CCW seen from +z
+    m.F.push_back({bottom, b(i + 1), b(i)});    // CCW seen from -z
+    m.F.push_back({b(i), b(i + 1), t(i + 1)});  // (tangent) x (tangent + z) points out
+    m.F.push_back({b(i), t(i + 1), t(i)});
+  }
+  return m;
+}
+
 IndexedMesh torus(double major_radius, double minor_radius, int major_segments, int minor_segments) {
   detail::require_positive_length("torus", "major_radius", major_radius);
   detail::require_positive_length("torus", "minor_radius", minor_radius);

@@ -51,7 +51,7 @@ Run add_fit(CLI::App& app, const std::vector<std::string>& command_line) {
   auto* sub = app.add_subcommand(
       "fit", "Fit kg, kl parameters, time scale and registration to an observation sequence (Ceres)");
   auto o = std::make_shared<experiments::FitRunOptions>();
-  auto fit = std::make_shared<std::string>("kg,reg");
+  auto fit = std::make_shared<std::string>();
   auto fix = std::make_shared<std::vector<std::string>>();
   auto initial = std::make_shared<std::vector<std::string>>();
   auto bounds = std::make_shared<std::vector<std::string>>();
@@ -61,8 +61,9 @@ Run add_fit(CLI::App& app, const std::vector<std::string>& command_line) {
   sub->add_option("--mesh", s.mesh, "Mesh file or dataset name (the object at the first photo)")->required();
   sub->add_option("--observations", o->observations, "Observation manifest (.yaml/.yml/.json)")->required();
   sub->add_option("--out", o->out_dir, "Output folder (fit.json, comparison/)")->required();
-  sub->add_option("--fit", *fit, "Parameters to fit, comma separated: " + verify::fit_parameter_names_help())
-      ->default_val("kg,reg");
+  sub->add_option("--fit", *fit,
+                  "Parameters to fit, comma separated (default kg,reg with photos, kg for a mass series): " +
+                      verify::fit_parameter_names_help());
   sub->add_option("--fix", *fix, "Fixed values: name=value[,name=value...]");
   sub->add_option("--initial", *initial, "Starting values: name=value[,...]");
   sub->add_option("--bound", *bounds, "Bounds: name=lower:upper (repeatable)");
@@ -75,6 +76,16 @@ Run add_fit(CLI::App& app, const std::vector<std::string>& command_line) {
   const auto store_melt_options = add_melt_options(*sub, s, melt);
   sub->add_option("--cycles-per-photo", o->cycles_per_photo, "Cycles between photos (start value when fitted)")
       ->default_val(verify::kDefaultCyclesPerPhoto);
+  auto seconds_per_cycle = std::make_shared<double>(0.0);
+  auto mass_g = std::make_shared<double>(0.0);
+  sub->add_option("--seconds-per-cycle", *seconds_per_cycle,
+                  "A mass series alone: seconds of the experiment per simulation cycle (start value when fitted; "
+                  "without it a fitted time scale starts from the series)");
+  sub->add_option("--mass-g", *mass_g,
+                  "A mass series alone: the ice at t = 0 in grams (default: the reading at t = 0); the mesh is "
+                  "scaled to it");
+  sub->add_option("--density", o->density_kg_m3, "A mass series alone: density of ice (kg/m³) for volumes")
+      ->default_val(verify::kIceDensity);
   sub->add_option("--first-cycle", o->first_cycle, "Cycle shown by the first photo")->default_val(0);
   sub->add_option("--holdout", o->holdout, "Fraction of the last photos kept out of the fit and predicted")
       ->default_val(0.0);
@@ -92,11 +103,15 @@ Run add_fit(CLI::App& app, const std::vector<std::string>& command_line) {
 
   return [=]() {
     store_melt_options();
-    o->fit.clear();
+    o->fit.clear();  // empty: the default of the observations (fit_run.h)
     std::stringstream in(*fit);
     std::string item;
     while (std::getline(in, item, ','))
       if (!item.empty()) o->fit.push_back(item);
+    if (sub->count("--fit") > 0 && o->fit.empty()) throw InputError("--fit: names no parameter");
+    o->cycles_per_photo_given = sub->count("--cycles-per-photo") > 0;
+    if (sub->count("--seconds-per-cycle") > 0) o->seconds_per_cycle = *seconds_per_cycle;
+    if (sub->count("--mass-g") > 0) o->mass_g = *mass_g;
     o->fix = parse_assignments(*fix, "--fix");
     o->initial = parse_assignments(*initial, "--initial");
     for (const std::string& b : *bounds) {
@@ -117,10 +132,15 @@ Run add_fit(CLI::App& app, const std::vector<std::string>& command_line) {
       values += fmt::format(" {}={:.6g}", name, e["value"].get<double>());
       if (!e["standard_error"].is_null()) values += fmt::format("±{:.2g}", e["standard_error"].get<double>());
     }
-    std::fprintf(stderr, "meltlab: fit %s after %d iterations, %d simulations, %.1f s:%s; P mean %.4f; wrote %s\n",
+    std::string quality;
+    if (j.contains("series_comparison"))
+      quality = fmt::format("RMSE {:.3g} g", j["series_comparison"]["rmse_g"].get<double>());
+    else
+      quality = fmt::format("P mean {:.4f}",
+                            j["comparison"]["P_mean"].is_null() ? 0.0 : j["comparison"]["P_mean"].get<double>());
+    std::fprintf(stderr, "meltlab: fit %s after %d iterations, %d simulations, %.1f s:%s; %s; wrote %s\n",
                  j["converged"].get<bool>() ? "converged" : "stopped", j["iterations"].get<int>(),
-                 j["simulations"].get<int>(), j["time_s"].get<double>(), values.c_str(),
-                 j["comparison"]["P_mean"].is_null() ? 0.0 : j["comparison"]["P_mean"].get<double>(),
+                 j["simulations"].get<int>(), j["time_s"].get<double>(), values.c_str(), quality.c_str(),
                  o->out_dir.string().c_str());
     return kExitOk;
   };

@@ -22,6 +22,7 @@ Run add_compare(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_synth_sequence(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_fit(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_manufacture(CLI::App& app, const std::vector<std::string>& command_line);
+Run add_predict(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_render(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_reproduce(CLI::App& app);
 Run add_volume(CLI::App& app, const std::vector<std::string>& command_line);

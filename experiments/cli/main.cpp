@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
   add(cli::add_synth_sequence(app, command_line));
   add(cli::add_fit(app, command_line));
   add(cli::add_manufacture(app, command_line));
+  add(cli::add_predict(app, command_line));
   add(cli::add_render(app, command_line));
   add(cli::add_reproduce(app));
   add(cli::add_volume(app, command_line));

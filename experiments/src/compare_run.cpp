@@ -152,6 +152,9 @@ CompareRunResult run_compare(const CompareRunOptions& o,
   RunFolder folder(o.out_dir, {"--out", "compare.json", "comparison", o.overwrite});
 
   const verify::ObservationSequence obs = verify::load_observations(o.observations);
+  require(obs.has_photos(), fmt::format("{}: no frames (a mass series alone): compare needs photos; a series is fitted "
+                                        "by meltlab fit and predicted by meltlab predict",
+                                        obs.manifest.string()));
   RunReplay replay(o.run_dir);
   verify::CompareOptions copt = o.compare;
   copt.last_cycle = replay.cycles_run();

@@ -10,11 +10,14 @@
 #include <meltlab/sim/mesh_sequence.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/experiments/provenance.h>
+#include <meltlab/experiments/series_output.h>
 #include <meltlab/verify/fit_parameters.h>
+#include <meltlab/verify/mass_series.h>
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -29,7 +32,6 @@ using nlohmann::json;
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kIceDensity = 917.0;  // kg/m³ near 0 °C (CRC Handbook), for mass series
 
 std::vector<std::string> split(const std::string& s, char sep) {
   std::vector<std::string> out;
@@ -117,28 +119,48 @@ void require(bool ok, const std::string& message) {
 }  // namespace
 
 std::vector<verify::FitParameter> fit_parameters(const FitRunOptions& o, double kg_initial,
-                                                 const std::map<std::string, double>& kl_values) {
+                                                 const std::map<std::string, double>& kl_values, bool series_only) {
   verify::FitParameterContext context;
   context.kg_initial = kg_initial;
   context.kE = o.simulation.kE;
   context.kn_initial = o.simulation.kN.value_or(o.simulation.kE / 100.0);
   context.cycles_per_photo = o.cycles_per_photo;
+  context.series_only = series_only;
+  context.seconds_per_cycle = o.seconds_per_cycle.value_or(1.0);
   // By name: the order of the fit's parameter vector.
   std::map<std::string, verify::FitParameterSpec> known;
   for (verify::FitParameterSpec& spec : verify::fit_parameter_table(context)) known[spec.name] = std::move(spec);
   for (const auto& [name, v] : kl_values) known[name] = verify::kl_fit_parameter(name, v);
+  // A photo parameter named for a mass series: say why it is unknown there.
+  auto check_known = [&](const std::string& option, const std::string& name) {
+    if (known.count(name) > 0) return;
+    const bool photo_only =
+        name == verify::kRegistrationGroup || name == "cycles_per_photo" || name.rfind("reg.", 0) == 0;
+    if (series_only && photo_only)
+      throw InputError(fmt::format("{}: {} needs photos; the observations are a mass series alone (parameters: {})",
+                                   option, name, verify::fit_parameter_names(true)));
+    throw InputError(
+        fmt::format("{}: unknown parameter '{}' ({})", option, name, verify::fit_parameter_names(series_only)));
+  };
 
   std::set<std::string> free;
-  for (const std::string& f : o.fit) {
-    if (f == verify::kRegistrationGroup) {
+  std::vector<std::string> fit_names = o.fit;
+  if (fit_names.empty())
+    fit_names = series_only ? std::vector<std::string>{"kg"}
+                            : std::vector<std::string>{"kg", std::string(verify::kRegistrationGroup)};
+  for (const std::string& f : fit_names) {
+    if (f == verify::kRegistrationGroup && !series_only) {
       for (const std::string& r : verify::registration_parameter_names()) free.insert(r);
     } else {
-      require(known.count(f) > 0, fmt::format("--fit: unknown parameter '{}' ({})", f, verify::fit_parameter_names()));
+      check_known("--fit", f);
       free.insert(f);
     }
   }
   for (const auto& [name, v] : o.fix) {
-    require(known.count(name) > 0, fmt::format("--fix: unknown parameter '{}'", name));
+    if (series_only)
+      check_known("--fix", name);
+    else
+      require(known.count(name) > 0, fmt::format("--fix: unknown parameter '{}'", name));
     free.erase(name);
   }
   std::vector<verify::FitParameter> out;
@@ -159,12 +181,17 @@ std::vector<verify::FitParameter> fit_parameters(const FitRunOptions& o, double 
     p.fixed = free.count(name) == 0;
     require(std::isfinite(p.initial) && p.lower <= p.initial && p.initial <= p.upper,
             fmt::format("{} = {} lies outside its bounds [{}, {}]", name, p.initial, p.lower, p.upper));
+    if (name == "seconds_per_cycle") p.scale = 0.05 * p.initial;  // the table's 5 %, of the start given
     out.push_back(p);
   }
-  for (const auto& [name, v] : o.initial)
+  for (const auto& [name, v] : o.initial) {
+    if (series_only) check_known("--initial", name);
     require(known.count(name) > 0, fmt::format("--initial: unknown parameter '{}'", name));
-  for (const auto& [name, v] : o.bounds)
+  }
+  for (const auto& [name, v] : o.bounds) {
+    if (series_only) check_known("--bound", name);
     require(known.count(name) > 0, fmt::format("--bound: unknown parameter '{}'", name));
+  }
   return out;
 }
 
@@ -200,9 +227,9 @@ verify::VolumeSeries volume_series(const verify::ObservationSequence& obs, int n
     if (ts.time_s[i] >= held_out_time) break;
     double v = ts.value[i];
     if (ts.quantity == "mass_g")
-      v = v / 1000.0 / kIceDensity;
+      v = v / 1000.0 / verify::kIceDensity;
     else if (ts.quantity == "mass_kg")
-      v = v / kIceDensity;
+      v = v / verify::kIceDensity;
     else if (ts.quantity == "volume_cm3")
       v = v * 1e-6;
     vs.time_s.push_back(ts.time_s[i]);
@@ -231,6 +258,57 @@ verify::CompareResult compare_fitted_run(const verify::ObservationSequence& obs,
   return compare_and_write(obs, *meshes, copt, dir, o.overlay_every, {});
 }
 
+json optional_json(const std::optional<double>& v) { return v ? json(*v) : json(nullptr); }
+
+/// Every parameter: value, start, fixed, at a bound, and its errors (fit.json "estimates").
+json estimates_json(const verify::FitResult& fit, bool photos) {
+  json est = json::object();
+  for (const auto& e : fit.estimates) {
+    est[e.name] = {{"value", e.value},
+                   {"initial", e.initial},
+                   {"fixed", e.fixed},
+                   {"at_bound", e.at_bound},
+                   {"standard_error", optional_json(e.standard_error)},
+                   {"standard_error_clustered", optional_json(e.standard_error_clustered)}};
+    if (photos) est[e.name]["segmentation_bias"] = optional_json(e.segmentation_bias);
+    est[e.name]["standard_error_total"] = optional_json(e.standard_error_total);
+  }
+  return est;
+}
+
+/// What the errors of "estimates" mean (fit.json "uncertainty"; verify/fit.h).
+json uncertainty_json(const verify::FitResult& fit, bool photos) {
+  json u;
+  u["standard_error"] =
+      "Ceres' covariance scaled by the residual variance: every residual counted as independent. Not to be trusted "
+      "for photos: the ~50 contour residuals of one photo are not independent (too small or too large).";
+  u["standard_error_clustered"] = fmt::format(
+      "cluster-robust (sandwich) covariance, one cluster per {}, times G/(G-1): the statistical error, "
+      "estimate ± 1.96 of it covers the truth about 95 % of the time when nothing else is wrong",
+      photos ? "photo" : fmt::format("run of {} consecutive readings", fit.readings_per_cluster));
+  u["clusters"] = fit.clusters;
+  u["correlation_clustered"] = fit.correlation_clustered;
+  if (photos) {
+    u["segmentation_bias"] =
+        "a systematic error, in neither standard error above: the estimate minus the estimate from contours at the "
+        "level half-way between ice and ground next to each contour (one Gauss-Newton step from the optimum). Its "
+        "size is that of the error the segmentation's level makes; its sign is no reliable correction.";
+    u["standard_error_total"] =
+        "sqrt(standard_error_clustered² + segmentation_bias²): the error bar to quote (statistical and segmentation "
+        "errors together; the fit_coverage experiment measures how often ±1.96 of it holds the truth)";
+    json off = nullptr;
+    if (!fit.segmentation_offset_px.empty()) {
+      double sum = 0, lo = fit.segmentation_offset_px.front(), hi = lo;
+      for (double v : fit.segmentation_offset_px) sum += v, lo = std::min(lo, v), hi = std::max(hi, v);
+      off = {{"mean", sum / static_cast<double>(fit.segmentation_offset_px.size())}, {"min", lo}, {"max", hi}};
+    }
+    u["segmentation_offset_px"] = off;
+  } else {
+    u["standard_error_total"] = "the clustered error (a series has no segmentation)";
+  }
+  return u;
+}
+
 /// fit.json without its provenance: the library's FitResult and CompareResult, written here
 /// at the edge.
 json fit_json(const verify::ObservationSequence& obs, const FitRunOptions& o, const verify::FitResult& fit,
@@ -242,20 +320,16 @@ json fit_json(const verify::ObservationSequence& obs, const FitRunOptions& o, co
                        {"frames", n_frames},
                        {"object", obs.object}};
   j["simulation"] = options_to_json(o.simulation);
-  json est = json::object();
-  for (const auto& e : fit.estimates) {
-    est[e.name] = {{"value", e.value},
-                   {"initial", e.initial},
-                   {"fixed", e.fixed},
-                   {"at_bound", e.at_bound},
-                   {"standard_error", e.standard_error ? json(*e.standard_error) : json(nullptr)}};
-  }
+  const json est = estimates_json(fit, true);
   j["estimates"] = est;
   j["free"] = fit.free_names;
   j["correlation"] = fit.correlation;
   j["cost"] = {{"initial", fit.initial_cost}, {"final", fit.final_cost}, {"residual_sigma_px", fit.residual_sigma_px}};
+  j["uncertainty"] = uncertainty_json(fit, true);
+  j["warnings"] = fit.warnings;
   j["iterations"] = fit.iterations;
   j["simulations"] = fit.simulations;
+  j["uncertainty_simulations"] = fit.uncertainty_evaluations;
   j["time_s"] = fit.time_s;
   j["converged"] = fit.converged;
   j["message"] = fit.message;
@@ -304,6 +378,131 @@ json fit_json(const verify::ObservationSequence& obs, const FitRunOptions& o, co
   return j;
 }
 
+/// The fitted model's mass curve: one point per cycle from t = 0 (cycle first_cycle) until it
+/// has fallen below 1 % of the initial mass after `t_end`, or at 3 t_end (or max_cycles).
+verify::MassCurve fitted_mass_curve(verify::FitModel& model, const verify::FitResult& fit, double mass0_g,
+                                    double first_cycle, double t_end, std::int64_t max_cycles) {
+  std::map<std::string, double> values;
+  for (const auto& e : fit.estimates)
+    if (verify::is_model_parameter(e.name)) values[e.name] = e.value;
+  const double S = fit.value("seconds_per_cycle");
+  auto seq = model.start(values);
+  auto volume_at = [&](std::int64_t c) {
+    const sim::TriMesh<double>& m = seq->mesh_at(c);
+    return m.live_triangle_count() > 0 ? sim::mesh_volume(m) : 0.0;
+  };
+  const double v0 = volume_at(0);
+  const auto c0 = static_cast<std::int64_t>(std::floor(first_cycle));
+  verify::MassCurve curve;
+  double previous = v0;
+  if (c0 > 0) previous = volume_at(c0);
+  const double w = first_cycle - static_cast<double>(c0);
+  for (std::int64_t c = c0 + 1; c <= max_cycles; ++c) {
+    const double v = volume_at(c);
+    if (curve.time_s.empty()) {  // t = 0: between cycles c0 and c0 + 1
+      curve.time_s.push_back(0.0);
+      curve.mass_g.push_back(mass0_g * ((1.0 - w) * previous + w * v) / v0);
+    }
+    curve.time_s.push_back((static_cast<double>(c) - first_cycle) * S);
+    curve.mass_g.push_back(mass0_g * v / v0);
+    if (curve.time_s.back() > t_end && (curve.mass_g.back() < 0.01 * mass0_g || curve.time_s.back() > 3 * t_end)) break;
+    previous = v;
+  }
+  return curve;
+}
+
+/// `meltlab fit` on a mass series alone (fit_run.h).
+json run_series_fit(const FitRunOptions& o, const verify::ObservationSequence& obs,
+                    const std::shared_ptr<const PreparedSimulation>& prepared, const YAML::Node& kl_doc,
+                    const std::map<std::string, double>& kl_values, const fs::path& dir,
+                    const std::function<void(const std::string&)>& log) {
+  const std::string manifest = obs.manifest.string();
+  require(o.holdout == 0, "--holdout: photos are held out; a mass series is fitted whole");
+  require(!o.cycles_per_photo_given,
+          fmt::format("--cycles-per-photo: {} has no photos; the time scale of a mass series is --seconds-per-cycle",
+                      manifest));
+  if (o.seconds_per_cycle)
+    require(std::isfinite(*o.seconds_per_cycle) && *o.seconds_per_cycle > 0,
+            fmt::format("--seconds-per-cycle: must be a number > 0 (got {})", *o.seconds_per_cycle));
+  require(std::isfinite(o.density_kg_m3) && o.density_kg_m3 > 0, "--density: must be a number > 0");
+  const std::vector<verify::FitParameter> params = fit_parameters(o, o.simulation.kg, kl_values, true);
+  const auto S = std::find_if(params.begin(), params.end(),
+                              [](const verify::FitParameter& p) { return p.name == "seconds_per_cycle"; });
+  require(S != params.end() && (!S->fixed || o.seconds_per_cycle || o.fix.count("seconds_per_cycle")),
+          fmt::format("{}: a mass series needs the time scale: give --seconds-per-cycle S to fit kg, or fit the time "
+                      "scale (--fit seconds_per_cycle, kg fixed by --kg)",
+                      manifest));
+  const verify::MeltSeries series = load_melt_series(obs, o.density_kg_m3);
+  std::string mass_from;
+  const double m0 = initial_mass_g(series, o.mass_g, mass_from);
+  for (const std::string& s : series.left_out) log("left out " + s);
+
+  // The readings as volumes; the one the mesh is scaled to is not a residual.
+  const std::size_t first = o.mass_g ? 0 : 1;
+  const double g_per_m3 = o.density_kg_m3 * 1000.0;
+  verify::VolumeSeries vs;
+  for (std::size_t i = first; i < series.time_s.size(); ++i) {
+    vs.time_s.push_back(series.time_s[i]);
+    vs.volume_m3.push_back(series.mass_g[i] / g_per_m3);
+  }
+  vs.initial_volume_m3 = m0 / g_per_m3;
+  verify::FitOptions fo = o.fit_options;
+  fo.first_cycle = o.first_cycle;
+  fo.frames.clear();
+  fo.volume_weight = 1.0;
+  fo.log = log;
+  fo.start_time_scale = !S->fixed && !o.seconds_per_cycle && !o.initial.count("seconds_per_cycle");
+
+  EmpiricalModel model(prepared, kl_doc);
+  const verify::FitResult fit = verify::fit_sequence(obs, model, params, fo, vs);
+  const verify::MassCurve curve = fitted_mass_curve(model, fit, m0, o.first_cycle, series.time_s.back(), fo.max_cycles);
+  require(curve.time_s.back() >= series.time_s.back(),
+          fmt::format("fit: the fitted model does not reach the last reading within {} cycles", fo.max_cycles));
+  const verify::SeriesComparison cmp = verify::compare_series(verify::mass_curve(series), curve, m0, 0.02, first);
+  write_mass_curve_csv(dir / "mass_curve.csv", series, curve, "fitted");
+  verify::write_image(
+      dir / "mass_curve.png",
+      verify::mass_curve_image(
+          verify::mass_curve(series),
+          {{fmt::format("empirical model, kg {:.4g}, {:.4g} s/cycle", fit.value("kg"), fit.value("seconds_per_cycle")),
+            curve}},
+          fmt::format("{}: mass of the ice", obs.object.empty() ? "series" : obs.object), 0.02 * m0,
+          series.left_out_readings));
+
+  json j;
+  j["observations"] = {{"manifest", fs::absolute(obs.manifest).string()},
+                       {"manifest_hash", file_hash(obs.manifest)},
+                       {"frames", 0},
+                       {"object", obs.object},
+                       {"series", series_json(series)}};
+  j["initial_mass_g"] = {{"value", m0}, {"from", mass_from}, {"density_kg_m3", o.density_kg_m3}};
+  j["simulation"] = options_to_json(o.simulation);
+  j["estimates"] = estimates_json(fit, false);
+  j["free"] = fit.free_names;
+  j["correlation"] = fit.correlation;
+  // Residuals are relative masses (model - reading) / initial mass.
+  j["cost"] = {{"initial", fit.initial_cost},
+               {"final", fit.final_cost},
+               {"residual_sigma_relative", fit.residual_sigma_px},
+               {"residual_sigma_g", fit.residual_sigma_px * m0}};
+  j["uncertainty"] = uncertainty_json(fit, false);
+  // What a mass curve fixes: the melt per second of the experiment.
+  const double kg = fit.value("kg"), sec = fit.value("seconds_per_cycle");
+  j["kg_per_second_per_cycle"] = kg / sec;
+  j["iterations"] = fit.iterations;
+  j["simulations"] = fit.simulations;
+  j["uncertainty_simulations"] = fit.uncertainty_evaluations;
+  j["time_s"] = fit.time_s;
+  j["converged"] = fit.converged;
+  j["message"] = fit.message;
+  json scan = json::array();
+  for (const auto& [k, c] : fit.kg_scan) scan.push_back({{"kg", k}, {"cost", c}});
+  j["kg_scan"] = scan;
+  j["series_comparison"] = series_comparison_json(cmp, "fitted");
+  j["outputs"] = {{"curve", "mass_curve.csv"}, {"chart", "mass_curve.png"}};
+  return j;
+}
+
 }  // namespace
 
 json run_fit(const FitRunOptions& o, const std::function<void(const std::string&)>& log) {
@@ -316,6 +515,15 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
   std::shared_ptr<const PreparedSimulation> prepared = prepare_simulation(o.simulation, /*check_output=*/false);
   YAML::Node kl_doc;
   const std::map<std::string, double> kl_values = kl_parameter_values(o, *prepared, kl_doc);
+  if (!obs.has_photos()) {
+    json j = run_series_fit(o, obs, prepared, kl_doc, kl_values, folder.path(), log);
+    j["provenance"] = finish_provenance(provenance);
+    write_text_atomically(folder.path() / "fit.json", j.dump(2) + "\n");
+    folder.commit();
+    return j;
+  }
+  require(!o.mass_g, "--mass-g: the initial mass is for a mass series without photos");
+  require(!o.seconds_per_cycle, "--seconds-per-cycle: photos map to cycles by --cycles-per-photo");
   const std::vector<verify::FitParameter> params = fit_parameters(o, o.simulation.kg, kl_values);
 
   // Frames: all, minus the held-out tail.

@@ -12,7 +12,111 @@ synth() {
     --misalign 5,-3,0.8,1 --seed 3 --out seq "$@"
 }
 
+# A weighing experiment made by the empirical model: the icosphere melted with kg = 0.8
+# (`meltlab simulate`, its volume every cycle), read as 250 g of ice on a scale every 10
+# cycles at 6 s per cycle (one reading a minute), with 0.5 g of noise, in 0.1 g steps.
+series() {
+  run_ok "$M" simulate --mesh icosphere_3 --kg 0.8 --cycles 2000 --out sim
+  mkdir -p w
+  python3 - "$@" <<'PY' || fail "writing the series"
+import csv, random, sys
+rows = list(csv.DictReader(open('sim/stats.csv')))
+v0 = float(rows[0]['volume'])
+random.seed(5)
+with open('w/mass.csv', 'w') as f:
+    f.write('time_s,mass_g\n')
+    for r in rows:
+        c = int(r['cycle'])
+        if c % 10:
+            continue
+        m = 250 * float(r['volume']) / v0 + (random.gauss(0, 0.5) if c else 0)
+        f.write(f"{c * 6},{m:.1f}\n")
+open('w/manifest.yaml', 'w').write('meltlab_observations: 1\nobject: icosphere\nmass_series: mass.csv\n')
+PY
+}
+
 case "$CASE" in
+  mass_only)
+    # Issue 19: kg within 1 % with the time scale fixed, the time scale within 1 % with kg
+    # fixed, and both together refused (a mass curve shows only kg / seconds_per_cycle).
+    series
+    run_ok "$M" fit --mesh icosphere_3 --observations w/manifest.yaml --seconds-per-cycle 6 --out f_kg
+    cat err.txt
+    [ -s f_kg/fit.json ] && [ -s f_kg/mass_curve.csv ] && [ -s f_kg/mass_curve.png ] || fail "outputs"
+    [ ! -e f_kg/comparison ] || fail "a photo comparison without photos"
+    run_ok "$M" fit --mesh icosphere_3 --observations w/manifest.yaml --fit seconds_per_cycle --kg 0.8 --out f_s
+    cat err.txt
+    py <<'PY'
+import csv, json
+j = json.load(open('f_kg/fit.json'))
+kg = j['estimates']['kg']
+assert abs(kg['value'] - 0.8) / 0.8 < 0.01, kg
+assert j['estimates']['seconds_per_cycle'] == {**j['estimates']['seconds_per_cycle'], 'value': 6.0, 'fixed': True}
+assert kg['standard_error'] and kg['standard_error_clustered'], kg
+assert 'reg.tx_px' not in j['estimates'] and 'cycles_per_photo' not in j['estimates'], list(j['estimates'])
+assert j['observations']['frames'] == 0 and j['observations']['series']['used'] == 106, j['observations']
+assert j['initial_mass_g']['value'] == 250 and j['initial_mass_g']['density_kg_m3'] == 917, j['initial_mass_g']
+c = j['series_comparison']
+# The readings' noise: 0.5 g plus the 0.1 g steps (sigma 0.03 g); the fitted curve leaves it.
+assert 0.35 < c['rmse_g'] < 0.7 and c['samples'] == 105, c
+assert abs(c['time_to_melt_s']['fitted'] - c['time_to_melt_s']['observed']) < 60, c['time_to_melt_s']
+assert j['uncertainty']['clusters'] > 10, j['uncertainty']
+rows = list(csv.DictReader(open('f_kg/mass_curve.csv')))
+assert len(rows) == 106 and all(r['used'] == '1' for r in rows), len(rows)
+s = json.load(open('f_s/fit.json'))['estimates']['seconds_per_cycle']
+assert abs(s['value'] - 6) / 6 < 0.01 and not s['fixed'], s
+print('kg', kg['value'], '±', kg['standard_error'], 'seconds_per_cycle', s['value'], '±', s['standard_error'],
+      'rmse', c['rmse_g'])
+PY
+    expect_exit 2 "$M" fit --mesh icosphere_3 --observations w/manifest.yaml --fit kg,seconds_per_cycle --out f_both
+    expect_err "kg and seconds_per_cycle cannot both be fitted"; expect_err "--fix"; expect_one_line_err
+    expect_no_dir f_both
+    ;;
+  series_bad_inputs)
+    # Bad series are refused naming file:line, or (a spike) left out and listed; photo
+    # options and parameters on a series alone are refused by name.
+    series
+    refuse() {  # refuse NAME CSV_TEXT EXPECTED_TEXT
+      mkdir -p "b_$1"
+      printf '%b' "$2" > "b_$1/s.csv"
+      printf 'meltlab_observations: 1\nmass_series: s.csv\n' > "b_$1/m.yaml"
+      expect_exit 2 "$M" fit --mesh icosphere_3 --observations "b_$1/m.yaml" --seconds-per-cycle 6 --out "o_$1"
+      expect_err "$3"; expect_one_line_err; expect_no_dir "o_$1"
+    }
+    refuse nan 'time_s,mass_g\n0,250\n60,nan\n120,240\n' 's.csv:3'
+    refuse backwards 'time_s,mass_g\n0,250\n60,245\n30,240\n' 's.csv:4: time_s 30 does not increase'
+    refuse negative 'time_s,mass_g\n0,250\n60,200\n120,150\n180,-80\n240,50\n' 's.csv:5: -80 g is below zero'
+    refuse rising 'time_s,mass_g\n0,250\n60,240\n120,230\n180,260\n240,262\n300,265\n' 's.csv:5: the mass rises'
+    refuse one_row 'time_s,mass_g\n0,250\n' 'a melt series needs at least 3'
+    refuse late_start 'time_s,mass_g\n60,250\n120,240\n180,230\n' '--mass-g'
+    # A spike: left out, listed in fit.json and on stderr, and the fit is still right.
+    python3 -c "
+import csv
+rows = open('w/mass.csv').read().splitlines()
+t, m = rows[41].split(',')
+rows[41] = f'{t},{float(m) + 30:.1f}'
+open('w/spiked.csv', 'w').write('\n'.join(rows) + '\n')
+open('w/spiked.yaml', 'w').write('meltlab_observations: 1\nmass_series: spiked.csv\n')
+"
+    run_ok "$M" fit --mesh icosphere_3 --observations w/spiked.yaml --seconds-per-cycle 6 --out f_spike
+    expect_err "left out"; expect_err "spiked.csv:42"
+    py <<'PY'
+import json
+j = json.load(open('f_spike/fit.json'))
+left = j['observations']['series']['left_out']
+assert len(left) == 1 and 'spiked.csv:42' in left[0], left
+assert abs(j['estimates']['kg']['value'] - 0.8) / 0.8 < 0.01, j['estimates']['kg']
+PY
+    # Photo things on a series alone; the time scale missing.
+    expect_exit 2 "$M" fit --mesh icosphere_3 --observations w/manifest.yaml --fit kg,reg --seconds-per-cycle 6 --out o1
+    expect_err "reg needs photos"; expect_one_line_err; expect_no_dir o1
+    expect_exit 2 "$M" fit --mesh icosphere_3 --observations w/manifest.yaml --seconds-per-cycle 6 --cycles-per-photo 7 --out o2
+    expect_err "--cycles-per-photo"; expect_one_line_err; expect_no_dir o2
+    expect_exit 2 "$M" fit --mesh icosphere_3 --observations w/manifest.yaml --out o3
+    expect_err "needs the time scale"; expect_err "--seconds-per-cycle"; expect_one_line_err; expect_no_dir o3
+    expect_exit 2 "$M" fit --mesh icosphere_3 --observations w/manifest.yaml --seconds-per-cycle -6 --out o4
+    expect_err "--seconds-per-cycle"; expect_one_line_err; expect_no_dir o4
+    ;;
   inverse_crime)
     synth
     run_ok "$M" fit --mesh airplane --observations seq/manifest.yaml --cycles-per-photo 40 --fit kg,reg --kg 0.5 --out fit

@@ -258,6 +258,53 @@ def manifest_cases():
         cases.append(Case(f"series/{n}", ["fit", "--mesh", "benchmark_a", "--observations", "{f}", "--fit", "kg",
                                            "--volume-weight", "1", "--cycles-per-photo", "2", "--out", "{out}"],
                           {"seq/m.yaml": base + "mass_series: s.csv\n", "seq/s.csv": text}, names=["s.csv"]))
+    # A weighing experiment (a mass series, no photos; issue 19): series a melt cannot make,
+    # refused by `fit` and by `predict`, naming the file (and the line where there is one).
+    melt_series = {
+        "weighing_nan": ("time_s,mass_g\n0,250\n60,nan\n120,240\n", "s.csv:3"),
+        "weighing_time_backwards": ("time_s,mass_g\n0,250\n60,245\n30,240\n", "s.csv:4"),
+        "weighing_negative_mass": ("time_s,mass_g\n0,250\n60,200\n120,150\n180,-80\n240,50\n", "s.csv:5"),
+        "weighing_mass_rises": ("time_s,mass_g\n0,250\n60,240\n120,230\n180,260\n240,262\n300,265\n", "s.csv:5"),
+        "weighing_one_row": ("time_s,mass_g\n0,250\n", "s.csv"),
+        "weighing_two_rows": ("time_s,mass_g\n0,250\n60,240\n", "s.csv"),
+        "weighing_no_ice": ("time_s,mass_g\n0,0\n60,0\n120,0\n", "s.csv:2"),
+        "weighing_time_before_start": ("time_s,mass_g\n-60,250\n0,240\n60,230\n", "s.csv:2"),
+        "weighing_too_many_spikes": ("time_s,mass_g\n" + "".join(
+            f"{60 * k},{250 - 2 * k + (40 if k % 3 == 1 else 0)}\n" for k in range(12)), "s.csv"),
+        "weighing_header_only": ("time_s,mass_g\n", "s.csv"),
+    }
+    weighing = "meltlab_observations: 1\nmass_series: s.csv\n"
+    for n, (text, where) in melt_series.items():
+        cases.append(Case(f"series/{n}/fit", ["fit", "--mesh", "benchmark_a", "--observations", "{f}",
+                                               "--seconds-per-cycle", "6", "--out", "{out}"],
+                          {"w/m.yaml": weighing, "w/s.csv": text}, names=[where]))
+        cases.append(Case(f"series/{n}/predict", ["predict", "--mesh", "benchmark_a", "--mass-g", "50",
+                                                   "--observations", "{f}", "--out", "{out}"],
+                          {"w/m.yaml": weighing, "w/s.csv": text}, names=[where]))
+    good = "time_s,mass_g\n0,250\n60,240\n120,230\n180,220\n"
+    weighing_misuse = {
+        "weighing_kg_and_time_scale": (["--fit", "kg,seconds_per_cycle"], ["seconds_per_cycle", "--fix"]),
+        "weighing_registration": (["--fit", "kg,reg", "--seconds-per-cycle", "6"], ["reg"]),
+        "weighing_no_time_scale": ([], ["--seconds-per-cycle"]),
+        "weighing_cycles_per_photo": (["--seconds-per-cycle", "6", "--cycles-per-photo", "7"], ["--cycles-per-photo"]),
+        "weighing_negative_seconds": (["--seconds-per-cycle", "-6"], ["--seconds-per-cycle"]),
+        "weighing_mass_zero": (["--seconds-per-cycle", "6", "--mass-g", "0"], ["--mass-g"]),
+    }
+    for n, (extra, names) in weighing_misuse.items():
+        cases.append(Case(f"series/{n}", ["fit", "--mesh", "benchmark_a", "--observations", "{f}"] + extra +
+                          ["--out", "{out}"], {"w/m.yaml": weighing, "w/s.csv": good}, names=names))
+    weighing_manifests = {
+        "weighing_camera_without_frames": weighing + "camera: {type: orthographic, width: 64, height: 48}\n",
+        "weighing_both_series": weighing + "volume_series: s.csv\n",
+        "weighing_no_frames_no_series": "meltlab_observations: 1\nobject: cube\n",
+    }
+    cases.append(Case("manifest/weighing_compared", ["compare", "--sim", "{run}", "--observations", "{f}",
+                                                     "--out", "{out}"], {"w/m.yaml": weighing, "w/s.csv": good},
+                      names=["m.yaml"]))
+    for n, text in weighing_manifests.items():
+        cases.append(Case(f"manifest/{n}", ["fit", "--mesh", "benchmark_a", "--observations", "{f}",
+                                             "--seconds-per-cycle", "6", "--out", "{out}"],
+                          {"w/m.yaml": text, "w/s.csv": good}, names=["m.yaml"]))
     return cases
 
 
@@ -399,6 +446,25 @@ def option_cases():
              names=["--photos"]),
         Case("option/render_every_zero", ["render", "--mesh", "benchmark_a", "--every", "0", "--out", "{out}"],
              names=["--every"]),
+        Case("option/predict_mesh_and_shape", ["predict", "--mesh", "benchmark_a", "--shape", "box:10x10x10",
+                                               "--out", "{out}"], names=["--shape"]),
+        Case("option/predict_no_body", ["predict", "--mass-g", "50", "--out", "{out}"], names=["--mesh"]),
+        Case("option/predict_shape_unknown", ["predict", "--shape", "cone:3x4", "--out", "{out}"], names=["--shape"]),
+        Case("option/predict_shape_size_zero", ["predict", "--shape", "box:10x0x3", "--out", "{out}"],
+             names=["--shape"]),
+        Case("option/predict_shape_size_nan", ["predict", "--shape", "sphere:nan", "--out", "{out}"],
+             names=["--shape"]),
+        Case("option/predict_mesh_without_mass", ["predict", "--mesh", "benchmark_a", "--out", "{out}"],
+             names=["--mass-g"]),
+        Case("option/predict_warm_ice", ["predict", "--shape", "sphere:30", "--ice-C", "5", "--out", "{out}"],
+             names=["--ice-C"]),
+        Case("option/predict_voxel_huge", ["predict", "--shape", "sphere:30", "--voxel-mm", "500", "--out", "{out}"],
+             names=["--voxel-mm"]),
+        Case("option/predict_photos_without_times", ["predict", "--shape", "sphere:30", "--observations", "{f}",
+                                                      "--out", "{out}"],
+             {"seq/m.yaml": "meltlab_observations: 1\ncamera: {type: orthographic, width: 64, height: 48, "
+                            "pixels_per_mm: 2, centre_m: [0, 0]}\nframes:\n  - {image: frames/frame_0001.jpg}\n"},
+             names=["m.yaml"]),
         Case("option/text_limit", ["--limits", "text_bytes=16", "simulate", "--mesh", "{mesh}", "--kl", "{f}",
                                    "--out", "{out}"], {"kl.yaml": "kl: {type: constant, value: 0.5}\n"}),
     ]
@@ -498,7 +564,7 @@ def run_case(meltlab, case, root, fixtures, asan):
             out.write(data.encode() if isinstance(data, str) else data)
         first = first or path
     os.makedirs(os.path.join(work, "meshdir"), exist_ok=True)
-    if case.name.startswith(("manifest/", "series/")):  # a real photo where the manifests expect one
+    if case.name.startswith(("manifest/", "series/", "option/predict_photos")):  # a real photo where manifests expect one
         os.makedirs(os.path.join(work, "seq", "frames"), exist_ok=True)
         shutil.copy(os.path.join(fixtures["seq"], "frames", "frame_0001.jpg"),
                     os.path.join(work, "seq", "frames", "frame_0001.jpg"))

@@ -253,6 +253,23 @@ TEST(SphereWithTriangles, HasExactlyTheRequestedCount) {
   EXPECT_THROW(sphere_with_triangles(4), InputError);
 }
 
+// ---------------------------------------------------------------- cylinder
+
+TEST(Cylinder, ClosedSolidWithThePrismVolume) {
+  const double r = 0.025, h = 0.08;
+  const int n = 48;
+  const IndexedMesh m = cylinder(r, h, n);
+  EXPECT_EQ(m.V.size(), static_cast<std::size_t>(2 * n + 2));
+  EXPECT_EQ(m.F.size(), static_cast<std::size_t>(4 * n));
+  expect_closed_solid(m, 0);
+  // The inscribed prism: n triangles of area r² sin(2π/n) / 2, times the height. Exact up to
+  // round-off (1e-12 relative: a few hundred terms of about 1e-6 m³).
+  const double prism = 0.5 * n * r * r * std::sin(2 * kPi / n) * h;
+  EXPECT_NEAR(signed_volume(m), prism, 1e-12 * prism);
+  EXPECT_THROW(cylinder(0.0, h, n), InputError);
+  EXPECT_THROW(cylinder(r, h, 2), InputError);
+}
+
 // ---------------------------------------------------------------- torus
 
 TEST(Torus, GenusOneAndVolumeWithinTheInscribedBound) {

@@ -6,9 +6,11 @@
 #include <meltlab/verify/fit.h>
 #include <meltlab/verify/metrics.h>
 #include <meltlab/verify/registration.h>
+#include <meltlab/sim/quality.h>
 
 #include <ceres/ceres.h>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -47,6 +49,25 @@ struct Targets {
   cv::Mat first_mask;  ///< of the first usable photo (pivot, initial registration)
 };
 
+/// A photo as the fit sees it, from its segmentation.
+PhotoTarget make_target(const ObservationSequence& obs, int k, const cv::Mat& image, const Segmentation& seg,
+                        const FitOptions& o) {
+  const Frame& f = obs.frames[static_cast<std::size_t>(k)];
+  PhotoTarget t;
+  t.frame = k;
+  t.position = (f.time_s && obs.interval_s) ? *f.time_s / *obs.interval_s : static_cast<double>(k);
+  t.segs = segments_of(seg.region);
+  t.samples = sample_contour(t.segs, o.photo_samples);
+  t.area = region_area(seg.region);
+  for (const Segment& s : t.segs) t.perimeter += (s.b - s.a).norm();
+  const cv::Rect bound = cv::boundingRect(seg.mask);
+  const int m = static_cast<int>(std::ceil(o.margin_px));
+  t.bbox = cv::Rect(bound.x - m, bound.y - m, bound.width + 2 * m, bound.height + 2 * m) &
+           cv::Rect(0, 0, image.cols, image.rows);
+  t.sdf = signed_distance_image(seg.mask);
+  return t;
+}
+
 /// Segments every photo to fit once; unreadable or empty photos go to result.frames_refused.
 Targets photo_targets(const ObservationSequence& obs, const FitOptions& o, FitResult& result) {
   Targets out;
@@ -68,18 +89,7 @@ Targets photo_targets(const ObservationSequence& obs, const FitOptions& o, FitRe
       result.frames_refused.push_back(fmt::format("frame {}: segmentation found no object", k + 1));
       continue;
     }
-    PhotoTarget t;
-    t.frame = k;
-    t.position = (f.time_s && obs.interval_s) ? *f.time_s / *obs.interval_s : static_cast<double>(k);
-    t.segs = segments_of(seg.region);
-    t.samples = sample_contour(t.segs, o.photo_samples);
-    t.area = region_area(seg.region);
-    for (const Segment& s : t.segs) t.perimeter += (s.b - s.a).norm();
-    const cv::Rect bound = cv::boundingRect(seg.mask);
-    const int m = static_cast<int>(std::ceil(o.margin_px));
-    t.bbox = cv::Rect(bound.x - m, bound.y - m, bound.width + 2 * m, bound.height + 2 * m) &
-             cv::Rect(0, 0, image.cols, image.rows);
-    t.sdf = signed_distance_image(seg.mask);
+    PhotoTarget t = make_target(obs, k, image, seg, o);
     if (out.first_mask.empty()) out.first_mask = seg.mask;
     out.targets.push_back(std::move(t));
     result.frames_used.push_back(k);
@@ -284,7 +294,8 @@ std::vector<double> covariance(ceres::Problem& problem, const std::vector<FitPar
 }
 
 std::vector<FitEstimate> estimates(const std::vector<FitParameter>& params, const std::vector<double>& u,
-                                   const std::vector<double>& se) {
+                                   const std::vector<double>& se, const std::vector<double>& se_clustered,
+                                   const std::vector<double>& segmentation) {
   std::vector<FitEstimate> out;
   for (std::size_t j = 0; j < params.size(); ++j) {
     FitEstimate e;
@@ -293,11 +304,390 @@ std::vector<FitEstimate> estimates(const std::vector<FitParameter>& params, cons
     e.value = params[j].initial + params[j].scale * u[j];
     e.fixed = params[j].fixed;
     if (!e.fixed && std::isfinite(se[j])) e.standard_error = se[j];
+    if (!e.fixed && std::isfinite(se_clustered[j])) e.standard_error_clustered = se_clustered[j];
+    if (!e.fixed && std::isfinite(segmentation[j])) e.segmentation_bias = segmentation[j];
+    if (e.standard_error_clustered)
+      e.standard_error_total = std::hypot(*e.standard_error_clustered, e.segmentation_bias.value_or(0.0));
     const double tol = 1e-9 * params[j].scale;
     e.at_bound = !e.fixed && (std::abs(e.value - params[j].lower) < tol || std::abs(e.value - params[j].upper) < tol);
     out.push_back(e);
   }
   return out;
+}
+
+bool is_free(const std::vector<FitParameter>& params, const std::string& name) {
+  const int j = index_of(params, name);
+  return j >= 0 && !params[static_cast<std::size_t>(j)].fixed;
+}
+
+/// A series alone: the parameters it can identify, checked before any simulation.
+void check_series_parameters(const ObservationSequence& obs, const std::vector<FitParameter>& params,
+                             const std::optional<VolumeSeries>& volume, const FitOptions& o) {
+  if (!volume || volume->time_s.empty() || !(o.volume_weight > 0) || !volume->initial_volume_m3)
+    throw InputError(fmt::format("{}: no photos and no mass series to fit", obs.manifest.string()));
+  for (const FitParameter& p : params)
+    if (!p.fixed && (is_registration(p.name) || p.name == "cycles_per_photo"))
+      throw InputError(fmt::format("fit: {} needs photos ({} has a mass series only)", p.name, obs.manifest.string()));
+  if (index_of(params, "seconds_per_cycle") < 0)
+    throw InputError("fit: a mass series needs the time scale seconds_per_cycle");
+  if (is_free(params, "kg") && is_free(params, "seconds_per_cycle"))
+    throw InputError(
+        "fit: kg and seconds_per_cycle cannot both be fitted to a mass series: it shows only the melt per second "
+        "(kg / seconds_per_cycle); fix one of them: --fix seconds_per_cycle=S (seconds per cycle known) to fit kg, "
+        "or --fix kg=V to fit the time scale");
+  const auto n_free = std::count_if(params.begin(), params.end(), [](const FitParameter& p) { return !p.fixed; });
+  if (static_cast<std::size_t>(n_free) >= volume->time_s.size())
+    throw InputError(fmt::format("fit: {} readings cannot fit {} parameters", volume->time_s.size(), n_free));
+}
+
+/// A series alone with seconds_per_cycle free and no given start: the model at its starting
+/// values, run until it falls to the relative volume of the reading nearest half the initial
+/// one (or the last reading); S = that reading's time / the cycle it is reached at. Returns
+/// the simulations run (0 or 1).
+int start_time_scale(FitModel& model, std::vector<FitParameter>& params, const VolumeSeries& vs, const FitOptions& o,
+                     const std::function<void(const std::string&)>& log) {
+  const int j = index_of(params, "seconds_per_cycle");
+  if (j < 0 || params[static_cast<std::size_t>(j)].fixed || !o.start_time_scale) return 0;
+  FitParameter& S = params[static_cast<std::size_t>(j)];
+  const double v0 = *vs.initial_volume_m3;
+  std::size_t ref = vs.time_s.size();
+  for (std::size_t i = 0; i < vs.time_s.size(); ++i) {
+    if (!(vs.time_s[i] > 0)) continue;
+    if (ref == vs.time_s.size() || std::abs(vs.volume_m3[i] / v0 - 0.5) < std::abs(vs.volume_m3[ref] / v0 - 0.5))
+      ref = i;
+  }
+  if (ref == vs.time_s.size() || !(vs.volume_m3[ref] / v0 < 0.999)) {
+    log("time scale start: the series shows no melt; seconds_per_cycle starts at its given value");
+    return 0;
+  }
+  const double target = vs.volume_m3[ref] / v0;
+  std::map<std::string, double> mv;
+  for (const FitParameter& p : params)
+    if (is_model_parameter(p.name)) mv[p.name] = p.initial;
+  auto seq = model.start(mv);
+  auto volume_of = [&](std::int64_t c) {
+    const sim::TriMesh<double>& m = seq->mesh_at(c);
+    return m.live_triangle_count() > 0 ? sim::mesh_volume(m) : 0.0;
+  };
+  const double mesh0 = volume_of(0);
+  if (!(mesh0 > 0)) throw InputError("fit: the mesh encloses no volume at cycle 0");
+  const std::int64_t first = static_cast<std::int64_t>(std::ceil(o.first_cycle));
+  double previous = 1.0;
+  for (std::int64_t c = std::max<std::int64_t>(first, 1); c <= o.max_cycles; ++c) {
+    const double rel = volume_of(c) / mesh0;
+    if (rel <= target) {
+      const double frac = previous > rel ? (previous - target) / (previous - rel) : 1.0;
+      const double cycle = static_cast<double>(c - 1) + frac;
+      if (!(cycle > o.first_cycle)) break;
+      const double start = std::clamp(vs.time_s[ref] / (cycle - o.first_cycle), S.lower, S.upper);
+      log(
+          fmt::format("time scale start: the model falls to {:.3f} of its volume at cycle {:.1f}, the series at {} s: "
+                      "seconds_per_cycle {:.6g}",
+                      target, cycle, vs.time_s[ref], start));
+      S.initial = start;
+      S.scale = 0.05 * start;  // the table's 5 % of the start
+      return 1;
+    }
+    previous = rel;
+  }
+  throw InputError(
+      fmt::format("fit: the model at its starting values does not melt to {:.3f} of its volume within {} cycles; give "
+                  "the start of seconds_per_cycle (--seconds-per-cycle or --initial)",
+                  target, o.max_cycles));
+}
+
+/// A small dense matrix (free x free or rows x free), row-major. The fits have a handful of
+/// free parameters, so plain loops serve; Eigen's vectorised kernels trip GCC 12's
+/// -Wmaybe-uninitialized under -march=native.
+struct Dense {
+  std::size_t rows = 0, cols = 0;
+  std::vector<double> v;
+  Dense() = default;
+  Dense(std::size_t r, std::size_t c) : rows(r), cols(c), v(r * c, 0.0) {}
+  double& operator()(std::size_t i, std::size_t j) { return v[i * cols + j]; }
+  double operator()(std::size_t i, std::size_t j) const { return v[i * cols + j]; }
+};
+
+/// The inverse of a square matrix by Gauss-Jordan elimination with full pivoting; nullopt if
+/// a pivot falls below 1e-12 of the largest (numerically singular).
+std::optional<Dense> inverse(Dense a) {
+  const std::size_t n = a.rows;
+  Dense inv(n, n);
+  for (std::size_t i = 0; i < n; ++i) inv(i, i) = 1.0;
+  std::vector<std::size_t> col_of(n);
+  for (std::size_t i = 0; i < n; ++i) col_of[i] = i;
+  double largest = 0;
+  for (double x : a.v) largest = std::max(largest, std::abs(x));
+  if (!(largest > 0)) return std::nullopt;
+  // Full pivoting: swap rows of a and inv; swap columns of a, recorded to unswap inv's rows.
+  for (std::size_t k = 0; k < n; ++k) {
+    std::size_t pr = k, pc = k;
+    for (std::size_t i = k; i < n; ++i)
+      for (std::size_t j = k; j < n; ++j)
+        if (std::abs(a(i, j)) > std::abs(a(pr, pc))) pr = i, pc = j;
+    if (!(std::abs(a(pr, pc)) > 1e-12 * largest)) return std::nullopt;
+    for (std::size_t j = 0; j < n; ++j) std::swap(a(k, j), a(pr, j)), std::swap(inv(k, j), inv(pr, j));
+    for (std::size_t i = 0; i < n; ++i) std::swap(a(i, k), a(i, pc));
+    std::swap(col_of[k], col_of[pc]);
+    const double d = a(k, k);
+    for (std::size_t j = 0; j < n; ++j) a(k, j) /= d, inv(k, j) /= d;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (i == k || a(i, k) == 0) continue;
+      const double m = a(i, k);
+      for (std::size_t j = 0; j < n; ++j) a(i, j) -= m * a(k, j), inv(i, j) -= m * inv(k, j);
+    }
+  }
+  // a was reduced to the identity with its columns permuted by col_of: the inverse of the
+  // original has row col_of[k] = row k of inv.
+  Dense out(n, n);
+  for (std::size_t k = 0; k < n; ++k)
+    for (std::size_t j = 0; j < n; ++j) out(col_of[k], j) = inv(k, j);
+  return out;
+}
+
+Dense multiply(const Dense& a, const Dense& b) {
+  Dense c(a.rows, b.cols);
+  for (std::size_t i = 0; i < a.rows; ++i)
+    for (std::size_t k = 0; k < a.cols; ++k)
+      for (std::size_t j = 0; j < b.cols; ++j) c(i, j) += a(i, k) * b(k, j);
+  return c;
+}
+
+/// Residual blocks with their Jacobians in the free parameters' scaled units, at u.
+struct Blocks {
+  std::vector<std::vector<double>> r;
+  std::vector<Dense> J;  ///< rows x free
+};
+
+/// Central differences as BlockCost's (one-sided at a bound) of the blocks `residuals(x)`.
+Blocks blocks_at(const std::function<std::vector<std::vector<double>>(const std::vector<double>&)>& residuals,
+                 const std::vector<FitParameter>& params, const ScaledParameters& sp, const std::vector<double>& u,
+                 const FreeParameters& free, double step) {
+  Blocks b;
+  b.r = residuals(sp.values(params, u));
+  for (const auto& r : b.r) b.J.emplace_back(r.size(), free.index.size());
+  for (std::size_t a = 0; a < free.index.size(); ++a) {
+    const std::size_t j = free.index[a];
+    std::vector<double> up = u, down = u;
+    up[j] = std::min(u[j] + step, sp.upper_u[j]);
+    down[j] = std::max(u[j] - step, sp.lower_u[j]);
+    const double h = up[j] - down[j];
+    if (h <= 0) continue;
+    const auto rp = up[j] == u[j] ? b.r : residuals(sp.values(params, up));
+    const auto rm = down[j] == u[j] ? b.r : residuals(sp.values(params, down));
+    for (std::size_t k = 0; k < b.r.size(); ++k)
+      for (std::size_t i = 0; i < b.r[k].size(); ++i) b.J[k](i, a) = (rp[k][i] - rm[k][i]) / h;
+  }
+  return b;
+}
+
+/// The blocks the solver sees: one per photo, then the volume series (if any).
+std::vector<std::vector<double>> evaluation_blocks(Evaluator& ev, const std::vector<double>& x) {
+  const auto e = ev.evaluate(x);
+  std::vector<std::vector<double>> out = e->frame_residuals;
+  if (!e->volume_residuals.empty()) out.push_back(e->volume_residuals);
+  return out;
+}
+
+/// Huber weight of a block (the IRLS weight rho'(|r|²) of Ceres' HuberLoss).
+double huber_weight(const std::vector<double>& r, double a) {
+  double s = 0;
+  for (double v : r) s += v * v;
+  return s <= a * a ? 1.0 : a / std::sqrt(s);
+}
+
+/// A cluster of residuals: its rows of one block, and the block's Huber weight.
+struct Cluster {
+  std::size_t block = 0, row0 = 0, rows = 0;
+  double weight = 1;
+};
+
+/// Clusters: every photo block; the volume block of a photo fit as one; a series alone in
+/// runs of consecutive readings.
+std::vector<Cluster> clusters_of(const Blocks& b, std::size_t photo_blocks, double block_loss, bool series_only,
+                                 const FitOptions& o, int& readings_per_cluster) {
+  std::vector<Cluster> out;
+  for (std::size_t k = 0; k < b.r.size(); ++k) {
+    if (k < photo_blocks) {
+      out.push_back({k, 0, b.r[k].size(), huber_weight(b.r[k], block_loss)});
+    } else if (!series_only) {
+      out.push_back({k, 0, b.r[k].size(), 1.0});
+    } else {
+      const std::size_t n = b.r[k].size();
+      const auto size = static_cast<std::size_t>(o.series_cluster_size > 0
+                                                     ? o.series_cluster_size
+                                                     : std::max(1L, std::lround(std::cbrt(static_cast<double>(n)))));
+      readings_per_cluster = static_cast<int>(size);
+      for (std::size_t i = 0; i < n; i += size) out.push_back({k, i, std::min(size, n - i), 1.0});
+    }
+  }
+  return out;
+}
+
+/// A = Σ w J_kᵀ J_k over the clusters (the Gauss-Newton matrix of the robust cost).
+Dense gauss_newton_matrix(const Blocks& b, const std::vector<Cluster>& clusters, std::size_t f) {
+  Dense A(f, f);
+  for (const Cluster& c : clusters) {
+    const Dense& J = b.J[c.block];
+    for (std::size_t i = c.row0; i < c.row0 + c.rows; ++i)
+      for (std::size_t p = 0; p < f; ++p)
+        for (std::size_t q = 0; q < f; ++q) A(p, q) += c.weight * J(i, p) * J(i, q);
+  }
+  return A;
+}
+
+/// w J_kᵀ r_k of a cluster (its part of the cost's gradient).
+std::vector<double> cluster_gradient(const Blocks& b, const Cluster& c) {
+  const Dense& J = b.J[c.block];
+  std::vector<double> g(J.cols, 0.0);
+  for (std::size_t i = c.row0; i < c.row0 + c.rows; ++i)
+    for (std::size_t p = 0; p < J.cols; ++p) g[p] += c.weight * J(i, p) * b.r[c.block][i];
+  return g;
+}
+
+/// The cluster-robust (sandwich) standard errors, physical units (fit.h); NaN where not
+/// computable. Fills the clustered correlation of `result`.
+std::vector<double> clustered_errors(const Blocks& b, const std::vector<Cluster>& clusters,
+                                     const std::vector<FitParameter>& params, const FreeParameters& free,
+                                     FitResult& result, const std::function<void(const std::string&)>& log) {
+  std::vector<double> se(params.size(), std::numeric_limits<double>::quiet_NaN());
+  const std::size_t f = free.index.size();
+  const auto G = static_cast<double>(clusters.size());
+  if (f == 0 || clusters.size() < 2) return se;
+  const std::optional<Dense> Ainv = inverse(gauss_newton_matrix(b, clusters, f));
+  if (!Ainv) {
+    log("clustered errors: not computable (rank-deficient Jacobian)");
+    return se;
+  }
+  Dense B(f, f);
+  for (const Cluster& c : clusters) {
+    const std::vector<double> g = cluster_gradient(b, c);
+    for (std::size_t p = 0; p < f; ++p)
+      for (std::size_t q = 0; q < f; ++q) B(p, q) += g[p] * g[q];
+  }
+  const Dense V = multiply(multiply(*Ainv, B), *Ainv);
+  const double small_sample = G / (G - 1.0);  // CR1: the sandwich of few clusters is low
+  result.correlation_clustered.assign(f, std::vector<double>(f, 0.0));
+  for (std::size_t a = 0; a < f; ++a) {
+    se[free.index[a]] = std::sqrt(std::max(0.0, small_sample * V(a, a))) * params[free.index[a]].scale;
+    for (std::size_t c = 0; c < f; ++c) {
+      const double d = std::sqrt(std::max(V(a, a), 0.0) * std::max(V(c, c), 0.0));
+      result.correlation_clustered[a][c] = d > 0 ? V(a, c) / d : (a == c ? 1.0 : 0.0);
+    }
+  }
+  return se;
+}
+
+/// The segmentation's bias (fit.h): every fitted photo segmented at the mid level between
+/// ice and ground next to its contour, and one Gauss-Newton step of the fit to those contours
+/// from the optimum. Returns estimate - (estimate from the mid-level contours) per parameter
+/// (NaN where not computable); fills result.segmentation_offset_px.
+std::vector<double> segmentation_bias(const ObservationSequence& obs, Evaluator& ev, const ScaledParameters& sp,
+                                      const FreeParameters& free, const FitOptions& o,
+                                      const std::vector<Cluster>& clusters, FitResult& result,
+                                      const std::function<void(const std::string&)>& log) {
+  const std::vector<FitParameter>& params = ev.params();
+  std::vector<double> bias(params.size(), std::numeric_limits<double>::quiet_NaN());
+  const std::size_t f = free.index.size();
+  if (f == 0) return bias;
+  std::vector<PhotoTarget> variant;
+  int estimated = 0;
+  for (const PhotoTarget& t : ev.targets()) {
+    PhotoTarget v = t;  // the photo's own contour where no mid level is found
+    double offset = 0;
+    try {
+      const cv::Mat image = read_image(obs.frames[static_cast<std::size_t>(t.frame)].image);
+      const Segmentation used = segment_image(image, obs.segmentation, obs.roi);
+      if (const auto mid = mid_level_threshold(image, obs.segmentation, used.mask, obs.roi)) {
+        SegmentationSettings s = obs.segmentation;
+        s.method = SegmentationSettings::Method::kGlobal;
+        s.threshold = *mid;
+        const Segmentation seg = segment_image(image, s, obs.roi);
+        if (seg.area_px > 0 && !seg.region.empty()) {
+          v = make_target(obs, t.frame, image, seg, o);
+          offset = (v.area - t.area) / t.perimeter;
+          ++estimated;
+        }
+      }
+    } catch (const InputError& e) {
+      log(fmt::format("segmentation bias: frame {}: {}", t.frame + 1, e.what()));
+    }
+    result.segmentation_offset_px.push_back(offset);
+    variant.push_back(std::move(v));
+  }
+  if (estimated == 0) {
+    log("segmentation bias: not estimated (no photo has a mid level: adaptive or background segmentation?)");
+    result.segmentation_offset_px.clear();
+    return bias;
+  }
+  auto residuals = [&](const std::vector<double>& x) {
+    std::vector<std::vector<double>> out = ev.residuals_against(x, variant);
+    const auto e = ev.evaluate(x);
+    if (!e->volume_residuals.empty()) out.push_back(e->volume_residuals);
+    return out;
+  };
+  const Blocks b = blocks_at(residuals, params, sp, sp.u, free, o.step_fraction);
+  const std::optional<Dense> Ainv = inverse(gauss_newton_matrix(b, clusters, f));
+  if (!Ainv) return bias;
+  std::vector<double> g(f, 0.0);
+  for (const Cluster& c : clusters) {
+    const std::vector<double> gc = cluster_gradient(b, c);
+    for (std::size_t p = 0; p < f; ++p) g[p] += gc[p];
+  }
+  // The Gauss-Newton step to the mid-level contours' optimum is -A⁻¹ g; the bias of the
+  // estimate is minus that step.
+  for (std::size_t a = 0; a < f; ++a) {
+    double step = 0;
+    for (std::size_t q = 0; q < f; ++q) step += (*Ainv)(a, q) * g[q];
+    bias[free.index[a]] = step * params[free.index[a]].scale;
+  }
+  return bias;
+}
+
+/// A fitted model that falls into pieces while the segmentation keeps only the largest
+/// component of each photo: the photos then lack the other pieces and every estimate is
+/// biased towards a faster melt. One warning naming the photos and the setting.
+void check_pieces(const ObservationSequence& obs, Evaluator& ev, const ScaledParameters& sp, FitResult& result,
+                  const std::function<void(const std::string&)>& log) {
+  if (!obs.segmentation.largest_component || ev.targets().empty()) return;
+  // Pieces the segmentation would keep if it kept all: above its minimum component size.
+  const std::vector<int> pieces =
+      ev.rendered_pieces(sp.values(ev.params(), sp.u), std::max(obs.segmentation.min_component_px, 1.0));
+  int first = -1, last = -1, most = 1;
+  for (std::size_t t = 0; t < pieces.size(); ++t) {
+    if (pieces[t] <= 1) continue;
+    const int frame = ev.targets()[t].frame + 1;
+    if (first < 0) first = frame;
+    last = frame;
+    most = std::max(most, pieces[t]);
+  }
+  if (first < 0) return;
+  const std::string w = fmt::format(
+      "photos {}-{}: the fitted model shows up to {} separate pieces but the segmentation keeps only the largest "
+      "component of each photo (segmentation.largest_component: true), so those photos lack the rest and the "
+      "estimates are biased; set largest_component: false in the manifest",
+      first, last, most);
+  result.warnings.push_back(w);
+  log("warning: " + w);
+}
+
+/// Two free parameters a series cannot tell apart: refused after the fit, naming them.
+void check_series_identifiable(const FitResult& result) {
+  const std::size_t f = result.free_names.size();
+  for (const auto* corr : {&result.correlation, &result.correlation_clustered}) {
+    if (corr->size() != f) continue;
+    for (std::size_t a = 0; a < f; ++a)
+      for (std::size_t b = a + 1; b < f; ++b)
+        if (std::abs((*corr)[a][b]) > 0.995)
+          throw InputError(
+              fmt::format("fit: {} and {} cannot both be fitted to this mass series (correlation {:.4f}): "
+                          "it shows them only together; fix one of them (--fix {}=…)",
+                          result.free_names[a], result.free_names[b], (*corr)[a][b], result.free_names[b]));
+  }
+  if (f > 0 && result.correlation.empty())
+    throw InputError(
+        fmt::format("fit: the mass series cannot identify {} together (singular covariance); fix some of them",
+                    fmt::join(result.free_names, ", ")));
 }
 
 }  // namespace
@@ -344,17 +734,25 @@ FitResult fit_sequence(const ObservationSequence& obs, FitModel& model, const st
   check_parameters(params, o);
 
   FitResult result;
-  Targets targets = photo_targets(obs, o, result);
-  for (const auto& s : result.frames_refused) log("refused " + s);
-  if (targets.targets.empty()) throw InputError(fmt::format("{}: no usable photo to fit", obs.manifest.string()));
-  // Pivot: the first photo's centroid.
-  const cv::Moments mo = cv::moments(targets.first_mask, true);
-  result.pivot_px = Vec2d(mo.m10 / mo.m00, mo.m01 / mo.m00);
+  const bool series_only = !obs.has_photos();
+  Targets targets;
+  int start_simulations = 0;
+  if (series_only) {
+    check_series_parameters(obs, params, volume, o);
+    start_simulations = start_time_scale(model, params, *volume, o, log);
+  } else {
+    targets = photo_targets(obs, o, result);
+    for (const auto& s : result.frames_refused) log("refused " + s);
+    if (targets.targets.empty()) throw InputError(fmt::format("{}: no usable photo to fit", obs.manifest.string()));
+    // Pivot: the first photo's centroid.
+    const cv::Moments mo = cv::moments(targets.first_mask, true);
+    result.pivot_px = Vec2d(mo.m10 / mo.m00, mo.m01 / mo.m00);
 
-  const bool reg_free = std::any_of(params.begin(), params.end(),
-                                    [](const FitParameter& p) { return is_registration(p.name) && !p.fixed; });
-  if (o.initial_registration && reg_free)
-    start_registration(obs, model, params, o, targets.targets.front(), targets.first_mask, result.pivot_px, log);
+    const bool reg_free = std::any_of(params.begin(), params.end(),
+                                      [](const FitParameter& p) { return is_registration(p.name) && !p.fixed; });
+    if (o.initial_registration && reg_free)
+      start_registration(obs, model, params, o, targets.targets.front(), targets.first_mask, result.pivot_px, log);
+  }
 
   Evaluator ev(obs, model, params, o, std::move(targets.targets), volume, result.pivot_px);
   {
@@ -378,8 +776,31 @@ FitResult fit_sequence(const ObservationSequence& obs, FitModel& model, const st
 
   residual_statistics(ev, sp, free, result);
   const std::vector<double> se = covariance(problem, params, sp, free, result, log);
-  result.estimates = estimates(params, sp.u, se);
-  result.simulations = ev.simulations();
+  result.simulations = ev.simulations() + start_simulations;
+
+  // Beyond Ceres' covariance: clustered errors and the segmentation's bias (fit.h). The
+  // Jacobian at the optimum was evaluated by the covariance, so this costs no simulation
+  // unless the render cache has let it go.
+  std::vector<double> se_clustered(params.size(), std::numeric_limits<double>::quiet_NaN());
+  std::vector<double> segmentation(params.size(), std::numeric_limits<double>::quiet_NaN());
+  if (!free.names.empty()) {
+    const Blocks b = blocks_at([&](const std::vector<double>& x) { return evaluation_blocks(ev, x); }, params, sp, sp.u,
+                               free, o.step_fraction);
+    const std::vector<Cluster> clusters =
+        clusters_of(b, ev.targets().size(), block_loss, series_only, o, result.readings_per_cluster);
+    result.cluster_kind = series_only ? "readings" : "photo";
+    result.clusters = static_cast<int>(clusters.size());
+    se_clustered = clustered_errors(b, clusters, params, free, result, log);
+    if (!series_only && o.segmentation_bias)
+      segmentation = segmentation_bias(obs, ev, sp, free, o, clusters, result, log);
+  }
+  if (!series_only) check_pieces(obs, ev, sp, result, log);
+  result.uncertainty_evaluations = ev.simulations() + start_simulations - result.simulations;
+  result.estimates = estimates(params, sp.u, se, se_clustered, segmentation);
+  if (series_only) {
+    result.volume_fitted_m3 = ev.evaluate(sp.values(params, sp.u))->volume_model;
+    check_series_identifiable(result);
+  }
   result.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }

@@ -60,6 +60,7 @@ struct PhotoTarget {
 struct Evaluation {
   std::vector<std::vector<double>> frame_residuals;  ///< per target
   std::vector<double> volume_residuals;
+  std::vector<double> volume_model;  ///< the model's volume (m³, scaled as the residuals) per sample
 };
 
 /// Residuals for a parameter vector (physical units, in the order of `params`). The
@@ -88,6 +89,13 @@ class Evaluator {
 
   std::map<std::string, double> values_of(const std::vector<double>& x) const;
   std::shared_ptr<const Evaluation> evaluate(const std::vector<double>& x);
+  /// The residuals of other photo targets (one per target of this evaluator, same frames)
+  /// against the renders at x: the photos segmented another way, same model.
+  std::vector<std::vector<double>> residuals_against(const std::vector<double>& x,
+                                                     const std::vector<PhotoTarget>& others);
+  /// Per target: how many separate pieces of at least `min_area_px` the rendered silhouette
+  /// at x has (of the nearer of the two cycles a photo blends).
+  std::vector<int> rendered_pieces(const std::vector<double>& x, double min_area_px);
 
  private:
   /// The rendered contours (render pixel coordinates) every photo needs, for one set of
@@ -103,7 +111,8 @@ class Evaluator {
     std::vector<double> volume_model;  ///< per volume sample (blended)
   };
 
-  std::shared_ptr<const Renders> renders(const std::map<std::string, double>& model_values, double K);
+  std::shared_ptr<const Renders> renders(const std::map<std::string, double>& model_values, double K,
+                                         std::optional<double> seconds_per_cycle);
   Evaluation compute(const std::vector<double>& x);
   Region render_region(std::size_t target, const sim::TriMesh<double>& mesh, cv::Mat& coverage);
   std::vector<double> frame_residuals(const PhotoTarget& t, const Region& region) const;

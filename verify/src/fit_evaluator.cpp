@@ -3,7 +3,10 @@
 
 #include "fit_detail.h"
 
+#include <meltlab/core/error.h>
 #include <meltlab/sim/quality.h>
+
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -27,13 +30,13 @@ std::shared_ptr<const Evaluation> Evaluator::evaluate(const std::vector<double>&
 }
 
 std::shared_ptr<const Evaluator::Renders> Evaluator::renders(const std::map<std::string, double>& model_values,
-                                                             double K) {
+                                                             double K, std::optional<double> seconds_per_cycle) {
   std::vector<double> key;
   for (const auto& [k, v] : model_values) key.push_back(v);
   key.push_back(K);
+  if (seconds_per_cycle) key.push_back(*seconds_per_cycle);
   if (auto it = render_cache_.find(key); it != render_cache_.end()) return it->second;
   if (render_cache_.size() > 64) render_cache_.clear();
-  ++simulations_;
   auto r = std::make_shared<Renders>();
   // Which cycles are needed: the two neighbours of every photo's (fractional) cycle.
   struct At {
@@ -54,7 +57,12 @@ std::shared_ptr<const Evaluator::Renders> Evaluator::renders(const std::map<std:
   if (volume_ && o_.volume_weight > 0) {
     const double interval = obs_.interval_s.value_or(1.0);
     for (std::size_t s = 0; s < volume_->time_s.size(); ++s) {
-      const double c = std::max(0.0, o_.first_cycle + volume_->time_s[s] / interval * K);
+      const double c = seconds_per_cycle ? std::max(0.0, o_.first_cycle + volume_->time_s[s] / *seconds_per_cycle)
+                                         : std::max(0.0, o_.first_cycle + volume_->time_s[s] / interval * K);
+      // An infeasible step for the solver (BlockCost returns false), an error elsewhere.
+      if (!(c <= static_cast<double>(o_.max_cycles)))
+        throw InputError(fmt::format("fit: the reading at {} s maps to cycle {:.4g}, beyond {} cycles",
+                                     volume_->time_s[s], c, o_.max_cycles));
       const auto c0 = static_cast<std::int64_t>(std::floor(c));
       volume_cycles.push_back({c0, c0 + 1});
       volume_weights.push_back({1.0 - (c - static_cast<double>(c0)), c - static_cast<double>(c0)});
@@ -63,7 +71,10 @@ std::shared_ptr<const Evaluator::Renders> Evaluator::renders(const std::map<std:
   std::set<std::int64_t> cycles;
   for (const At& n : at) cycles.insert(n.cycle);
   for (const auto& vc : volume_cycles) cycles.insert(vc.begin(), vc.end());
+  const bool relative = !volume_cycles.empty() && volume_->initial_volume_m3.has_value();
+  if (relative) cycles.insert(0);  // the mesh's own initial volume
   std::map<std::int64_t, double> volume_at;
+  ++simulations_;
   const std::unique_ptr<sim::MeshSequence> seq = model_.start(model_values);
   cv::Mat coverage;
   for (const std::int64_t cycle : cycles) {
@@ -77,6 +88,12 @@ std::shared_ptr<const Evaluator::Renders> Evaluator::renders(const std::map<std:
   for (std::size_t s = 0; s < volume_cycles.size(); ++s)
     r->volume_model.push_back(volume_weights[s][0] * volume_at[volume_cycles[s][0]] +
                               volume_weights[s][1] * volume_at[volume_cycles[s][1]]);
+  if (relative) {
+    // The mesh scaled to the initial volume of the series.
+    const double v0 = volume_at[0];
+    if (!(v0 > 0)) throw InputError("fit: the mesh encloses no volume at cycle 0");
+    for (double& v : r->volume_model) v = v / v0 * *volume_->initial_volume_m3;
+  }
   render_cache_[key] = r;
   return r;
 }
@@ -87,8 +104,10 @@ Evaluation Evaluator::compute(const std::vector<double>& x) {
   for (const auto& [k, v] : values)
     if (is_model_parameter(k)) model_values[k] = v;
   const double K = values.count("cycles_per_photo") ? values.at("cycles_per_photo") : kDefaultCyclesPerPhoto;
+  const std::optional<double> S =
+      values.count("seconds_per_cycle") ? std::optional<double>(values.at("seconds_per_cycle")) : std::nullopt;
   const Similarity2D reg = registration_of(values, pivot_);
-  const auto rs = renders(model_values, K);
+  const auto rs = renders(model_values, K, S);
   Evaluation e;
   e.frame_residuals.assign(targets_.size(), std::vector<double>(residuals_per_frame(), 0.0));
   for (const auto& n : rs->needs) {
@@ -97,11 +116,54 @@ Evaluation Evaluator::compute(const std::vector<double>& x) {
     for (std::size_t i = 0; i < r.size(); ++i) acc[i] += n.weight * r[i];
   }
   if (!rs->volume_model.empty()) {
-    const double v0 = std::max(volume_->volume_m3.front(), 1e-30);
+    const double v0 = std::max(volume_->initial_volume_m3.value_or(volume_->volume_m3.front()), 1e-30);
     for (std::size_t s = 0; s < rs->volume_model.size(); ++s)
       e.volume_residuals.push_back(o_.volume_weight * (rs->volume_model[s] - volume_->volume_m3[s]) / v0);
+    e.volume_model = rs->volume_model;
   }
   return e;
+}
+
+std::vector<std::vector<double>> Evaluator::residuals_against(const std::vector<double>& x,
+                                                              const std::vector<PhotoTarget>& others) {
+  if (others.size() != targets_.size()) throw InvariantError("residuals_against: one target per fitted photo");
+  const std::map<std::string, double> values = values_of(x);
+  std::map<std::string, double> model_values;
+  for (const auto& [k, v] : values)
+    if (is_model_parameter(k)) model_values[k] = v;
+  const double K = values.count("cycles_per_photo") ? values.at("cycles_per_photo") : kDefaultCyclesPerPhoto;
+  const std::optional<double> S =
+      values.count("seconds_per_cycle") ? std::optional<double>(values.at("seconds_per_cycle")) : std::nullopt;
+  const Similarity2D reg = registration_of(values, pivot_);
+  const auto rs = renders(model_values, K, S);
+  std::vector<std::vector<double>> out(others.size(), std::vector<double>(residuals_per_frame(), 0.0));
+  for (const auto& n : rs->needs) {
+    const std::vector<double> r = frame_residuals(others[n.target], transform_region(n.region, reg));
+    for (std::size_t i = 0; i < r.size(); ++i) out[n.target][i] += n.weight * r[i];
+  }
+  return out;
+}
+
+std::vector<int> Evaluator::rendered_pieces(const std::vector<double>& x, double min_area_px) {
+  const std::map<std::string, double> values = values_of(x);
+  std::map<std::string, double> model_values;
+  for (const auto& [k, v] : values)
+    if (is_model_parameter(k)) model_values[k] = v;
+  const double K = values.count("cycles_per_photo") ? values.at("cycles_per_photo") : kDefaultCyclesPerPhoto;
+  const std::optional<double> S =
+      values.count("seconds_per_cycle") ? std::optional<double>(values.at("seconds_per_cycle")) : std::nullopt;
+  const auto rs = renders(model_values, K, S);
+  std::vector<int> pieces(targets_.size(), 0);
+  std::vector<double> weight(targets_.size(), -1.0);
+  for (const auto& n : rs->needs) {
+    if (n.weight <= weight[n.target]) continue;
+    weight[n.target] = n.weight;
+    int count = 0;
+    for (const Polygon& p : n.region)
+      if (region_area(Region{p}) >= min_area_px) ++count;
+    pieces[n.target] = count;
+  }
+  return pieces;
 }
 
 /// The rendered contour of a photo's window (render pixel coordinates of the whole image).

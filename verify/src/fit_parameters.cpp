@@ -19,7 +19,7 @@ bool starts_with(std::string_view s, std::string_view prefix) { return s.substr(
 FitParameterRole fit_parameter_role(std::string_view name) {
   if (starts_with(name, kKlParameterPrefix)) return FitParameterRole::kKlField;
   if (starts_with(name, "reg.")) return FitParameterRole::kRegistration;
-  if (name == "cycles_per_photo") return FitParameterRole::kTimeScale;
+  if (name == "cycles_per_photo" || name == "seconds_per_cycle") return FitParameterRole::kTimeScale;
   return FitParameterRole::kMeltSettings;
 }
 
@@ -35,6 +35,17 @@ std::vector<FitParameterSpec> fit_parameter_table(const FitParameterContext& c) 
   // ones. Bounded by kE (the monograph's kN << kE). A change of kE/200 moves a flat side by
   // ≈ 0.5 L0 over 100 photos of 7 cycles, many pixels.
   // Name order: the fit's parameter vector (and fit.json's "free" list) follows it.
+  if (c.series_only) {
+    // seconds_per_cycle: a change of 5 % moves the end of the melt by 5 % of its time, far
+    // above the resolution of a scale; the fit may move its start (fit.h, the time scale).
+    return {
+        {"kg", R::kMeltSettings, c.kg_initial, 0.01, 1.0, 0.05, "global melt rate"},
+        {"kn", R::kMeltSettings, c.kn_initial, 0.0, std::max(c.kE, c.kn_initial), std::max(c.kE / 200.0, 1e-9),
+         "weight of M_N, --kn units"},
+        {"seconds_per_cycle", R::kTimeScale, c.seconds_per_cycle, 1e-6, 1e9, 0.05 * c.seconds_per_cycle,
+         "seconds of the experiment per simulation cycle (the time scale of a mass series)"},
+    };
+  }
   return {
       {"cycles_per_photo", R::kTimeScale, c.cycles_per_photo, 0.25, 1000.0, 0.5,
        "simulation cycles between photos (the time scale)"},
@@ -62,7 +73,8 @@ std::vector<std::string> registration_parameter_names() {
   return {"reg.tx_px", "reg.ty_px", "reg.angle_deg", "reg.scale"};
 }
 
-std::string fit_parameter_names() {
+std::string fit_parameter_names(bool series_only) {
+  if (series_only) return "kg, kn, seconds_per_cycle, kl.<path in the --kl file>";
   std::string out = "kg, kn, cycles_per_photo, reg";
   for (const std::string& r : registration_parameter_names()) out += ", " + r;
   return out + ", kl.<path in the --kl file>";
@@ -77,8 +89,13 @@ std::string fit_parameter_names_help() {
   };
   std::string regs;
   for (const std::string& r : registration_parameter_names()) regs += (regs.empty() ? "" : ",") + r;
-  return fmt::format("{}, {}, {}, reg (= {}), kl.<path in the --kl YAML, e.g. kl.of.0.strength>", help_of("kg"),
-                     help_of("kn"), help_of("cycles_per_photo"), regs);
+  FitParameterContext series;
+  series.series_only = true;
+  std::string seconds;
+  for (const FitParameterSpec& s : fit_parameter_table(series))
+    if (s.name == "seconds_per_cycle") seconds = fmt::format("{} ({}; no photos)", s.name, s.help);
+  return fmt::format("{}, {}, {}, reg (= {}), kl.<path in the --kl YAML, e.g. kl.of.0.strength>; {}", help_of("kg"),
+                     help_of("kn"), help_of("cycles_per_photo"), regs, seconds);
 }
 
 }  // namespace meltlab::verify

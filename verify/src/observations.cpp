@@ -6,8 +6,9 @@
 // line, "<manifest>:<line>: <problem>", naming the key concerned.
 //
 // Choices where observations.h leaves room:
-//  - `camera` is required (the comparison renders the simulation with it); its width and
-//    height must equal the first readable frame's size.
+//  - `camera` is required with frames (the comparison renders the simulation with it); its
+//    width and height must equal the first readable frame's size. Without frames (a mass or
+//    volume series alone) camera, roi and segmentation are refused.
 //  - frame times: an explicit time_s wins; otherwise first_time_s + index * interval_s when
 //    interval_s is given; otherwise the first frame gets first_time_s if that is given, and
 //    other frames have no time. Known times must strictly increase.
@@ -230,8 +231,21 @@ ObservationSequence load_observations(const fs::path& manifest) {
   if (!root.has("meltlab_observations")) root.fail("missing key 'meltlab_observations' (format version, 1)");
   if (const ConfigValue v = root.value("meltlab_observations"); v.scalar() != "1")
     v.fail(fmt::format("unsupported format version '{}' (this is version 1)", v.is_scalar() ? v.scalar() : "?"));
-  if (!root.has("frames")) root.fail("missing key 'frames'");
-  if (!root.has("camera")) root.fail("missing key 'camera'");
+  if (root.has("mass_series") && root.has("volume_series"))
+    root.fail_at("volume_series", "give either 'mass_series' or 'volume_series', not both");
+  const char* series_key = root.has("volume_series") ? "volume_series" : "mass_series";
+  const bool weighing_only = !root.has("frames") && root.has(series_key);
+  if (!root.has("frames") && !weighing_only)
+    root.fail("missing key 'frames' (the photos; a weighing experiment without photos names a mass_series instead)");
+  if (!weighing_only && !root.has("camera")) root.fail("missing key 'camera'");
+  if (weighing_only) {
+    // Keys that only photos need: refused rather than ignored (a typo'd 'frames' would
+    // otherwise silently turn a photo manifest into a weighing one).
+    for (const char* key : {"camera", "roi", "segmentation"})
+      if (root.has(key))
+        root.fail_at(key,
+                     fmt::format("'{}' without 'frames': a manifest of a mass series alone needs no {}", key, key));
+  }
 
   ObservationSequence seq;
   seq.manifest = absolute;
@@ -241,12 +255,16 @@ ObservationSequence load_observations(const fs::path& manifest) {
     seq.interval_s = dt;
   }
   const std::optional<double> first_time = root.optional<double>("first_time_s");
-  seq.camera = render::parse_camera(root.section("camera"));
+  if (!weighing_only) seq.camera = render::parse_camera(root.section("camera"));
   if (const auto roi = root.optional_value("roi")) seq.roi = parse_roi(*roi);
   const std::optional<ConfigSection> segmentation = root.optional_section("segmentation");
   if (segmentation) seq.segmentation = parse_segmentation(ctx, *segmentation);
   if (const auto v = root.optional_value("ground_truth")) seq.ground_truth = existing_file(ctx, *v);
-  if (const auto v = root.optional_value("mass_series")) seq.mass_series = existing_file(ctx, *v);
+  if (const auto v = root.optional_value(series_key)) seq.mass_series = existing_file(ctx, *v);
+  if (weighing_only) {
+    root.finish();
+    return seq;
+  }
   const ConfigValue frames_node = root.value("frames");
   const std::vector<FrameEntry> entries = parse_frames(ctx, frames_node);
   root.finish();

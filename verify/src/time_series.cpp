@@ -65,6 +65,7 @@ TimeSeries read_time_series(const fs::path& csv) {
 
   static const std::array<const char*, 4> kQuantities = {"mass_kg", "mass_g", "volume_m3", "volume_cm3"};
   TimeSeries ts;
+  ts.file = csv;
   int time_col = -1, value_col = -1;
   std::size_t columns = 0;
   bool have_header = false;
@@ -132,6 +133,7 @@ TimeSeries read_time_series(const fs::path& csv) {
     }
     ts.time_s.push_back(t);
     ts.value.push_back(v);
+    ts.line.push_back(line_no);
   }
   if (in.bad()) throw InputError(fmt::format("{}: read error", file));
   if (!have_header) throw InputError(fmt::format("{}:{}: empty file (no header line)", file, std::max(line_no, 1)));

@@ -1,8 +1,10 @@
 // The volume integrator (see integrator/volume_integrator.h).
 
 #include <meltlab/render/integrator/volume_integrator.h>
+#include <meltlab/render/integrator/fast_exp.h>
 
 #include <meltlab/core/error.h>
+#include <meltlab/core/hash.h>
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -14,6 +16,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
 
@@ -27,13 +30,6 @@ constexpr std::size_t kMaxLights = 16;
 
 double ms_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
 }
 
 void validate(const Volume& volume, const VolumeRenderSettings& s) {
@@ -54,8 +50,9 @@ void validate(const Volume& volume, const VolumeRenderSettings& s) {
   if (s.quadrature == Quadrature::kExponential && !s.emission_scale_by_ds)
     bad("vlr.emission.scale_by_ds = false needs the inclusive or exclusive quadrature (the exponential rule "
         "integrates each step)");
-  if (!s.emission.allFinite() || !s.emission_rim.allFinite() || !s.background.allFinite())
+  if (!s.emission.allFinite() || !s.emission_rim.allFinite() || !s.background.allFinite() || !s.ambient.allFinite())
     bad("colours must be finite");
+  if ((s.ambient.array() < 0).any()) bad("the ambient radiance must be >= 0");
   for (const auto& l : s.lights) {
     if (!l.intensity.allFinite() || (l.intensity.array() < 0).any()) bad("light intensities must be finite and >= 0");
     if (l.type == LightType::kDirectional && !(l.to_light.allFinite() && l.to_light.norm() > 0))
@@ -241,22 +238,12 @@ struct Kernel {
 
   double extinction_weight(float f) const { return s.gamma == 1.0 ? double(f) : std::pow(double(f), s.gamma); }
 
-  /// κ ∫ f^γ from x towards light l (to the box exit, or the light if nearer), midpoint-rule
-  /// sub-steps of equal length <= the shadow step starting at the start offset.
-  double shadow_optical_depth(const Vec3& x, const LightTerm& l, std::int64_t& samples) const {
-    Vec3 dir;
-    double end = kInf;
-    if (l.type == LightType::kDirectional) {
-      dir = l.to_light;
-    } else {
-      dir = l.position - x;
-      end = dir.norm();
-      if (!(end > 0)) return 0.0;
-      dir /= end;
-    }
+  /// κ ∫ f^γ from x along unit direction dir to the box exit (or max_distance if nearer),
+  /// midpoint-rule sub-steps of equal length <= the shadow step, starting at the start offset.
+  double optical_depth(const Vec3& x, const Vec3& dir, double max_distance, std::int64_t& samples) const {
     const auto hit = intersect_box(box, x, dir);
     if (!hit) return 0.0;
-    end = std::min(end, hit->t1);
+    const double end = std::min(max_distance, hit->t1);
     const double start = std::max(0.0, hit->t0);
     if (!(end > start)) return 0.0;
     const std::int64_t m = std::max<std::int64_t>(1, std::int64_t(std::ceil((end - start) / shadow_h)));
@@ -271,6 +258,15 @@ struct Kernel {
                   });
     samples += taken;
     return s.kappa * h * sum;
+  }
+
+  /// The optical depth from x to light l (to the box exit, or the light if nearer).
+  double shadow_optical_depth(const Vec3& x, const LightTerm& l, std::int64_t& samples) const {
+    if (l.type == LightType::kDirectional) return optical_depth(x, l.to_light, kInf, samples);
+    Vec3 dir = l.position - x;
+    const double dist = dir.norm();
+    if (!(dist > 0)) return 0.0;
+    return optical_depth(x, dir / dist, dist, samples);
   }
 
   Rgb emission_colour(const Vec3& x) const {
@@ -330,7 +326,7 @@ struct Kernel {
         offset_fraction = 0.5;
         break;
       case FirstOffset::kJitter:
-        offset_fraction = double(splitmix64(s.jitter_seed ^ splitmix64(pixel_id)) >> 11) * (1.0 / 9007199254740992.0);
+        offset_fraction = unit_from_bits(splitmix64(s.jitter_seed ^ splitmix64(pixel_id)));
         break;
     }
     const double length = t1 - t0;
@@ -390,6 +386,8 @@ struct Kernel {
     // Radiance in three plain doubles: Eigen's small-vector loops were not inlined in this lambda.
     double Ir = 0, Ig = 0, Ib = 0;
     const double Er = s.emission.x(), Eg = s.emission.y(), Eb = s.emission.z();
+    const double Ar = s.ambient.x(), Ag = s.ambient.y(), Ab = s.ambient.z();
+    const bool has_ambient = Ar != 0 || Ag != 0 || Ab != 0;
     double T = 1.0, ext = 0.0;
     std::int64_t taken = 0;
     bool terminated = false;
@@ -434,6 +432,10 @@ struct Kernel {
                 const double k = scatter_k * e * p * Ts;
                 gr += L.intensity.x() * k, gg += L.intensity.y() * k, gb += L.intensity.z() * k;
               }
+              if (has_ambient) {  // the uniform ambient radiance, ∫ p dω = 1, unshadowed
+                const double k = scatter_k * e;
+                gr += Ar * k, gg += Ag * k, gb += Ab * k;
+              }
             }
           }
           // The source's sum of g (no Δs, vlr.emission.scale_by_ds = false) counts a partial step in proportion.
@@ -450,17 +452,17 @@ struct Kernel {
             // volume); 1 - e^{-x} as -expm1 so a thin step keeps its digits.
             if constexpr (Q == Quadrature::kInclusive) {
               ext += w == h ? e : e * (w / h);
-              T = double(std::exp(float(-kappa_h * ext)));
+              T = double(exp_nonpositive(float(-kappa_h * ext)));
               k = T * g_step;
             } else if constexpr (Q == Quadrature::kExclusive) {
               k = T * g_step;
               ext += e * w;
-              T = double(std::exp(float(-s.kappa * ext)));
+              T = double(exp_nonpositive(float(-s.kappa * ext)));
             } else {
               const double sigma = s.kappa * e;
               k = T * (sigma > 0 ? double(-std::expm1(float(-sigma * w))) / sigma : w);
               ext += e * w;
-              T = double(std::exp(float(-s.kappa * ext)));
+              T = double(exp_nonpositive(float(-s.kappa * ext)));
             }
             if constexpr (emits) Ir += gr * k, Ig += gg * k, Ib += gb * k;
             if (T < s.ert_transmittance) {
@@ -656,33 +658,47 @@ ShadowCache build_cache_impl(const Kernel<S>& k, const LightTerm& l, const Volum
   return c;
 }
 
+/// The tracer's state behind a virtual interface (one dispatch per ray): the volume and the settings
+/// it owns (the kernel refers to them), the kernel, and the shadow caches.
+struct TracerState {
+  virtual ~TracerState() = default;
+  virtual double trace(const Vec3& o, const Vec3& v, double t0, double t1, std::uint64_t pixel, Rgb& I,
+                       VolumeRenderStats& st) const = 0;
+  virtual double optical_depth(const Vec3& x, const Vec3& d, double max_distance, std::int64_t& samples) const = 0;
+  Box3 box;
+  double cache_ms = 0;
+  std::int64_t cache_samples = 0;
+};
+
 template <class S>
-VolumeFrame render_typed(const Volume& volume, const VolumeSamples<S>& samples, const Camera& camera,
-                         const VolumeRenderSettings& s, const std::vector<ShadowCache>* given_caches) {
-  const auto t_start = std::chrono::steady_clock::now();
-  Macrocells macro;
-  if (s.skip_empty && s.address == VolumeAddress::kClamp) macro = build_macrocells(volume);
-  Kernel<S> k(volume, s, samples, std::move(macro));
-  k.lights = light_terms(volume, s);
-  VolumeFrame frame;
-  // Shadow caches.
-  std::vector<ShadowCache> own_caches;
-  const std::vector<ShadowCache>* caches = given_caches;
-  if (s.model == OpticalModel::kHGAttenuated && s.shadow == ShadowMethod::kCache) {
-    if (!caches || caches->size() != k.lights.size()) {
+struct TypedTracerState final : TracerState {
+  Volume volume;
+  VolumeRenderSettings settings;
+  std::vector<ShadowCache> caches;
+  Kernel<S> k;
+
+  TypedTracerState(const Volume& v, const VolumeRenderSettings& s, const std::vector<ShadowCache>& given)
+      : volume(v), settings(s), k(volume, settings, volume.samples<S>(), macrocells_for(volume, settings)) {
+    box = k.box;
+    k.lights = light_terms(volume, settings);
+    if (settings.model != OpticalModel::kHGAttenuated || settings.shadow != ShadowMethod::kCache) return;
+    if (given.size() == k.lights.size()) {
+      caches = given;
+    } else {
       const auto t = std::chrono::steady_clock::now();
-      for (const auto& l : k.lights) own_caches.push_back(build_cache_impl(k, l, s, frame.stats));
-      frame.stats.shadow_cache_ms = ms_since(t);
-      caches = &own_caches;
+      VolumeRenderStats st;
+      for (const auto& l : k.lights) caches.push_back(build_cache_impl(k, l, settings, st));
+      cache_ms = ms_since(t);
+      cache_samples = st.shadow_samples;
     }
-    k.cache_samples.reserve(caches->size());
-    for (std::size_t i = 0; i < caches->size(); ++i) {
-      const Volume& c = (*caches)[i].transmittance;
-      if (c.type() != SampleType::kFloat32) throw InputError("volume render: a shadow cache must be float32");
-      k.cache_samples.push_back(c.samples<float>());
+    k.cache_samples.reserve(caches.size());
+    for (const auto& c : caches) {
+      if (c.transmittance.type() != SampleType::kFloat32)
+        throw InputError("volume render: a shadow cache must be float32");
+      k.cache_samples.push_back(c.transmittance.samples<float>());
     }
     for (std::size_t i = 0; i < k.lights.size(); ++i) {
-      const Volume& c = (*caches)[i].transmittance;
+      const Volume& c = caches[i].transmittance;
       k.lights[i].cache = &k.cache_samples[i];
       k.lights[i].cache_origin = c.origin();
       k.lights[i].cache_inv_spacing = c.spacing().cwiseInverse();
@@ -692,6 +708,118 @@ VolumeFrame render_typed(const Volume& volume, const VolumeSamples<S>& samples, 
     k.all_cached_same_grid =
         std::all_of(k.lights.begin(), k.lights.end(), [](const LightTerm& l) { return l.cache_same_grid; });
   }
+  static Macrocells macrocells_for(const Volume& v, const VolumeRenderSettings& s) {
+    return s.skip_empty && s.address == VolumeAddress::kClamp ? build_macrocells(v) : Macrocells{};
+  }
+  double trace(const Vec3& o, const Vec3& v, double t0, double t1, std::uint64_t pixel, Rgb& I,
+               VolumeRenderStats& st) const override {
+    return k.trace(o, v, t0, t1, pixel, I, st);
+  }
+  double optical_depth(const Vec3& x, const Vec3& d, double max_distance, std::int64_t& samples) const override {
+    return k.optical_depth(x, d, max_distance, samples);
+  }
+};
+
+}  // namespace
+
+void check_volume_render_settings(const Volume& volume, const VolumeRenderSettings& settings) {
+  validate(volume, settings);
+  (void)light_terms(volume, settings);
+}
+
+double henyey_greenstein(double cos_theta, double c) {
+  const double denom = 1.0 + c * c - 2.0 * c * cos_theta;
+  return (1.0 - c * c) / (4.0 * std::numbers::pi * denom * std::sqrt(denom));
+}
+
+VolumeLight default_light(const Box3& box) {
+  VolumeLight l;
+  l.type = LightType::kPoint;
+  l.position = box.centre() + 2.0 * box.size();
+  return l;
+}
+
+std::optional<RayInterval> intersect_box(const Box3& box, const Vec3& o, const Vec3& v) {
+  double t0 = -kInf, t1 = kInf;
+  for (int a = 0; a < 3; ++a) {
+    if (v[a] == 0.0) {
+      if (o[a] < box.lo[a] || o[a] > box.hi[a]) return std::nullopt;
+      continue;
+    }
+    double tn = (box.lo[a] - o[a]) / v[a], tf = (box.hi[a] - o[a]) / v[a];
+    if (tn > tf) std::swap(tn, tf);  // vlr.slab.swap
+    t0 = std::max(t0, tn);
+    t1 = std::min(t1, tf);
+  }
+  if (t0 > t1 || t1 < 0) return std::nullopt;
+  return RayInterval{t0, t1};
+}
+
+double primary_step(const Volume& volume, const VolumeRenderSettings& s) {
+  if (s.step_rule == StepRule::kFitSegment) return s.step;
+  return volume.domain().diagonal() / s.samples;
+}
+
+std::vector<VolumeLight> effective_lights(const Volume& volume, const VolumeRenderSettings& s) {
+  if (!s.lights.empty()) return s.lights;
+  return {default_light(volume.domain())};
+}
+
+// ---- the tracer -----------------------------------------------------------------------------------
+
+struct VolumeTracer::Impl {
+  std::unique_ptr<TracerState> state;
+};
+
+VolumeTracer::VolumeTracer(const Volume& volume, const VolumeRenderSettings& settings,
+                           const std::vector<ShadowCache>& caches)
+    : impl_(std::make_unique<Impl>()) {
+  validate(volume, settings);
+  impl_->state = visit_samples(volume, [&](const auto& samples) -> std::unique_ptr<TracerState> {
+    using S = typename std::remove_cv_t<std::remove_pointer_t<decltype(samples.data)>>;
+    return std::make_unique<TypedTracerState<S>>(volume, settings, caches);
+  });
+}
+
+VolumeTracer::~VolumeTracer() = default;
+
+VolumeTracer::Result VolumeTracer::trace(const Vec3& o, const Vec3& d, double t_max, std::uint64_t pixel_id,
+                                         VolumeRenderStats* stats) const {
+  Result r;
+  const auto hit = intersect_box(impl_->state->box, o, d);
+  if (!hit) return r;
+  const double t0 = std::max(hit->t0, 0.0), t1 = std::min(hit->t1, t_max);
+  if (!(t1 > t0)) return r;
+  r.met = true;
+  VolumeRenderStats local;
+  VolumeRenderStats& st = stats ? *stats : local;
+  ++st.rays;
+  r.transmittance = impl_->state->trace(o, d, t0, t1, pixel_id, r.radiance, st);
+  return r;
+}
+
+double VolumeTracer::transmittance(const Vec3& x, const Vec3& d, double max_distance, VolumeRenderStats* stats) const {
+  std::int64_t n = 0;
+  const double tau = impl_->state->optical_depth(x, d, max_distance, n);
+  if (stats) stats->shadow_samples += n;
+  return std::exp(-tau);
+}
+
+const Box3& VolumeTracer::box() const { return impl_->state->box; }
+double VolumeTracer::cache_build_ms() const { return impl_->state->cache_ms; }
+std::int64_t VolumeTracer::cache_shadow_samples() const { return impl_->state->cache_samples; }
+
+VolumeFrame render_volume(const Volume& volume, const Camera& camera, const VolumeRenderSettings& settings) {
+  return render_volume(volume, camera, settings, {});
+}
+
+VolumeFrame render_volume(const Volume& volume, const Camera& camera, const VolumeRenderSettings& s,
+                          const std::vector<ShadowCache>& caches) {
+  const VolumeTracer tracer(volume, s, caches);
+  const TracerState& k = *tracer.impl_->state;
+  VolumeFrame frame;
+  frame.stats.shadow_cache_ms = k.cache_ms;
+  frame.stats.shadow_samples = k.cache_samples;
   const int W = camera_width(camera), H = camera_height(camera);
   frame.radiance = ImageF(W, H, 3, 0.0f);
   frame.transmittance = ImageF(W, H, 1, 1.0f);
@@ -746,70 +874,14 @@ VolumeFrame render_typed(const Volume& volume, const VolumeSamples<S>& samples, 
   });
   stats.combine_each([&](const VolumeRenderStats& st) { add_stats(frame.stats, st); });
   frame.stats.render_ms = ms_since(t_render);
-  (void)t_start;
   return frame;
 }
 
-}  // namespace
+namespace {
 
-void check_volume_render_settings(const Volume& volume, const VolumeRenderSettings& settings) {
-  validate(volume, settings);
-  (void)light_terms(volume, settings);
-}
-
-double henyey_greenstein(double cos_theta, double c) {
-  const double denom = 1.0 + c * c - 2.0 * c * cos_theta;
-  return (1.0 - c * c) / (4.0 * std::numbers::pi * denom * std::sqrt(denom));
-}
-
-VolumeLight default_light(const Box3& box) {
-  VolumeLight l;
-  l.type = LightType::kPoint;
-  l.position = box.centre() + 2.0 * box.size();
-  return l;
-}
-
-std::optional<RayInterval> intersect_box(const Box3& box, const Vec3& o, const Vec3& v) {
-  double t0 = -kInf, t1 = kInf;
-  for (int a = 0; a < 3; ++a) {
-    if (v[a] == 0.0) {
-      if (o[a] < box.lo[a] || o[a] > box.hi[a]) return std::nullopt;
-      continue;
-    }
-    double tn = (box.lo[a] - o[a]) / v[a], tf = (box.hi[a] - o[a]) / v[a];
-    if (tn > tf) std::swap(tn, tf);  // vlr.slab.swap
-    t0 = std::max(t0, tn);
-    t1 = std::min(t1, tf);
-  }
-  if (t0 > t1 || t1 < 0) return std::nullopt;
-  return RayInterval{t0, t1};
-}
-
-double primary_step(const Volume& volume, const VolumeRenderSettings& s) {
-  if (s.step_rule == StepRule::kFitSegment) return s.step;
-  return volume.domain().diagonal() / s.samples;
-}
-
-std::vector<VolumeLight> effective_lights(const Volume& volume, const VolumeRenderSettings& s) {
-  if (!s.lights.empty()) return s.lights;
-  return {default_light(volume.domain())};
-}
-
-VolumeFrame render_volume(const Volume& volume, const Camera& camera, const VolumeRenderSettings& settings) {
-  validate(volume, settings);
-  return visit_samples(volume,
-                       [&](const auto& samples) { return render_typed(volume, samples, camera, settings, nullptr); });
-}
-
-VolumeFrame render_volume(const Volume& volume, const Camera& camera, const VolumeRenderSettings& settings,
-                          const std::vector<ShadowCache>& caches) {
-  validate(volume, settings);
-  return visit_samples(volume,
-                       [&](const auto& samples) { return render_typed(volume, samples, camera, settings, &caches); });
-}
-
-ShadowCache build_shadow_cache(const Volume& volume, const VolumeRenderSettings& settings, int light_index,
-                               VolumeRenderStats* stats) {
+/// Calls fn(kernel, light) with a kernel for the volume and light `light_index` of the settings.
+template <class Fn>
+auto with_kernel(const Volume& volume, const VolumeRenderSettings& settings, int light_index, const Fn& fn) {
   validate(volume, settings);
   return visit_samples(volume, [&](const auto& samples) {
     Macrocells macro;
@@ -818,8 +890,17 @@ ShadowCache build_shadow_cache(const Volume& volume, const VolumeRenderSettings&
     const auto lights = light_terms(volume, settings);
     if (light_index < 0 || light_index >= int(lights.size()))
       throw InputError(fmt::format("volume render: no light {}", light_index));
+    return fn(k, lights[std::size_t(light_index)]);
+  });
+}
+
+}  // namespace
+
+ShadowCache build_shadow_cache(const Volume& volume, const VolumeRenderSettings& settings, int light_index,
+                               VolumeRenderStats* stats) {
+  return with_kernel(volume, settings, light_index, [&](const auto& k, const LightTerm& l) {
     VolumeRenderStats st;
-    auto c = build_cache_impl(k, lights[std::size_t(light_index)], settings, st);
+    auto c = build_cache_impl(k, l, settings, st);
     if (stats) add_stats(*stats, st);
     return c;
   });
@@ -827,16 +908,9 @@ ShadowCache build_shadow_cache(const Volume& volume, const VolumeRenderSettings&
 
 double shadow_transmittance(const Volume& volume, const VolumeRenderSettings& settings, int light_index,
                             const Vec3& x) {
-  validate(volume, settings);
-  return visit_samples(volume, [&](const auto& samples) {
-    Macrocells macro;
-    if (settings.skip_empty && settings.address == VolumeAddress::kClamp) macro = build_macrocells(volume);
-    Kernel k(volume, settings, samples, std::move(macro));
-    const auto lights = light_terms(volume, settings);
-    if (light_index < 0 || light_index >= int(lights.size()))
-      throw InputError(fmt::format("volume render: no light {}", light_index));
+  return with_kernel(volume, settings, light_index, [&](const auto& k, const LightTerm& l) {
     std::int64_t n = 0;
-    return std::exp(-k.shadow_optical_depth(x, lights[std::size_t(light_index)], n));
+    return std::exp(-k.shadow_optical_depth(x, l, n));
   });
 }
 

@@ -51,13 +51,6 @@ inline double grad(int hash, double x, double y, double z) {
   return ((h & 1) == 0 ? u : -u) + ((h & 2) == 0 ? v : -v);
 }
 
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-
 /// The domain offset of octave k for a seed: three numbers in [0, 256) (the noise has period 256).
 std::array<double, 3> octave_offset(std::uint64_t seed, int k) {
   if (seed == 0) return {0, 0, 0};
@@ -65,7 +58,7 @@ std::array<double, 3> octave_offset(std::uint64_t seed, int k) {
   std::uint64_t h = splitmix64(seed ^ (0x6f63746176650000ull + std::uint64_t(k)));
   for (auto& x : o) {
     h = splitmix64(h);
-    x = double(h >> 11) * (256.0 / 9007199254740992.0);
+    x = 256.0 * unit_from_bits(h);
   }
   return o;
 }

@@ -137,6 +137,8 @@ VolumeScene parse_volume_scene(const ConfigSection& c, const fs::path& base_dir)
     s.emission_scale_by_ds = o->get<bool>("emission_scale_by_ds", true);
     s.kappa_in_source = o->get<bool>("kappa_in_source", false);
     s.kappa_in_brdf = o->get<bool>("kappa_in_brdf", false);
+    s.ambient = colour(*o, "ambient", Rgb::Zero());
+    if ((s.ambient.array() < 0).any()) o->fail_at("ambient", "'ambient' must be >= 0");
     if (!s.emission_scale_by_ds && s.quadrature == Quadrature::kExponential)
       o->fail_at("emission_scale_by_ds", "'emission_scale_by_ds: false' needs the inclusive or exclusive quadrature");
   }
@@ -228,6 +230,7 @@ std::vector<std::pair<std::string, std::string>> describe_vlr(const VolumeScene&
   add("kappa", num(s.kappa));
   add("gamma", num(s.gamma));
   add("emission.color", rgb(s.emission));
+  add("ambient", rgb(s.ambient) + " (uniform radiance in-scattered, unshadowed; HG models)");
   add("emission.color_field",
       s.emission_field == EmissionField::kRadial ? "radial to " + rgb(s.emission_rim) : "constant");
   const auto lights = effective_lights(volume, s);

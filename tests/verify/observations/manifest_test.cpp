@@ -284,6 +284,30 @@ TEST_F(Manifest, EveryMistakeNamesFileLineAndKey) {
   }
 }
 
+TEST_F(Manifest, AMassSeriesAloneIsAWeighingExperiment) {
+  test::write_file(obs_ / "w.yaml", "meltlab_observations: 1\nobject: cube\nmass_series: mass.csv\n");
+  const ObservationSequence w = load_observations(obs_ / "w.yaml");
+  EXPECT_FALSE(w.has_photos());
+  EXPECT_TRUE(w.frames.empty());
+  ASSERT_TRUE(w.mass_series.has_value());
+  EXPECT_EQ(w.mass_series->filename(), "mass.csv");
+  EXPECT_EQ(w.object, "cube");
+  // volume_series is the same key, for a file of volumes.
+  test::write_file(obs_ / "v.yaml", "meltlab_observations: 1\nvolume_series: mass.csv\n");
+  EXPECT_EQ(load_observations(obs_ / "v.yaml").mass_series->filename(), "mass.csv");
+  // A photo manifest keeps its photos.
+  test::write_file(obs_ / "m.yaml", kYaml);
+  EXPECT_TRUE(load_observations(obs_ / "m.yaml").has_photos());
+
+  // Neither frames nor a series; keys only photos need; both series keys.
+  expect_error("meltlab_observations: 1\nobject: cube\n", 1, "frames");
+  expect_error("meltlab_observations: 1\nmass_series: mass.csv\ncamera: {type: orthographic}\n", 3, "camera");
+  expect_error("meltlab_observations: 1\nmass_series: mass.csv\nroi: [0, 0, 4, 4]\n", 3, "roi");
+  expect_error("meltlab_observations: 1\nmass_series: mass.csv\nsegmentation: {channel: gray}\n", 3, "segmentation");
+  expect_error("meltlab_observations: 1\nmass_series: mass.csv\nvolume_series: mass.csv\n", 3, "volume_series");
+  expect_error("meltlab_observations: 1\nmass_series: nope.csv\n", 2, "nope.csv");
+}
+
 TEST_F(Manifest, BrokenFiles) {
   EXPECT_THAT(error_of("meltlab_observations: 1\nframes: [a.png\n"), HasSubstr("m.yaml:"));
   EXPECT_THAT(error_of(""), HasSubstr("empty"));

@@ -33,6 +33,20 @@ class ContentHash {
   std::uint64_t h_ = kOffset;
 };
 
+/// SplitMix64's mixing step: a counter-based pseudo-random 64-bit value of x (no shared state), for
+/// jitter, noise and seeds that must come out the same serial and parallel.
+constexpr std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ULL;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+  return x ^ (x >> 31);
+}
+
+/// A uniform number in (0, 1) from 64 random bits (the top 53, centred in their interval).
+constexpr double unit_from_bits(std::uint64_t bits) {
+  return (static_cast<double>(bits >> 11) + 0.5) * (1.0 / 9007199254740992.0);
+}
+
 /// FNV-1a 64 of a file's bytes as 16 hex digits.
 std::string file_hash(const std::filesystem::path& file);
 /// FNV-1a 64 of a string as 16 hex digits.

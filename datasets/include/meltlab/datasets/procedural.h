@@ -74,6 +74,12 @@ IndexedMesh geodesic_sphere(int frequency, double radius = 1.0);
 /// triangle mesh) and >= 6.
 IndexedMesh sphere_with_triangles(int triangles, double radius = 1.0);
 
+/// Closed cylinder around the z axis, centred on the origin (z from -height/2 to height/2):
+/// two rings of `segments` vertices on the circle of `radius`, a centre vertex on each cap,
+/// 2 segments + 2 vertices, 4 segments triangles. Its volume is exactly that of the inscribed
+/// prism, segments/2 · radius² · sin(2π/segments) · height. Requires segments >= 3.
+IndexedMesh cylinder(double radius, double height, int segments);
+
 /// Ring torus around the z axis, centred on the origin: tube centre-line radius
 /// `major_radius`, tube radius `minor_radius` (0 < minor < major), `major_segments`
 /// vertices around the axis and `minor_segments` around the tube (each >= 3).

@@ -16,7 +16,7 @@ namespace meltlab::verify {
 enum class FitParameterRole {
   kMeltSettings,  ///< a sim::MeltParams coefficient (kg, kn): passed to FitModel::start
   kKlField,       ///< a number in the kl field's YAML ("kl.<path>"): passed to FitModel::start
-  kTimeScale,     ///< cycles_per_photo: maps photos to simulation cycles
+  kTimeScale,     ///< cycles_per_photo (photos) or seconds_per_cycle (a mass series): time -> cycles
   kRegistration,  ///< reg.*: the render -> photo similarity about the pivot
 };
 
@@ -26,6 +26,10 @@ struct FitParameterContext {
   double kE = 1.0;                                   ///< the run's edge coefficient (bounds kn)
   double kn_initial = 0.01;                          ///< the run's kN (default kE / 100)
   double cycles_per_photo = kDefaultCyclesPerPhoto;  ///< the run's starting K
+  /// A weighing experiment (a mass series, no photos): the time scale is seconds_per_cycle
+  /// and there is no registration (fit_parameter_table then lists kg, kn, seconds_per_cycle).
+  bool series_only = false;
+  double seconds_per_cycle = 1.0;  ///< the run's starting S (series only)
 };
 
 /// One registered parameter with its default (starting value), bounds and scale: the size of
@@ -49,16 +53,16 @@ FitParameterRole fit_parameter_role(std::string_view name);
 /// True for the names FitModel::start receives (melt settings and kl field numbers).
 bool is_model_parameter(std::string_view name);
 
-/// Every fixed-name parameter (kg, kn, cycles_per_photo, reg.*), in name order, with the
-/// values of `context`.
+/// Every fixed-name parameter (kg, kn, cycles_per_photo, reg.*; for a series alone kg, kn,
+/// seconds_per_cycle), in name order, with the values of `context`.
 std::vector<FitParameterSpec> fit_parameter_table(const FitParameterContext& context);
 /// A kl field number as a parameter: non-negative if it starts so, scale 5 % of its value.
 FitParameterSpec kl_fit_parameter(const std::string& name, double value);
 /// The registration parameters "reg" expands to.
 std::vector<std::string> registration_parameter_names();
 /// "kg, kn, cycles_per_photo, reg, reg.tx_px, …, kl.<path in the --kl file>": the names an
-/// unknown-name error lists.
-std::string fit_parameter_names();
+/// unknown-name error lists (with `series_only`: "kg, kn, seconds_per_cycle, kl.<…>").
+std::string fit_parameter_names(bool series_only = false);
 /// The same with a phrase each, for --fit's help text.
 std::string fit_parameter_names_help();
 

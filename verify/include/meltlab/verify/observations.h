@@ -1,6 +1,6 @@
 #pragma once
 // Observations of a real (or manufactured) melt: a photo sequence described by a manifest,
-// or a mass/volume time series from a CSV file.
+// or a mass/volume time series from a CSV file (a kitchen scale), or both.
 //
 // Manifest (YAML, or JSON with the same keys; paths relative to the manifest's folder;
 // unknown keys are errors naming file and line):
@@ -17,6 +17,12 @@
 //   segmentation: {...}                   # see SegmentationSettings
 //   ground_truth: ../truth/giraffe.json   # optional, kept apart from the images
 //   mass_series: mass.csv                 # optional time series (see read_time_series)
+//   volume_series: volume.csv             # the same key for a volume column (one of the two)
+//
+// A weighing experiment without photos: a manifest with a mass_series (or volume_series) and
+// no frames; camera, roi and segmentation are then not needed (and refused, as typos would
+// be). Such a manifest is what `meltlab fit` fits kg (or the time scale) to and what
+// `meltlab predict` compares the physics with.
 
 #include <meltlab/core/image.h>
 #include <meltlab/render/camera.h>
@@ -73,12 +79,16 @@ struct ObservationSequence {
   std::optional<cv::Rect> roi;
   SegmentationSettings segmentation;
   std::optional<std::filesystem::path> ground_truth;
-  std::optional<std::filesystem::path> mass_series;
+  std::optional<std::filesystem::path> mass_series;  ///< from `mass_series` or `volume_series`
+
+  /// False for a weighing experiment (a series and no frames).
+  bool has_photos() const { return !frames.empty(); }
 };
 
 /// Reads and validates a manifest (.yaml/.yml/.json). Missing image files are NOT errors
 /// here (a frame can be missing; compare reports and skips it) but a frame list that names
-/// no existing file at all is. Throws InputError "<manifest>:<line>: <problem>".
+/// no existing file at all is. Without `frames` the manifest must name a series (then
+/// `frames` is empty and `camera` default). Throws InputError "<manifest>:<line>: <problem>".
 ObservationSequence load_observations(const std::filesystem::path& manifest);
 
 /// The edge between meltlab::ImageF (RGB) and OpenCV (BGR): the first 3 channels as BGR (1 or 2
@@ -114,14 +124,27 @@ struct Segmentation {
 Segmentation segment_image(const cv::Mat& image, const SegmentationSettings& settings,
                            const std::optional<cv::Rect>& roi = std::nullopt);
 
+/// The threshold half-way between the object and the ground next to a segmentation's
+/// boundary: the mean of the medians of the segmented channel (after the pre-blur) over the
+/// pixels 2-6 px inside and 2-6 px outside `mask` (within the ROI). A blurred step edge
+/// crosses that level at the edge itself, whatever the blur, so the contour at this level
+/// estimates the segmentation's sub-pixel bias (verify/fit.h). On the scale of
+/// SegmentationSettings::threshold. Nullopt for the adaptive and background methods (no one
+/// global level) and when either band is empty.
+std::optional<double> mid_level_threshold(const cv::Mat& image, const SegmentationSettings& settings,
+                                          const cv::Mat& mask, const std::optional<cv::Rect>& roi = std::nullopt);
+
 /// A time series from CSV: a header line naming the columns, then one row per sample. The
 /// columns are `time_s` and one of `mass_kg`, `mass_g`, `volume_m3`, `volume_cm3` (the
 /// quantity is taken from the header). Rows must have increasing time; NaN/inf, missing
-/// cells and non-numbers are errors naming file and line.
+/// cells and non-numbers are errors naming file and line. Whether the values make a melt
+/// (positive, falling) is checked by verify/mass_series.h.
 struct TimeSeries {
   std::string quantity;  ///< "mass_kg", "mass_g", "volume_m3" or "volume_cm3"
   std::vector<double> time_s;
   std::vector<double> value;
+  std::vector<int> line;  ///< 1-based line of each row in the file (for messages)
+  std::filesystem::path file;
 };
 TimeSeries read_time_series(const std::filesystem::path& csv);
 

@@ -40,6 +40,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -133,6 +134,9 @@ struct VolumeRenderSettings {
   double albedo = 0.9;                    ///< a
   double hg_c = 0.5;                      ///< HG asymmetry c ∈ (-1, 1); c > 0 forward
   std::vector<VolumeLight> lights;        ///< empty: one point light at the spec's default
+  /// HG models: a uniform ambient radiance (sky, room) in-scattered with ∫ p dω = 1, unshadowed:
+  /// S += a e [κ] ambient — a stand-in for multiple scattering (the photo renderer's sky). 0: none.
+  Rgb ambient = Rgb::Zero();
   // --- shadows (HGAttenuated) ---
   ShadowMethod shadow = ShadowMethod::kMarch;
   double shadow_step = 0;            ///< vlr.shadow.step (scene units); 0 = Δs (the primary step)
@@ -200,6 +204,41 @@ struct VolumeFrame {
 /// A shadow cache of one light: T to the light at the volume's samples (or a finer/coarser grid).
 struct ShadowCache {
   Volume transmittance;  ///< float32, cell-centred or nodes as the volume, same domain
+};
+
+/// The integrator for callers that cast their own rays (the photo renderer of voxel ice, which
+/// adds a ground behind the ice): the per-render state — empty-space macrocells, lights, shadow
+/// caches — is built once, then rays are traced from any thread.
+class VolumeTracer {
+ public:
+  /// Throws InputError for bad settings. Builds the shadow caches unless given (one per light).
+  VolumeTracer(const Volume& volume, const VolumeRenderSettings& settings, const std::vector<ShadowCache>& caches = {});
+  ~VolumeTracer();
+  VolumeTracer(const VolumeTracer&) = delete;
+  VolumeTracer& operator=(const VolumeTracer&) = delete;
+
+  struct Result {
+    Rgb radiance = Rgb::Zero();  ///< I: what the volume adds along the ray
+    double transmittance = 1.0;  ///< T: what it lets through from behind
+    bool met = false;            ///< the ray met the volume's box before t_max
+  };
+  /// The ray o + t d (d unit) through the volume, on [max(entry, 0), min(exit, t_max)].
+  /// `pixel_id` seeds the jittered first offset; counters go to `stats` if given (one per thread).
+  Result trace(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_max = 1e300, std::uint64_t pixel_id = 0,
+               VolumeRenderStats* stats = nullptr) const;
+  /// Transmittance from x along unit direction d to the box exit (or max_distance if nearer): the
+  /// exact shadow march of the settings (shadow step, start offset, empty-space skipping).
+  double transmittance(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double max_distance = 1e300,
+                       VolumeRenderStats* stats = nullptr) const;
+  const Box3& box() const;
+  double cache_build_ms() const;
+  std::int64_t cache_shadow_samples() const;
+
+ private:
+  friend VolumeFrame render_volume(const Volume&, const Camera&, const VolumeRenderSettings&,
+                                   const std::vector<ShadowCache>&);
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 /// Throws the InputError render_volume would throw for these settings (checked before any work).

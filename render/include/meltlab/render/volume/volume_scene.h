@@ -15,7 +15,7 @@
 //   inclusive         # vlr.quad: inclusive (extinction_inclusive) | exclusive | exponential optics: {kappa: 0.01,
 //   gamma: 1, albedo: 0.9, hg_c: 0.5, emission: [1, 0.6, 0.2],
 //            emission_field: constant, emission_rim: [0.8, 0.1, 0], emission_scale_by_ds: true,
-//            kappa_in_source: false, kappa_in_brdf: false}
+//            kappa_in_source: false, kappa_in_brdf: false, ambient: 0}
 //   lights:                       # default: one point light at the box centre + 2 x its sides, L = 1
 //     - {type: point, position: [600, 600, 600], intensity: 1, falloff: none}
 //     - {type: directional, to_light: [0, 0, 1], intensity: [1, 0.9, 0.8]}
