@@ -112,10 +112,6 @@ class EmpiricalModel final : public verify::FitModel {
   YAML::Node kl_doc_;
 };
 
-void require(bool ok, const std::string& message) {
-  if (!ok) throw InputError(message);
-}
-
 }  // namespace
 
 std::vector<verify::FitParameter> fit_parameters(const FitRunOptions& o, double kg_initial,

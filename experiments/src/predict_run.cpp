@@ -28,10 +28,6 @@ using nlohmann::json;
 
 namespace {
 
-void require(bool ok, const std::string& message) {
-  if (!ok) throw InputError(message);
-}
-
 /// The solver stepped forward through a list of times ("checkpoints"), the mass recorded at
 /// each. As a mesh sequence, "cycle" k is photo k: the ice surface (marching tetrahedra) at
 /// the photo's time; the photos' times are among the checkpoints.

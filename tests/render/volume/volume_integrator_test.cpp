@@ -548,6 +548,40 @@ TEST(VolumeIntegrator, EmptySpaceSkippingChangesNoPixel) {
   }
 }
 
+// A sparse volume — a few small blobs far apart in 96³ — where rays cross long runs of dead
+// macrocells, several at a time by the chessboard distance: the jumps must not cross a live one
+// (every pixel and the sample count equal to marching without skipping), for each model and the
+// shadow march (which skips on the same macrocells).
+TEST(VolumeIntegrator, EmptySpaceJumpsAcrossSparseVolumesChangeNoPixel) {
+  Volume v = Volume::allocate(96, 96, 96, SampleType::kFloat32);
+  const int blobs[][3] = {{5, 7, 9}, {48, 50, 47}, {90, 12, 80}, {20, 88, 60}, {70, 70, 3}, {94, 94, 94}};
+  for (const auto& b : blobs)
+    for (int k = -2; k <= 2; ++k)
+      for (int j = -1; j <= 1; ++j)
+        for (int i = -1; i <= 1; ++i) {
+          const int x = b[0] + i, y = b[1] + j, z = b[2] + k;
+          if (x >= 0 && y >= 0 && z >= 0 && x < 96 && y < 96 && z < 96) v.set_value(x, y, z, 1.0 + 0.1 * (i + j + k));
+        }
+  v.fit_to_box(box300());
+  const Camera cam = Pinhole::look_at(80, 64, 70.0, Vec3(420, -520, 300), Vec3(0, 0, 0), Vec3::UnitZ());
+  for (auto model : {OpticalModel::kEmission, OpticalModel::kEmissionAbsorption, OpticalModel::kHGAttenuated}) {
+    VolumeRenderSettings s = cloud(model);
+    s.samples = 300;  // a step of ~1.7 voxels: samples land in the blobs
+    s.kappa = 0.05;
+    s.skip_empty = true;
+    const VolumeFrame a = render_volume(v, cam, s);
+    s.skip_empty = false;
+    const VolumeFrame b = render_volume(v, cam, s);
+    EXPECT_TRUE(same(a.radiance, b.radiance)) << optical_model_name(model);
+    EXPECT_TRUE(same(a.transmittance, b.transmittance)) << optical_model_name(model);
+    EXPECT_EQ(a.stats.samples + a.stats.skipped, b.stats.samples);
+    EXPECT_GT(a.stats.skipped, 20 * a.stats.samples);  // nearly everything is empty
+    double lit = 0;
+    for (float x : b.radiance.values()) lit += double(x);
+    EXPECT_GT(lit, 0.0) << "the blobs must be seen, or the comparison says nothing";
+  }
+}
+
 TEST(VolumeIntegrator, EarlyRayTerminationStaysWithinItsBound) {
   const Volume v = turbulence(VolumeKind::kTurbulenceBox, 24, box300());
   VolumeRenderSettings s = cloud(OpticalModel::kEmissionAbsorption);
