@@ -55,7 +55,7 @@ class Vec3Columns {
     using difference_type = std::ptrdiff_t;
     const_iterator() = default;
     const_iterator(const Vec3Columns* c, std::size_t i) : c_(c), i_(i) {}
-    Vec3<Real> operator*() const { return (*c_)[i_]; }
+    const Vec3<Real> operator*() const { return (*c_)[i_]; }
     const_iterator& operator++() {
       ++i_;
       return *this;
@@ -78,8 +78,9 @@ class Vec3Columns {
 
   std::size_t size() const { return x_.size(); }
   bool empty() const { return x_.empty(); }
-  /// Element i as a vector (a copy).
-  Vec3<Real> operator[](std::size_t i) const { return Vec3<Real>(x_[i], y_[i], z_[i]); }
+  /// Element i as a vector (a copy; const, so that `position[i].x() = 1` does not compile
+  /// and silently change nothing: write with set(i, v) or through the columns).
+  const Vec3<Real> operator[](std::size_t i) const { return Vec3<Real>(x_[i], y_[i], z_[i]); }
   void set(std::size_t i, const Vec3<Real>& v) {
     x_[i] = v.x();
     y_[i] = v.y();
