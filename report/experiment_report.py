@@ -8,7 +8,8 @@ usage: experiment_report.py KIND EXP_DIR [ARGS...]
 KIND: tab_2_3 | cycle_time CYCLES | deform_variants | split | kl_field | chapter8 MOLD | fit | fit_coverage |
       physics_fit MOLD |
       melt_away | liquid_figure | melt_scene | texture_filter FACTOR | stress_summary |
-      module_studies | runs (generic: every simulate run folder in EXP_DIR) | vlr_seed000 | sweep (meltlab sweep)
+      module_studies | runs (generic: every simulate run folder in EXP_DIR) | vlr_seed000 | clv_seed001 | fog_seed002 | slicing_seed003 |
+      sweep (meltlab sweep)
 
 report.json: {"tables": [{"caption", "csv"}], "figures": [{"caption", "png", "data"}],
 "verdict": str, "matches": bool|null, "notes": [str], "source_hardware": str, "extra": {...}}
@@ -21,7 +22,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-KINDS = ("tab_2_3", "cycle_time", "deform_variants", "split", "kl_field", "chapter8", "fit", "fit_coverage", "physics_fit", "melt_away", "liquid_figure", "melt_scene", "texture_filter", "stress_summary", "module_studies", "runs", "vlr_seed000", "sweep")
+KINDS = ("tab_2_3", "cycle_time", "deform_variants", "split", "kl_field", "chapter8", "fit", "fit_coverage", "physics_fit", "melt_away", "liquid_figure", "melt_scene", "texture_filter", "stress_summary", "module_studies", "runs", "vlr_seed000", "clv_seed001", "fog_seed002", "slicing_seed003", "sweep")
 
 
 def main(argv):

@@ -1,5 +1,6 @@
 #include <meltlab/core/time.h>
 
+#include <cstdlib>
 #include <ctime>
 
 namespace meltlab {
@@ -16,5 +17,17 @@ std::string utc_timestamp_iso8601(std::chrono::system_clock::time_point t) {
 }
 
 std::string utc_timestamp_iso8601_now() { return utc_timestamp_iso8601(std::chrono::system_clock::now()); }
+
+double process_cpu_ms() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+}
+
+std::array<double, 3> load_averages() {
+  double l[3] = {-1, -1, -1};
+  if (::getloadavg(l, 3) != 3) return {-1, -1, -1};
+  return {l[0], l[1], l[2]};
+}
 
 }  // namespace meltlab

@@ -19,6 +19,7 @@
 //     slots costs the other passes nothing measurable. Dead slots are compacted once they
 //     are half of the vertex slots, which bounds the sweep overhead at 2x over a long melt.
 
+#include <meltlab/core/time.h>
 #include "openmesh_peer.h"
 
 #include <meltlab/core/error.h>
@@ -44,10 +45,6 @@ struct PeerTraits : public OpenMesh::DefaultTraits {
   EdgeAttributes(OpenMesh::Attributes::Status);
   FaceAttributes(OpenMesh::Attributes::Status | OpenMesh::Attributes::Normal);
 };
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // Dead vertex slots are compacted once they reach this share of all vertex slots.
 constexpr std::int64_t kGarbagePercent = 50;

@@ -5,6 +5,18 @@
 
 namespace meltlab::cli {
 
+namespace {
+std::atomic<bool> g_interrupted{false};
+extern "C" void on_interrupt(int) { g_interrupted.store(true); }
+}  // namespace
+
+InterruptScope::InterruptScope() {
+  g_interrupted.store(false);
+  previous_ = std::signal(SIGINT, on_interrupt);
+}
+InterruptScope::~InterruptScope() { std::signal(SIGINT, previous_); }
+std::atomic<bool>* InterruptScope::flag() { return &g_interrupted; }
+
 ProgressLine::ProgressLine() : tty_(::isatty(STDERR_FILENO) != 0) {}
 ProgressLine::~ProgressLine() { finish(); }
 

@@ -6,7 +6,6 @@
 
 #include <fmt/format.h>
 
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <unistd.h>
@@ -19,11 +18,6 @@
 #endif
 
 namespace meltlab::cli {
-namespace {
-std::atomic<bool> g_stop{false};
-extern "C" void on_reproduce_interrupt(int) { g_stop.store(true); }
-}  // namespace
-
 void add_executor_options(CLI::App& sub, experiments::ReproduceOptions& o) {
   auto& s = o.slurm;
   sub.add_option("--executor", o.executor,
@@ -124,19 +118,21 @@ Run add_reproduce(CLI::App& app) {
     else
       std::fprintf(stderr, "meltlab reproduce: %zu experiment(s), %s mode, %d job(s), output %s\n", experiments.size(),
                    o->quick ? "quick" : "full", o->jobs, o->out_dir.string().c_str());
-    g_stop.store(false);
-    auto previous = std::signal(SIGINT, on_reproduce_interrupt);
-    const auto result = experiments::run_reproduce(
-        *o, experiments,
-        [](const std::string& line) {
-          std::fprintf(stderr, "%s\n", line.c_str());
-          std::fflush(stderr);
-        },
-        &g_stop);
-    std::signal(SIGINT, previous);
-
-    return print_outcome(result, o->out_dir);
+    return run_and_print_outcome(*o, experiments);
   };
+}
+
+int run_and_print_outcome(const experiments::ReproduceOptions& o,
+                          const std::vector<experiments::ReproduceExperiment>& experiments) {
+  InterruptScope interrupt;
+  const auto result = experiments::run_reproduce(
+      o, experiments,
+      [](const std::string& line) {
+        std::fprintf(stderr, "%s\n", line.c_str());
+        std::fflush(stderr);
+      },
+      interrupt.flag());
+  return print_outcome(result, o.out_dir);
 }
 
 int print_outcome(const experiments::ReproduceResult& result, const std::filesystem::path& out_dir) {

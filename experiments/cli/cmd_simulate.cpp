@@ -4,7 +4,6 @@
 
 #include <fmt/format.h>
 
-#include <csignal>
 #include <cstdio>
 #include <map>
 
@@ -13,11 +12,6 @@
 #include "melt_options.h"
 
 namespace meltlab::cli {
-
-namespace {
-std::atomic<bool> g_stop{false};
-extern "C" void on_interrupt(int) { g_stop.store(true); }
-}  // namespace
 
 Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
   auto* sub =
@@ -96,8 +90,7 @@ Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
                  "meltlab: %s: %zu vertices, %zu triangles, L0 = %.4g; kE = %.4g, kN = %.4g, kr = %.4g (mesh units)\n",
                  prepared->mesh_path.string().c_str(), prepared->mesh.V.size(), prepared->mesh.F.size(),
                  prepared->mean_edge_length, prepared->params.kE, prepared->params.kN, prepared->params.kr);
-    g_stop.store(false);
-    auto previous = std::signal(SIGINT, on_interrupt);
+    InterruptScope interrupt;
     ProgressLine line;
     const auto result = experiments::run_simulation(
         *prepared,
@@ -105,9 +98,8 @@ Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
           line.update(p.cycle, p.cycles,
                       fmt::format("cycles  {} triangles  {:.3f} ms/cycle", p.triangles, p.ms_per_cycle));
         },
-        &g_stop);
+        interrupt.flag());
     line.finish();
-    std::signal(SIGINT, previous);
     const auto& t = result.run_json["timing"];
     std::fprintf(stderr, "meltlab: %s after %lld cycles (%lld triangles left); median %.3f ms/cycle; wrote %s\n",
                  result.status.c_str(), static_cast<long long>(result.cycles_run),

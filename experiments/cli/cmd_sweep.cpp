@@ -8,7 +8,6 @@
 
 #include <fmt/format.h>
 
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 
@@ -19,11 +18,6 @@
 #endif
 
 namespace meltlab::cli {
-namespace {
-std::atomic<bool> g_stop{false};
-extern "C" void on_sweep_interrupt(int) { g_stop.store(true); }
-}  // namespace
-
 Run add_sweep(CLI::App& app, const std::vector<std::string>&) {
   namespace fs = std::filesystem;
   auto* sub = app.add_subcommand(
@@ -84,17 +78,7 @@ Run add_sweep(CLI::App& app, const std::vector<std::string>&) {
                  o->executor == "slurm" ? (o->slurm.detach ? "on Slurm (detached)" : "on Slurm")
                                         : fmt::format("{} job(s)", o->jobs).c_str(),
                  o->out_dir.string().c_str());
-    g_stop.store(false);
-    auto previous = std::signal(SIGINT, on_sweep_interrupt);
-    const auto result = experiments::run_reproduce(
-        *o, experiments,
-        [](const std::string& line) {
-          std::fprintf(stderr, "%s\n", line.c_str());
-          std::fflush(stderr);
-        },
-        &g_stop);
-    std::signal(SIGINT, previous);
-    return print_outcome(result, o->out_dir);
+    return run_and_print_outcome(*o, experiments);
   };
 }
 

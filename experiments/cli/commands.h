@@ -26,6 +26,7 @@ Run add_predict(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_render(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_reproduce(CLI::App& app);
 Run add_volume(CLI::App& app, const std::vector<std::string>& command_line);
+Run add_fog(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_sweep(CLI::App& app, const std::vector<std::string>& command_line);
 Run add_run_job(CLI::App& app, const std::vector<std::string>& command_line);
 
@@ -35,5 +36,9 @@ void add_executor_options(CLI::App& sub, experiments::ReproduceOptions& options)
 void print_waves(const experiments::ReproduceExperiment& experiment, const experiments::SlurmOptions& slurm);
 /// The outcome table and summary lines of a reproduce run; returns the exit code.
 int print_outcome(const experiments::ReproduceResult& result, const std::filesystem::path& out_dir);
+/// Runs the experiments (Ctrl-C stops after the running steps) with one stderr line per event,
+/// then print_outcome: reproduce's and sweep's common end.
+int run_and_print_outcome(const experiments::ReproduceOptions& options,
+                          const std::vector<experiments::ReproduceExperiment>& experiments);
 
 }  // namespace meltlab::cli

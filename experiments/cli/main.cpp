@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
   add(cli::add_render(app, command_line));
   add(cli::add_reproduce(app));
   add(cli::add_volume(app, command_line));
+  add(cli::add_fog(app, command_line));
   add(cli::add_sweep(app, command_line));
   add(cli::add_run_job(app, command_line));
 

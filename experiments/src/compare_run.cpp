@@ -202,9 +202,7 @@ CompareRunResult run_compare(const CompareRunOptions& o,
   j["timing"] = {{"total_s", total_s},
                  {"frame_ms_median", sorted.empty() ? 0.0 : sorted[sorted.size() / 2]},
                  {"frame_ms_max", sorted.empty() ? 0.0 : sorted.back()}};
-  j["provenance"] = finish_provenance(provenance);
-  write_text_atomically(folder.path() / "compare.json", j.dump(2) + "\n");
-  folder.commit();
+  commit_run(folder, std::move(j), provenance);
   return out;
 }
 

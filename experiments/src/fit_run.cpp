@@ -513,10 +513,7 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
   const std::map<std::string, double> kl_values = kl_parameter_values(o, *prepared, kl_doc);
   if (!obs.has_photos()) {
     json j = run_series_fit(o, obs, prepared, kl_doc, kl_values, folder.path(), log);
-    j["provenance"] = finish_provenance(provenance);
-    write_text_atomically(folder.path() / "fit.json", j.dump(2) + "\n");
-    folder.commit();
-    return j;
+    return commit_run(folder, std::move(j), provenance);
   }
   require(!o.mass_g, "--mass-g: the initial mass is for a mass series without photos");
   require(!o.seconds_per_cycle, "--seconds-per-cycle: photos map to cycles by --cycles-per-photo");
@@ -542,10 +539,7 @@ json run_fit(const FitRunOptions& o, const std::function<void(const std::string&
 
   json j = fit_json(obs, o, fit, cmp, n_fit);
   provenance.timings_s.emplace_back("fit", fit.time_s);
-  j["provenance"] = finish_provenance(provenance);
-  write_text_atomically(folder.path() / "fit.json", j.dump(2) + "\n");
-  folder.commit();
-  return j;
+  return commit_run(folder, std::move(j), provenance);
 }
 
 }  // namespace meltlab::experiments

@@ -267,10 +267,7 @@ json run_predict(const PredictOptions& o, const std::function<void(const Predict
   j["timing"] = {
       {"solver_s", run.solver_s}, {"surfaces_s", run.surfaces_s}, {"photos_s", photos_s}, {"total_s", total_s}};
   provenance.timings_s.emplace_back("solver", run.solver_s);
-  j["provenance"] = finish_provenance(provenance);
-  write_text_atomically(folder.path() / "predict.json", j.dump(2) + "\n");
-  folder.commit();
-  return j;
+  return commit_run(folder, std::move(j), provenance);
 }
 
 }  // namespace meltlab::experiments

@@ -1,6 +1,8 @@
 #include <meltlab/experiments/provenance.h>
 #include <meltlab/version.h>
 
+#include <meltlab/core/atomic_file.h>
+
 #include <tbb/info.h>
 
 #include <fstream>
@@ -36,6 +38,13 @@ Provenance start_provenance(const std::string& subcommand, const std::vector<std
 nlohmann::json finish_provenance(Provenance& provenance) {
   provenance.finish();
   return provenance.to_json();
+}
+
+nlohmann::json commit_run(RunFolder& folder, nlohmann::json record, Provenance& provenance) {
+  record["provenance"] = finish_provenance(provenance);
+  write_text_atomically(folder.path() / folder.marker(), record.dump(2) + "\n");
+  folder.commit();
+  return record;
 }
 
 }  // namespace meltlab::experiments

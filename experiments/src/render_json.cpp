@@ -83,6 +83,29 @@ json camera_json(const render::Camera& camera) {
           {"camera_from_world", rows}};
 }
 
+// Seed 002's fog (render/fog/scene_fog.h): every fsa.* choice and the spotlights; null without fog.
+json fog_json(const render::RenderScene& s) {
+  if (!s.fog) return nullptr;
+  json j;
+  for (const auto& [k, v] : render::fog::describe_scene_fog(*s.fog)) j[k] = v;
+  json lights = json::array();
+  for (const auto& l : s.fog->spotlights) {
+    json rings = json::array();
+    const bool point = l.kind == render::fog::LightKind::kPoint;
+    if (!point)
+      for (const auto& r : l.profile)
+        rings.push_back({{"half_angle_rad", r.half_angle_rad}, {"intensity", r.intensity}});
+    lights.push_back({{"kind", point ? "point" : "spot"},
+                      {"position", xyz(l.position)},
+                      {"axis", xyz(l.axis)},
+                      {"colour", xyz(l.colour)},
+                      {"intensity", l.intensity},
+                      {"profile", rings}});
+  }
+  j["spotlights"] = lights;
+  return j;
+}
+
 json render_scene_json(const render::RenderScene& s) {
   json lights = json::array();
   for (const auto& l : s.lights) lights.push_back({{"to_light", xyz(l.to_light)}, {"colour", xyz(l.colour)}});
@@ -103,7 +126,8 @@ json render_scene_json(const render::RenderScene& s) {
         {"to_sun", xyz(s.environment.to_sun)},
         {"sun_radiance", s.environment.sun_radiance}}},
       {"outputs",
-       {{"exr", s.outputs.exr}, {"png", s.outputs.png}, {"exposure", s.outputs.exposure}, {"gamma", s.outputs.gamma}}}};
+       {{"exr", s.outputs.exr}, {"png", s.outputs.png}, {"exposure", s.outputs.exposure}, {"gamma", s.outputs.gamma}}},
+      {"fog", fog_json(s)}};
 }
 
 }  // namespace meltlab::experiments

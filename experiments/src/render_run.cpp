@@ -1,5 +1,6 @@
 // `meltlab render` (render_run.h).
 
+#include <meltlab/core/statistics.h>
 #include <meltlab/core/run_folder.h>
 #include <meltlab/experiments/render_run.h>
 #include <meltlab/experiments/render_json.h>
@@ -25,12 +26,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 // A relief texture for the threshold (Fig. 7.7a): smooth value noise mapped to [p/2, 3p/2].
 std::vector<float> relief_threshold(int w, int h, float p) {
@@ -247,10 +242,7 @@ RenderRunResult run_render(const RenderRunOptions& o) {
   }
   result.median_trace_ms = median(trace_ms);
   json j = run_record(o, *prepared, lift, last, result, mask.get(), renderer.get(), threads);
-  j["provenance"] = finish_provenance(provenance);
-  result.run_json = j;
-  write_text_atomically(dir / "render.json", j.dump(2) + "\n");
-  folder.commit();
+  result.run_json = commit_run(folder, std::move(j), provenance);
   return result;
 }
 

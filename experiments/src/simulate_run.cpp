@@ -452,10 +452,7 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
   json run =
       run_record(p, result, simulator.mesh(), threads, exec, inverted_removed, times, total_s, checks, snapshots);
   if (!result.error.empty()) run["error"] = result.error;
-  run["provenance"] = finish_provenance(provenance);
-  write_text_atomically(dir / "run.json", run.dump(2) + "\n");
-  p.output->commit();
-  result.run_json = std::move(run);
+  result.run_json = commit_run(*p.output, std::move(run), provenance);
   return result;
 }
 

@@ -1,6 +1,13 @@
 // `meltlab volume bench` (see volume_bench.h).
 
+#include <meltlab/experiments/csv_table.h>
+#include <meltlab/core/time.h>
+#include <meltlab/core/statistics.h>
 #include <meltlab/experiments/volume_bench.h>
+#include <meltlab/experiments/bench_studies.h>
+
+#include "volume_bench_clv.h"
+#include "volume_bench_slicing.h"
 
 #include <meltlab/core/atomic_file.h>
 #include <meltlab/core/error.h>
@@ -18,6 +25,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <map>
 #include <numbers>
@@ -64,16 +72,6 @@ render::VolumeRenderSettings seed_settings(OpticalModel model, int n) {
   return s;
 }
 
-double ms_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 struct Timed {
   double median_ms = 0, min_ms = 0, max_ms = 0;
   render::VolumeFrame frame;
@@ -114,19 +112,6 @@ double rel_rmse(const ImageF& a, const ImageF& b) {
   return r2 > 0 ? std::sqrt(d2 / r2) : std::sqrt(d2);
 }
 
-class Csv {
- public:
-  explicit Csv(std::string header) : text_(std::move(header) + "\n") {}
-  template <class... A>
-  void row(const std::string& fmt_text, A&&... a) {
-    text_ += fmt::format(fmt::runtime(fmt_text), std::forward<A>(a)...) + "\n";
-  }
-  void write(const fs::path& f) const { write_text_atomically(f, text_); }
-
- private:
-  std::string text_;
-};
-
 void progress(const std::string& what) { std::fprintf(stderr, "meltlab: volume bench: %s\n", what.c_str()); }
 
 const char* model_key(OpticalModel m, render::ShadowMethod sh) {
@@ -152,7 +137,7 @@ void study_tables(const VolumeBenchOptions& o, const fs::path& dir, json& record
   };
   const std::vector<Config> configs = {
       {"5.1", 64, 512, {100, 64, 50}}, {"5.2", 64, 256, {100, 64}}, {"5.3", 128, 512, {50}}};
-  Csv csv(
+  CsvTable csv(
       "table,volume,pixels,samples,model,median_ms,min_ms,max_ms,fps,primary_samples,shadow_samples,cache_build_ms");
   std::map<int, render::Volume> volumes;
   for (const auto& c : configs) {
@@ -187,7 +172,7 @@ void study_tables(const VolumeBenchOptions& o, const fs::path& dir, json& record
 // ---- scaling (targets 9, 10, 12) -----------------------------------------------------------------
 
 void study_scaling(const VolumeBenchOptions& o, const fs::path& dir, json&) {
-  Csv csv("kind,model,x,median_ms,primary_samples,shadow_samples");
+  CsvTable csv("kind,model,x,median_ms,primary_samples,shadow_samples");
   const auto v = turbulence(render::VolumeKind::kTurbulenceBox, 64);
   const int side = o.quick ? 128 : 256;
   for (auto [model, sh] : {std::pair{OpticalModel::kEmission, render::ShadowMethod::kMarch},
@@ -251,7 +236,7 @@ void study_pareto(const VolumeBenchOptions& o, const fs::path& dir, json& record
   const double ref_ms = ms_since(t_ref);
   const ImageF ref_img = render::composite_over(ref, render::Rgb::Zero());
   write_image(dir / "pareto_reference.png", ref_img);
-  Csv csv("knob,value,median_ms,rel_rmse,primary_samples,shadow_samples,cache_build_ms,terminated");
+  CsvTable csv("knob,value,median_ms,rel_rmse,primary_samples,shadow_samples,cache_build_ms,terminated");
   auto measure = [&](const std::string& knob, const std::string& value, const render::VolumeRenderSettings& s) {
     const Timed t = time_render(v, cam, s, o.warmup, o.repeats);
     const double err = rel_rmse(render::composite_over(t.frame, render::Rgb::Zero()), ref_img);
@@ -302,7 +287,7 @@ void study_pareto(const VolumeBenchOptions& o, const fs::path& dir, json& record
   {
     auto s = base(100);
     s.shadow = render::ShadowMethod::kCache;
-    Csv cache_csv("cache_scale,build,points,mean_abs_error,max_abs_error,build_ms");
+    CsvTable cache_csv("cache_scale,build,points,mean_abs_error,max_abs_error,build_ms");
     for (auto build : {render::ShadowCacheBuild::kSweep, render::ShadowCacheBuild::kMarch})
       for (double scale : {0.5, 1.0, 2.0}) {
         s.shadow_cache_build = build;
@@ -378,7 +363,7 @@ void study_peer(const VolumeBenchOptions& o, const fs::path& dir, json& record) 
                                             render::Rgb::Zero());
   write_image(dir / "peer_reference.png", ref);
   const render::OpenVdbPeer peer(v);
-  Csv csv("renderer,step_voxels,median_ms,min_ms,rel_rmse_vs_reference,rel_diff_vs_openvdb,cache_build_ms");
+  CsvTable csv("renderer,step_voxels,median_ms,min_ms,rel_rmse_vs_reference,rel_diff_vs_openvdb,cache_build_ms");
   for (double step : {2.0, 1.0, 0.5}) {
     render::OpenVdbRenderSettings ps;
     ps.primary_step_voxels = ps.shadow_step_voxels = step;
@@ -423,29 +408,32 @@ void study_peer(const VolumeBenchOptions& o, const fs::path& dir, json& record) 
 
 }  // namespace
 
-void run_volume_bench(const VolumeBenchOptions& o) {
-  const std::vector<std::string> known{"tables", "scaling", "pareto", "peer"};
-  for (const auto& s : o.studies)
-    if (std::find(known.begin(), known.end(), s) == known.end())
-      throw InputError(fmt::format("--study: unknown study '{}' (tables, scaling, pareto, peer)", s));
-  if (o.repeats < 1 || o.warmup < 0) throw InputError("--repeats must be >= 1 and --warmup >= 0");
-  RunFolder folder(o.out_dir, RunFolderOptions{"--out", "bench.json", "volume bench", o.overwrite});
-  Provenance provenance = start_provenance("volume bench", o.command_line);
-  json record;
-  record["mode"] = o.quick ? "quick" : "full";
-  record["warmup_frames"] = o.warmup;
-  record["timed_frames"] = o.repeats;
-  record["studies"] = o.studies;
+void run_volume_bench(const VolumeBenchOptions& options) {
+  VolumeBenchOptions o = options;
+  if (o.large_size == 0) o.large_size = o.quick ? 800 : 2000;
+  if (o.large_size < 16 || o.large_size > 4096) throw InputError("--large-size must be in [16, 4096]");
   const std::map<std::string, std::function<void(const VolumeBenchOptions&, const fs::path&, json&)>> run{
-      {"tables", study_tables}, {"scaling", study_scaling}, {"pareto", study_pareto}, {"peer", study_peer}};
-  for (const auto& s : o.studies) {
-    const auto t0 = std::chrono::steady_clock::now();
-    run.at(s)(o, folder.path(), record);
-    record["study_seconds"][s] = ms_since(t0) / 1000;
-  }
-  record["provenance"] = finish_provenance(provenance);
-  write_text_atomically(folder.path() / "bench.json", record.dump(2) + "\n");
-  folder.commit();
+      {"tables", study_tables},
+      {"scaling", study_scaling},
+      {"pareto", study_pareto},
+      {"peer", study_peer},
+      {"seed001-generate", clv_bench::study_generate},
+      {"seed001-tables", clv_bench::study_tables},
+      {"seed001-large", clv_bench::study_large},
+      {"seed001-sweeps", clv_bench::study_sweeps},
+      {"seed001-peer", clv_bench::study_peer},
+      {"seed001-steps", clv_bench::study_steps},
+      {"seed001-ess", clv_bench::study_ess},
+      {"seed003-figures", slicing_bench::study_figures},
+      {"seed003-table3", slicing_bench::study_table3},
+      {"seed003-table4", slicing_bench::study_table4},
+      {"seed003-pareto", slicing_bench::study_pareto}};
+  std::map<std::string, BenchStudy> studies;
+  for (const auto& [name, fn] : run)
+    studies[name] = [&o, fn = fn](const fs::path& dir, json& record) { fn(o, dir, record); };
+  run_bench_studies(
+      BenchStudiesRun{"volume bench", o.studies, o.quick, o.warmup, o.repeats, o.out_dir, o.overwrite, o.command_line},
+      studies);
 }
 
 }  // namespace meltlab::experiments

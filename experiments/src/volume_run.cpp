@@ -1,5 +1,7 @@
 // `meltlab volume generate | render | info` (see volume_run.h).
 
+#include <meltlab/core/time.h>
+#include <meltlab/core/statistics.h>
 #include <meltlab/experiments/volume_run.h>
 
 #include <meltlab/core/atomic_file.h>
@@ -8,13 +10,20 @@
 #include <meltlab/core/run_folder.h>
 #include <meltlab/experiments/provenance.h>
 #include <meltlab/experiments/render_json.h>
+#include <meltlab/datasets/catalog.h>
+#include <meltlab/render/slicing/slicing_scene.h>
 #include <meltlab/render/volume/volume_io.h>
 #include <meltlab/render/volume/volume_scene.h>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
+#include <cstdio>
+#include <functional>
+#include <memory>
 
 namespace meltlab::experiments {
 
@@ -36,6 +45,19 @@ json volume_json(const render::Volume& v) {
 }
 
 std::map<std::string, std::string> generator_record(const render::VolumeGenerateOptions& g) {
+  if (g.kind == render::VolumeKind::kShapes)
+    return {{"kind", "shapes"},
+            {"shapes", std::to_string(g.shapes.count)},
+            {"sample", std::to_string(g.shapes.sample)},
+            {"object_size", std::to_string(g.shapes.object_size)},
+            {"seed", std::to_string(g.shapes.seed)},
+            {"rng", "xoshiro256** (splitmix64 seeding)"}};
+  if (g.kind == render::VolumeKind::kSkull) return {{"kind", "skull"}, {"seed", std::to_string(g.shapes.seed)}};
+  if (g.kind == render::VolumeKind::kCtPhantom) {
+    render::CtPhantomOptions ct = g.ct;
+    ct.dims = {g.nx, g.ny, g.nz};
+    return render::describe_ct_phantom(ct);
+  }
   const auto& n = g.noise;
   return {{"kind", render::volume_kind_name(g.kind)},
           {"octaves", std::to_string(n.octaves)},
@@ -51,7 +73,401 @@ std::map<std::string, std::string> generator_record(const render::VolumeGenerate
           {"permutation", "Perlin 2002 reference"}};
 }
 
-render::Camera resized(const render::Camera& c, int width, int height) {
+/// Seed 003's data choices of a render of a .vlb/.nrrd file (vsi.data.*); empty otherwise.
+json vsi_data_json(const render::VolumeScene& scene, const std::optional<render::Normalisation>& n) {
+  json j = json::object();
+  if (!n) return j;
+  j["data.norm_source"] = render::norm_source_name(n->source);
+  j["data.norm_range"] = {n->lo, n->hi};
+  j["data.scanned_range"] = {n->scanned_min, n->scanned_max};
+  j["data.constant"] = n->constant;
+  j["data.clipped"] = {n->clipped_low, n->clipped_high};
+  j["data.window_units"] = scene.volume.read.window_units == render::VlbWindowUnits::kValue ? "value" : "fraction";
+  j["data.internal_bits"] = "float32";
+  return j;
+}
+
+std::string order_name(render::ClvOrder o) { return o == render::ClvOrder::kBlocked ? "blocked" : "linear"; }
+
+json clv_header_json(const render::ClvHeader& h) {
+  return {{"dims", {h.dims[0], h.dims[1], h.dims[2]}},
+          {"order", order_name(h.order)},
+          {"block_side", h.block_side},
+          {"cell_shape", {h.cell_shape[0], h.cell_shape[1], h.cell_shape[2]}},
+          {"sample_type", "uint8"},
+          {"placement", "nodes"},
+          {"file_bytes", h.file_bytes()},
+          {"sample_bytes", h.sample_bytes()}};
+}
+
+/// Occupancy and the fraction visible under the shapes TF from a value histogram (seed 001's
+/// statistics in place of bit equality with the source's RNG).
+json histogram_stats(const std::vector<std::int64_t>& h) {
+  if (h.empty()) return nullptr;
+  std::int64_t total = 0, nonzero = 0, visible = 0;
+  const auto tf = render::TransferFunction::shapes();
+  for (int v = 0; v < 256; ++v) {
+    total += h[std::size_t(v)];
+    if (v) nonzero += h[std::size_t(v)];
+    if (tf.visible_at(v)) visible += h[std::size_t(v)];
+  }
+  return {{"voxels", total},
+          {"occupancy", total ? double(nonzero) / double(total) : 0.0},
+          {"fraction_visible_shapes_tf", total ? double(visible) / double(total) : 0.0}};
+}
+
+/// Prints "meltlab: volume generate: 45 % (230 of 512 MB)" every 5 %.
+std::function<void(std::int64_t, std::int64_t)> progress_printer(const fs::path& out) {
+  auto last = std::make_shared<int>(-1);
+  return [last, out](std::int64_t done, std::int64_t total) {
+    const int pct = total ? int(100 * done / total) : 100;
+    if (pct / 5 == *last / 5 && pct != 100) return;
+    if (pct == *last) return;
+    *last = pct;
+    std::fprintf(stderr, "meltlab: volume generate: %s %3d %% (%.0f of %.0f MB)\n", out.filename().c_str(), pct,
+                 double(done) / 1e6, double(total) / 1e6);
+  };
+}
+
+json generate_clv(const VolumeGenerateRunOptions& o) {
+  if (o.box) throw InputError("--box: a .clv volume has unit spacing from the origin (its cell shape is not applied)");
+  const auto& g = o.generate;
+  const std::array<int, 3> dims{g.nx, g.ny, g.nz};
+  render::ClvWriteOptions w;
+  w.order = o.order;
+  w.block_side = o.block_side;
+  w.batch = o.batch;
+  w.parallel = o.batch > 1;
+  if (o.progress) w.progress = progress_printer(o.out);
+  render::ClvWriteStats stats;
+  if (g.kind == render::VolumeKind::kShapes || g.kind == render::VolumeKind::kSkull) {
+    // Streamed: the samples are never all in memory.
+    std::unique_ptr<render::VoxelSource> source;
+    if (g.kind == render::VolumeKind::kShapes) {
+      render::ShapesOptions so = g.shapes;
+      so.dims = dims;
+      source = std::make_unique<render::ShapesVolume>(so);
+    } else {
+      source = std::make_unique<render::SkullPhantom>(dims, g.shapes.seed);
+    }
+    stats = render::write_clv_generated(o.out, dims, *source, w);
+  } else {
+    if (g.storage != render::SampleType::kUint8)
+      throw InputError("--out *.clv: a .clv file holds 8-bit samples (use --quantization uint8)");
+    const render::Volume v = render::generate_volume(g);
+    stats = render::write_clv_generated(o.out, dims, *render::voxels_of(v), w);
+  }
+  json j = clv_header_json(render::read_clv_header(o.out));
+  j["file"] = o.out.string();
+  j["generator"] = generator_record(g);
+  j["write"] = {
+      {"seconds", stats.seconds},
+      {"batch", o.batch},
+      {"parallel", w.parallel},
+      {"batches", stats.batches},
+      {"samples_per_second", stats.seconds > 0 ? double(j["sample_bytes"].get<std::int64_t>()) / stats.seconds : 0.0}};
+  j["statistics"] = histogram_stats(stats.histogram);
+  return j;
+}
+
+}  // namespace
+
+json volume_info(const fs::path& file) {
+  if (file.extension() == ".clv") {
+    json j = clv_header_json(render::read_clv_header(file));
+    j["file"] = file.string();
+    return j;
+  }
+  render::VolumeReadInfo info;
+  const render::Volume v = render::read_volume(file, {}, &info);
+  json j = volume_json(v);
+  j["file"] = file.string();
+  j["format"] = info.format;
+  if (render::is_medical_volume_file(file)) {
+    // The stored samples (before normalisation) and what the default load did.
+    j["stored"] = {{"sample_type", info.stored_type}, {"content_hash", info.samples_hash}};
+    if (info.normalisation)
+      j["normalisation"] = {{"norm_source", render::norm_source_name(info.normalisation->source)},
+                            {"range", {info.normalisation->lo, info.normalisation->hi}},
+                            {"scanned", {info.normalisation->scanned_min, info.normalisation->scanned_max}},
+                            {"constant", info.normalisation->constant}};
+    if (info.vlb)
+      j["vlb"] = {{"version", info.vlb->version},
+                  {"endian", info.vlb->endian == std::endian::big ? "big" : "little"},
+                  {"range", {info.vlb->min, info.vlb->max}},
+                  {"window", {info.vlb->window_lo, info.vlb->window_hi}}};
+  }
+  return j;
+}
+
+json run_volume_generate(const VolumeGenerateRunOptions& o) {
+  const std::string ext = o.out.extension().string();
+  if (ext != ".json" && ext != ".vdb" && ext != ".clv" && !render::is_medical_volume_file(o.out))
+    throw InputError(
+        fmt::format("--out {}: name the header NAME.json (raw samples in NAME.raw), NAME.vdb, NAME.clv (seed 001's "
+                    "format), NAME.vlb, NAME.nrrd or NAME.nhdr (seed 003's)",
+                    o.out.string()));
+  fs::path raw = o.out;
+  raw.replace_extension(".raw");
+  for (const fs::path& f : {o.out, raw}) {
+    std::error_code ec;
+    if (fs::is_directory(f, ec)) throw InputError(fmt::format("--out {}: is a folder", f.string()));
+    if (fs::exists(f, ec) && !o.overwrite && (f == o.out || ext == ".json" || ext == ".nhdr"))
+      throw InputError(fmt::format("--out {}: exists (use --overwrite to replace it)", f.string()));
+  }
+  if (o.out.has_parent_path()) create_output_directories(o.out.parent_path(), "--out");
+  if (ext == ".clv") return generate_clv(o);
+  if (render::is_medical_volume_file(o.out)) {
+    if (o.box) throw InputError("--box: .vlb and .nrrd volumes are placed by their spacing from the origin");
+    if (o.generate.kind == render::VolumeKind::kShapes || o.generate.kind == render::VolumeKind::kSkull)
+      throw InputError(fmt::format("--out {}: seed 001's volumes are written as .clv files", o.out.string()));
+    if (o.generate.kind == render::VolumeKind::kCtPhantom) {
+      // The phantom's int16 Hounsfield units, as the source's CT head.
+      render::CtPhantomOptions ct = o.generate.ct;
+      ct.dims = {o.generate.nx, o.generate.ny, o.generate.nz};
+      render::write_medical_volume(o.out, render::generate_ct_phantom(ct));
+    } else {
+      render::write_medical_volume(o.out, render::scalar_volume_of(render::generate_volume(o.generate)));
+    }
+    json j = volume_info(o.out);
+    j["generator"] = generator_record(o.generate);
+    return j;
+  }
+  render::Volume v = render::generate_volume(o.generate);
+  if (o.box) v.fit_to_box(*o.box);
+  render::write_volume(o.out, v, generator_record(o.generate));
+  json j = volume_json(v);
+  j["file"] = o.out.string();
+  j["generator"] = generator_record(o.generate);
+  return j;
+}
+
+namespace {
+
+/// Runs `call`; an InputError that does not name the scene file yet is re-thrown naming it.
+template <class Call>
+void run_naming_scene(const std::string& scene_name, const Call& call) {
+  try {
+    call();
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    if (what.rfind(scene_name, 0) == 0) throw;
+    throw InputError(fmt::format("{}: {}", scene_name, what));
+  }
+}
+
+/// Seed 001's transfer-function model: the volume in its layout, the empty-space index built once
+/// (timed apart), then warm-up and timed frames through one tracer.
+VolumeRenderRunResult run_tf_render(const VolumeRenderRunOptions& o, render::VolumeScene& scene) {
+  const std::string scene_name = o.scene_file.string();
+  auto named = [&](const auto& call) { run_naming_scene(scene_name, call); };
+  scene.settings.record_sample_counts = o.sample_counts;
+  const auto t_load = std::chrono::steady_clock::now();
+  const render::SceneVolume volume = render::load_scene_volumes(scene);
+  const double load_ms = ms_since(t_load);
+  if (const auto* pin = std::get_if<render::Pinhole>(&scene.camera)) {
+    const Eigen::Vector3d eye = pin->camera_from_world.inverse().translation();
+    if (volume.domain().contains(eye) && scene.settings.camera_inside == render::CameraInside::kReject)
+      throw InputError(
+          fmt::format("{}: the camera is inside the volume's box (vlr.camera.inside: reject); move it "
+                      "out or set rays: {{camera_inside: start_at_eye}}",
+                      scene_name));
+  }
+  std::unique_ptr<render::VolumeTracer> tracer;
+  named([&] {
+    if (volume.is_bricked())
+      render::check_volume_render_settings(volume.bricked, scene.settings);
+    else
+      render::check_volume_render_settings(volume.dense, scene.settings);
+  });
+  RunFolder folder(o.out_dir, RunFolderOptions{"--out", "render.json", "volume render", o.overwrite});
+  Provenance provenance = start_provenance("volume render", o.command_line);
+  const fs::path dir = folder.path();
+  named([&] {
+    tracer = volume.is_bricked() ? std::make_unique<render::VolumeTracer>(volume.bricked, scene.settings)
+                                 : std::make_unique<render::VolumeTracer>(volume.dense, scene.settings);
+  });
+  VolumeRenderRunResult result;
+  render::VolumeFrame frame;
+  std::vector<double> frame_ms, frame_cpu_ms;
+  for (int i = 0; i < scene.warmup_frames + scene.timed_frames; ++i) {
+    const auto t = std::chrono::steady_clock::now();
+    const double cpu0 = process_cpu_ms();
+    frame = tracer->render(scene.camera);
+    const double cpu = process_cpu_ms() - cpu0;
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+    if (i >= scene.warmup_frames) frame_ms.push_back(ms), frame_cpu_ms.push_back(cpu);
+  }
+  result.median_frame_ms = median(frame_ms);
+  result.stats = frame.stats;
+
+  write_image(dir / "image.png", render::tf_output_image(frame, scene.tf_output));
+  ImageF rgba(frame.radiance.width(), frame.radiance.height(), 4);
+  for (int y = 0; y < rgba.height(); ++y)
+    for (int x = 0; x < rgba.width(); ++x) {
+      for (int c = 0; c < 3; ++c) rgba.at(x, y, c) = frame.radiance.at(x, y, c);
+      rgba.at(x, y, 3) = 1.0f - frame.transmittance.at(x, y);
+    }
+  write_image(dir / "image.exr", rgba, PixelFormat::kFloat);
+  std::uint32_t max_count = 0;
+  if (o.sample_counts) {
+    ImageF counts(frame.radiance.width(), frame.radiance.height(), 1);
+    for (std::size_t i = 0; i < frame.sample_counts.size(); ++i) {
+      max_count = std::max(max_count, frame.sample_counts[i]);
+      counts.values()[i] = float(std::min<std::uint32_t>(frame.sample_counts[i], 65535)) / 65535.0f;
+    }
+    write_image(dir / "samples.png", counts, PixelFormat::kUint16);
+  }
+
+  json j;
+  j["scene_file"] = o.scene_file.string();
+  j["model"] = render::optical_model_name(scene.settings.model);
+  json clv = json::object();
+  for (const auto& [k, v] : render::describe_clv(scene, volume)) clv[k] = v;
+  j["clv"] = clv;
+  if (const json vsi = vsi_data_json(scene, volume.normalisation); !vsi.empty()) j["vsi"] = vsi;
+  const render::Box3 d = volume.domain();
+  const auto dims = volume.is_bricked() ? volume.bricked.dims() : volume.dense.dims();
+  j["volume"] = {
+      {"dims", {dims[0], dims[1], dims[2]}},
+      {"layout", volume.is_bricked() ? "blocked" : "linear"},
+      {"block_side", volume.is_bricked() ? volume.bricked.side() : 0},
+      {"sample_type", render::sample_type_name(volume.is_bricked() ? volume.bricked.type() : volume.dense.type())},
+      {"domain", {{"lo", {d.lo.x(), d.lo.y(), d.lo.z()}}, {"hi", {d.hi.x(), d.hi.y(), d.hi.z()}}}}};
+  if (scene.volume.generate) j["volume"]["generator"] = generator_record(*scene.volume.generate);
+  if (!scene.volume.file.empty()) j["volume"]["file"] = scene.volume.file.string();
+  if (volume.clv) j["volume"]["clv_header"] = clv_header_json(*volume.clv);
+  j["camera"] = camera_json(scene.camera);
+  const auto& st = frame.stats;
+  j["stats"] = {{"rays", st.rays},
+                {"samples", st.samples},
+                {"samples_skipped_empty", st.skipped},
+                {"rays_terminated_early", st.terminated},
+                {"blocks_visible", st.blocks_visible},
+                {"block_tasks", st.block_tasks},
+                {"queue_empty_fraction", st.block_tasks ? double(st.queue_empty) / double(st.block_tasks) : 0.0},
+                {"order_violations", st.order_violations},
+                {"render_busy_ms", st.render_busy_ms}};
+  if (o.sample_counts) j["stats"]["max_samples_per_pixel"] = max_count;
+  j["timing_ms"] = {{"frames", frame_ms},
+                    {"median_frame", result.median_frame_ms},
+                    {"frames_cpu", frame_cpu_ms},
+                    {"median_frame_cpu", median(frame_cpu_ms)},
+                    {"warmup_frames", scene.warmup_frames},
+                    {"load", load_ms},
+                    {"index_build", tracer->index_build_ms()}};
+  j["image"] = {{"png", "image.png"},
+                {"exr", "image.exr"},
+                {"png_output", scene.tf_output == render::TfOutput::kSourceDouble ? "source_double" : "premultiplied"}};
+  if (o.sample_counts) j["image"]["sample_counts"] = "samples.png (16-bit: samples per pixel)";
+  result.run_json = commit_run(folder, std::move(j), provenance);
+  return result;
+}
+
+/// Seed 003's slicing renderer (method: slicing): the gradient volume once (through the disk cache
+/// under the dataset cache, when the mode lights samples), then warm-up and timed frames.
+VolumeRenderRunResult run_slicing_render(const VolumeRenderRunOptions& o, render::VolumeScene& scene) {
+  const std::string scene_name = o.scene_file.string();
+  auto named = [&](const auto& call) { run_naming_scene(scene_name, call); };
+  const auto t_load = std::chrono::steady_clock::now();
+  const render::Volume volume = render::load_scene_volume(scene);
+  const double load_ms = ms_since(t_load);
+  render::SlicingScene& sl = *scene.slicing;
+  render::SlicingSettings& s = sl.settings;
+  named([&] {
+    s.mask = render::build_scene_mask(sl, volume.domain());
+    render::check_slicing_settings(volume, s);
+    const Eigen::Vector3d eye = std::get<render::Pinhole>(scene.camera).camera_from_world.inverse().translation();
+    if (volume.domain().contains(eye))
+      throw InputError("the camera is inside the volume's box (slicing needs it outside)");
+  });
+  RunFolder folder(o.out_dir, RunFolderOptions{"--out", "render.json", "volume render", o.overwrite});
+  Provenance provenance = start_provenance("volume render", o.command_line);
+  const fs::path dir = folder.path();
+  std::optional<render::GradientVolume> gradients;
+  std::string cache_dir;
+  if (render::slicing_needs_gradients(s)) {
+    fs::path cache;
+    if (sl.cache_gradients) {
+      try {
+        cache = datasets::default_cache_dir() / "slicing-gradients";
+      } catch (const InputError& e) {
+        spdlog::warn("slicing: no gradient cache ({})", e.what());
+      }
+    }
+    cache_dir = cache.string();
+    gradients = render::cached_gradient_volume(volume, s.gradient, cache);
+  }
+  if (s.mode == render::SlicingMode::kCombined)
+    spdlog::info("slicing: mode combined is the spec's interpretation of the source's words (vsi.combined.rule)");
+  const render::SlicingRenderer renderer(volume, s, gradients);
+  render::SlicingFrame frame;
+  std::vector<double> frame_ms, render_ms, post_ms;
+  for (int i = 0; i < scene.warmup_frames + scene.timed_frames; ++i) {
+    const auto t = std::chrono::steady_clock::now();
+    frame = renderer.render(scene.camera);
+    const double ms = ms_since(t);
+    if (i >= scene.warmup_frames)
+      frame_ms.push_back(ms), render_ms.push_back(frame.stats.render_ms), post_ms.push_back(frame.stats.post_ms);
+  }
+  VolumeRenderRunResult result;
+  result.median_frame_ms = median(frame_ms);
+  result.stats.rays = frame.stats.rays;
+  result.stats.samples = frame.stats.samples;
+
+  ImageF png(frame.rgb.width(), frame.rgb.height(), 3);
+  for (std::size_t i = 0; i < png.size(); ++i)
+    png.values()[i] = std::clamp(float(scene.exposure) * frame.rgb.values()[i], 0.0f, 1.0f);
+  write_image(dir / "image.png", png);
+  ImageF rgba(png.width(), png.height(), 4);
+  for (int y = 0; y < rgba.height(); ++y)
+    for (int x = 0; x < rgba.width(); ++x) {
+      for (int c = 0; c < 3; ++c) rgba.at(x, y, c) = frame.rgb.at(x, y, c);
+      rgba.at(x, y, 3) = frame.alpha.at(x, y);
+    }
+  write_image(dir / "image.exr", rgba, PixelFormat::kFloat);
+
+  json j;
+  j["scene_file"] = o.scene_file.string();
+  j["method"] = "slicing";
+  json vsi = json::object();
+  for (const auto& [k, v] : render::describe_vsi(s, volume, scene.camera)) vsi[k] = v;
+  const auto [lo, hi] = renderer.value_range();
+  vsi["vsi.data.value_range"] = fmt::format("[{:.17g}, {:.17g}]", lo, hi);
+  j["vsi"] = vsi;
+  j["volume"] = volume_json(volume);
+  if (scene.volume.generate) j["volume"]["generator"] = generator_record(*scene.volume.generate);
+  if (!scene.volume.file.empty()) j["volume"]["file"] = scene.volume.file.string();
+  j["camera"] = camera_json(scene.camera);
+  j["stats"] = {{"rays", frame.stats.rays},
+                {"samples", frame.stats.samples},
+                {"samples_past_mask", frame.stats.classified},
+                {"samples_skipped_empty", frame.stats.skipped},
+                {"samples_visited", frame.stats.visited},
+                {"rays_terminated", frame.stats.terminated},
+                {"slices", frame.stats.slices},
+                {"slice_spacing", frame.stats.slice_spacing}};
+  if (gradients)
+    j["gradients"] = {
+        {"cache_dir", cache_dir.empty() ? json(nullptr) : json(cache_dir)},
+        {"file", cache_dir.empty() ? json(nullptr) : json(render::gradient_cache_name(volume, s.gradient))},
+        {"from_cache", gradients->from_cache},
+        {"build_ms", gradients->build_ms},
+        {"max_magnitude", gradients->max_magnitude}};
+  j["timing_ms"] = {{"frames", frame_ms},
+                    {"median_frame", result.median_frame_ms},
+                    {"median_render", median(render_ms)},
+                    {"median_post", median(post_ms)},
+                    {"warmup_frames", scene.warmup_frames},
+                    {"load", load_ms}};
+  j["image"] = {{"png", "image.png"}, {"exr", "image.exr"}, {"exposure", scene.exposure}};
+  result.run_json = commit_run(folder, std::move(j), provenance);
+  return result;
+}
+
+}  // namespace
+
+render::Camera resized_camera(const render::Camera& c, int width, int height) {
   if (width <= 0 && height <= 0) return c;
   auto p = std::get<render::Pinhole>(c);
   const int w = width > 0 ? width : int(std::lround(double(p.width) * height / p.height));
@@ -67,53 +483,22 @@ render::Camera resized(const render::Camera& c, int width, int height) {
   return p;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-}  // namespace
-
-json volume_info(const fs::path& file) {
-  const render::Volume v = render::read_volume(file);
-  json j = volume_json(v);
-  j["file"] = file.string();
-  return j;
-}
-
-json run_volume_generate(const VolumeGenerateRunOptions& o) {
-  const std::string ext = o.out.extension().string();
-  if (ext != ".json" && ext != ".vdb")
-    throw InputError(
-        fmt::format("--out {}: name the header NAME.json (raw samples in NAME.raw) or NAME.vdb", o.out.string()));
-  fs::path raw = o.out;
-  raw.replace_extension(".raw");
-  for (const fs::path& f : {o.out, raw}) {
-    std::error_code ec;
-    if (fs::is_directory(f, ec)) throw InputError(fmt::format("--out {}: is a folder", f.string()));
-    if (fs::exists(f, ec) && !o.overwrite && (f == o.out || ext == ".json"))
-      throw InputError(fmt::format("--out {}: exists (use --overwrite to replace it)", f.string()));
-  }
-  if (o.out.has_parent_path()) create_output_directories(o.out.parent_path(), "--out");
-  render::Volume v = render::generate_volume(o.generate);
-  if (o.box) v.fit_to_box(*o.box);
-  render::write_volume(o.out, v, generator_record(o.generate));
-  json j = volume_json(v);
-  j["file"] = o.out.string();
-  j["generator"] = generator_record(o.generate);
-  return j;
-}
-
 VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
   render::VolumeScene scene = render::read_volume_scene(o.scene_file);
-  scene.camera = resized(scene.camera, o.width, o.height);
+  scene.camera = resized_camera(scene.camera, o.width, o.height);
   if (o.frames) scene.timed_frames = *o.frames;
   if (o.samples) scene.settings.samples = *o.samples;
   if (scene.timed_frames < 1) throw InputError("--frames must be >= 1");
   if (scene.settings.samples < 1) throw InputError("--samples must be >= 1");
-  const render::Volume volume = render::load_scene_volume(scene);
+  if (scene.slicing) {
+    if (o.samples || o.sample_counts) throw InputError("--samples and --sample-counts are for method: ray_casting");
+    return run_slicing_render(o, scene);
+  }
+  if (scene.settings.model == render::OpticalModel::kTransferFunction) return run_tf_render(o, scene);
+  if (o.sample_counts) throw InputError("--sample-counts is for model transfer_function");
+  const render::SceneVolume loaded = render::load_scene_volumes(scene);
+  if (loaded.is_bricked()) (void)render::load_scene_volume(scene);  // refuses a blocked volume, naming it
+  const render::Volume& volume = loaded.dense;
   ImageF background;
   if (scene.mode == render::VolumeOutputMode::kComposite) {
     background = read_image(scene.background_image);
@@ -133,15 +518,7 @@ VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
   }
   // Settings the integrator refuses (an eye inside the box, ...) are problems of the scene file.
   const std::string scene_name = o.scene_file.string();
-  auto named = [&](const auto& call) {
-    try {
-      call();
-    } catch (const InputError& e) {
-      const std::string what = e.what();
-      if (what.rfind(scene_name, 0) == 0) throw;
-      throw InputError(fmt::format("{}: {}", scene_name, what));
-    }
-  };
+  auto named = [&](const auto& call) { run_naming_scene(scene_name, call); };
   if (const auto* pin = std::get_if<render::Pinhole>(&scene.camera)) {
     const Eigen::Vector3d eye = pin->camera_from_world.inverse().translation();
     if (volume.domain().contains(eye) && scene.settings.camera_inside == render::CameraInside::kReject)
@@ -200,6 +577,7 @@ VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
   json vlr = json::object();
   for (const auto& [k, v] : render::describe_vlr(scene, volume)) vlr[k] = v;
   j["vlr"] = vlr;
+  if (const json vsi = vsi_data_json(scene, loaded.normalisation); !vsi.empty()) j["vsi"] = vsi;
   j["volume"] = volume_json(volume);
   if (scene.volume.generate) j["volume"]["generator"] = generator_record(*scene.volume.generate);
   if (!scene.volume.file.empty()) j["volume"]["file"] = scene.volume.file.string();
@@ -222,10 +600,7 @@ VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
                                    ? scene.background_image.string()
                                    : fmt::format("[{}, {}, {}]", scene.settings.background.x(),
                                                  scene.settings.background.y(), scene.settings.background.z())}};
-  j["provenance"] = finish_provenance(provenance);
-  result.run_json = j;
-  write_text_atomically(dir / "render.json", j.dump(2) + "\n");
-  folder.commit();
+  result.run_json = commit_run(folder, std::move(j), provenance);
   return result;
 }
 

@@ -137,6 +137,7 @@ RenderScene parse_render_scene(const YAML::Node& node, const std::string& source
   if (const auto gs = top.optional_section("ground")) read_ground(*gs, base, s.ground);
   if (const auto es = top.optional_section("environment")) read_environment(*es, base, s.environment);
   if (const auto os = top.optional_section("outputs")) read_outputs(*os, s.outputs);
+  if (const auto fs = top.optional_section("fog")) s.fog = fog::parse_scene_fog(*fs);
   top.finish();
   return s;
 }

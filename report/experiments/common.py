@@ -46,6 +46,37 @@ def load_run(run_dir: Path):
     return run, rows
 
 
+def read(path):
+    """The rows of a CSV file as dicts."""
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def linfit(xs, ys):
+    """Least-squares y = a + b x: (a, b, R²)."""
+    n = len(xs)
+    mx, my = sum(xs) / n, sum(ys) / n
+    sxx = sum((x - mx) ** 2 for x in xs)
+    sxy = sum((x - mx) * (y - my) for x, y in zip(xs, ys))
+    b = sxy / sxx if sxx > 0 else 0.0
+    a = my - b * mx
+    ss_res = sum((y - a - b * x) ** 2 for x, y in zip(xs, ys))
+    ss_tot = sum((y - my) ** 2 for y in ys)
+    return a, b, 1 - ss_res / ss_tot if ss_tot > 0 else 1.0
+
+
+def yes(b):
+    """A verdict word: "yes", or a shouted "NO" that stands out in a verdict line."""
+    return "yes" if b else "NO"
+
+
+def load_text(loads):
+    """A bench record's load averages ([1, 5, 15 min]) as "1.23 0.98 0.75" ("?" if absent)."""
+    if not loads:
+        return "?"
+    return " ".join(f"{x:.2f}" for x in loads)
+
+
 def fmt_bool(b):
     return "yes" if b else "no"
 

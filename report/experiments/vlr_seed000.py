@@ -1,7 +1,6 @@
 """Report of the `vlr_seed000` experiment (see report/experiment_report.py): seed 000's volume
 ray casting on this CPU — its figures, Tables 5.1-5.3 as times and ratios beside the GPU's frame
 rates, the scaling targets, time against error for every knob, and OpenVDB as the peer."""
-import csv
 import json
 import math
 from pathlib import Path
@@ -11,7 +10,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from .common import write_csv, write_fragment
+from .common import write_csv, write_fragment, read, linfit
 
 SOURCE_HW = ("AMD Athlon 64 3000+, 512 MB, GeForce 6600GT 128 MB, FX Composer 1.6 (fps after 30 s); "
              "the harness: median of timed frames after warm-up on this CPU")
@@ -25,23 +24,6 @@ SOURCE_FPS = {
     ("5.3", 128, 512, 50): {"emission": 87, "hg": 44, "hg_attenuated": 4},
 }
 MODELS = ["emission", "hg", "hg_attenuated", "hg_attenuated_cache"]
-
-
-def read(path):
-    with open(path) as f:
-        return list(csv.DictReader(f))
-
-
-def linfit(xs, ys):
-    n = len(xs)
-    mx, my = sum(xs) / n, sum(ys) / n
-    sxx = sum((x - mx) ** 2 for x in xs)
-    sxy = sum((x - mx) * (y - my) for x, y in zip(xs, ys))
-    b = sxy / sxx
-    a = my - b * mx
-    ss_res = sum((y - a - b * x) ** 2 for x, y in zip(xs, ys))
-    ss_tot = sum((y - my) ** 2 for y in ys)
-    return a, b, 1 - ss_res / ss_tot if ss_tot > 0 else 1.0
 
 
 def vlr_seed000(exp: Path, args):

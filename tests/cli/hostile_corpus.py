@@ -349,6 +349,16 @@ def scene_cases():
         "env_png_claims_30000": "environment: {file: env.png}\n",
         "ground_texture_truncated": "ground: {texture: tex.png}\n",
         "deep_nesting": "ice: " + "{a: " * 5000 + "1" + "}" * 5000 + "\n",
+        # The fog section (seed 002, render/fog/scene_fog.h).
+        "fog_no_spotlights": "fog: {kt: 0.1}\n",
+        "fog_spotlights_empty": "fog: {kt: 0.1, spotlights: []}\n",
+        "fog_kt_nan": "fog: {kt: .nan, spotlights: [{position: [0, 0, 3], target: [0, 0, 0]}]}\n",
+        "fog_target_is_position": "fog: {spotlights: [{position: [0, 0, 3], target: [0, 0, 3]}]}\n",
+        "fog_table_n_huge": "fog: {spotlights: [{position: [0, 0, 3], target: [0, 0, 0]}], table: {n: 100000000}}\n",
+        "fog_table_v_warp_bad": "fog: {spotlights: [{position: [0, 0, 3], target: [0, 0, 0]}], table: {v_warp: log}}\n",
+        "fog_table_v_interp_bad": "fog: {spotlights: [{position: [0, 0, 3], target: [0, 0, 0]}], table: {v_interp: cubic}}\n",
+        "fog_point_with_target": "fog: {spotlights: [{kind: point, position: [0, 0, 3], target: [0, 0, 0]}]}\n",
+        "fog_half_angle_90": "fog: {spotlights: [{position: [0, 0, 3], target: [0, 0, 0], half_angle_deg: 90}]}\n",
     }
     files = {"env.png": png_claiming(30000, 15000), "tex.png": png_claiming(64, 64)[:50]}
     cases = []
@@ -536,6 +546,24 @@ def volume_cases():
         "scene_background_claims_30000": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n" + cam +
                                          "output: {mode: composite, background_image: bg.png}\n",
         "scene_fov_and_fx": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n" + cam.replace("fov_deg: 40", "fov_deg: 40, fx: 9"),
+        # seed 003's slicing renderer (method: slicing)
+        "slicing_no_tfs": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  mode: blend\n",
+        "slicing_tf_x_not_increasing": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{a: [[0.5, 0.1], [0.2, 0.3]]}]\n",
+        "slicing_tf_alpha_above_one": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 1.5]]}]\n",
+        "slicing_tf_short_row": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1]]}]\n",
+        "slicing_five_tfs": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{a: [[0, 1]]}, {a: [[0, 1]]}, {a: [[0, 1]]}, {a: [[0, 1]]}, {a: [[0, 1]]}]\n",
+        "slicing_qc_zero": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  quality_class: 0\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n",
+        "slicing_mode_unknown": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  mode: xray\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n",
+        "slicing_mask_index_5": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  mask: {edits: [{shape: box, centre: [0.5, 0.5, 0.5], size: [1, 1, 1], index: 5}]}\n",
+        "slicing_mask_shape_unknown": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  mask: {edits: [{shape: cone, centre: [0.5, 0.5, 0.5], index: 0}]}\n",
+        "slicing_mask_zero_size": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  mask: {edits: [{shape: ellipsoid, centre: [0.5, 0.5, 0.5], radii: [0, 1, 1], index: 0}]}\n",
+        "slicing_mask_resolution_huge": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  mask: {resolution: [100000, 1, 1]}\n",
+        "slicing_gradient_bits_6": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  gradient: {bits: 6}\n",
+        "slicing_with_ray_caster_key": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\nsampling: {n: 10}\n",
+        "slicing_section_without_method": "model: hg\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n",
+        "slicing_bloom_sigma_zero": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  bloom: {enabled: true, sigma: 0}\n",
+        "slicing_skip_cell_3": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  skip_cell: 3\n",
+        "slicing_early_termination_above_one": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  early_termination: 1.5\n",
     }
     for n, t in scenes.items():
         cases.append(Case(f"volume/{n}", ["volume", "render", "--scene", "{f}", "--out", "{out}"],
@@ -550,6 +578,176 @@ def volume_cases():
         Case("volume/generate_out_is_a_folder", o + ["--out", "{d}"], {"full/keep.txt": "mine"}, names=["--out"]),
         Case("volume/render_no_scene", ["volume", "render", "--scene", "nowhere.yaml", "--out", "{out}"],
              names=["nowhere.yaml"]),
+    ]
+    return cases
+
+
+def clv_header(dims, order=1, side=0, cell=(1.0, 1.0, 1.0)):
+    return struct.pack("<3I3fBB", *dims, *cell, order, side)
+
+
+def clv_cases():
+    """Seed 001's .clv volume files (26-byte header, then 8-bit samples) and transfer-function
+    scenes: short files, lying headers, wrong order bytes, zero and overflowing dimensions; each
+    refused from the header and the file's size before anything is mapped or allocated."""
+    cam = "camera: {type: pinhole, width: 8, height: 8, fov_deg: 40, eye: [40, -30, 20], target: [2, 2, 2]}\n"
+    files = {
+        "clv_empty": b"",
+        "clv_header_cut": clv_header((4, 4, 4))[:20],
+        "clv_samples_short": clv_header((4, 4, 4)) + b"\1" * 63,
+        "clv_samples_long": clv_header((4, 4, 4)) + b"\1" * 65,
+        "clv_order_byte_3": clv_header((4, 4, 4), order=3) + b"\1" * 64,
+        "clv_order_byte_0": clv_header((4, 4, 4), order=0) + b"\1" * 64,
+        "clv_linear_with_side": clv_header((4, 4, 4), order=1, side=16) + b"\1" * 64,
+        "clv_blocked_side_1": clv_header((4, 4, 4), order=2, side=1) + b"\1" * 64,
+        "clv_blocked_short": clv_header((4, 4, 4), order=2, side=3) + b"\1" * 64,  # needs 2^3 blocks of 3^3
+        "clv_dims_zero": clv_header((0, 4, 4)),
+        "clv_dims_one": clv_header((1, 4, 4)) + b"\1" * 16,
+        "clv_dims_overflow": clv_header((0xFFFFFFFF, 0xFFFFFFFF, 0xFFFFFFFF)) + b"\1" * 64,
+        "clv_dims_product_overflows_int64": clv_header((2147483647, 2147483647, 2147483647)) + b"\1" * 64,
+        "clv_dims_claim_terabytes": clv_header((65535, 65535, 65535)) + b"\1" * 64,
+        "clv_cell_nan": clv_header((2, 2, 2), cell=(1.0, float("nan"), 1.0)) + b"\1" * 8,
+        "clv_cell_negative": clv_header((2, 2, 2), cell=(1.0, -1.0, 1.0)) + b"\1" * 8,
+        "clv_text": b"this is not a volume, just some text pretending to be one\n",
+    }
+    cases = []
+    for n, data in files.items():
+        cases.append(Case(f"volume/{n}/info", ["volume", "info", "{f}"], {"v.clv": data}, names=["v.clv"]))
+        for memory in ("mmap", "ram"):
+            scene = ("model: transfer_function\nvolume: {file: v.clv, memory: %s}\n" % memory + cam +
+                     "sampling: {ds_rule: fixed_step, step: 0.2}\n")
+            cases.append(Case(f"volume/{n}/render_{memory}", ["volume", "render", "--scene", "{f}", "--out", "{out}"],
+                              {"s.yaml": scene, "v.clv": data}, names=["v.clv"]))
+    good = clv_header((4, 4, 4)) + bytes(range(64))
+    tf = "model: transfer_function\nvolume: {file: v.clv}\n" + cam
+    scenes = {
+        "tf_table_unknown": tf + "transfer_function: {table: bones}\n",
+        "tf_range_unclosed": tf + 'transfer_function: {table: [{range: "(85, 95", rgb: [1, 2, 3], alpha: 0.5}]}\n',
+        "tf_range_reversed": tf + 'transfer_function: {table: [{range: "(95, 85]", rgb: [1, 2, 3], alpha: 0.5}]}\n',
+        "tf_alpha_two": tf + 'transfer_function: {table: [{range: "(85, 95]", rgb: [1, 2, 3], alpha: 2}]}\n',
+        "tf_for_hg": "model: hg\nvolume: {file: v.clv}\n" + cam + "transfer_function: {table: shapes}\n",
+        "tf_exponent_unknown": tf + "transfer_function: {opacity_exponent: s_times_s0}\n",
+        "tf_light_zero": tf + "transfer_function: {shading: {light_dir: [0, 0, 0]}}\n",
+        "tf_fixed_step_zero": tf + "sampling: {ds_rule: fixed_step, step: 0}\n",
+        "tf_tile_zero": tf + "traversal: {method: object_order, tile: 0}\n",
+        "object_order_for_hg": "model: hg\nvolume: {file: v.clv}\n" + cam + "traversal: {method: object_order}\n",
+        "tf_block_side_one": tf.replace("{file: v.clv}", "{file: v.clv, layout: blocked, block_side: 1}"),
+        "tf_memory_unknown": tf.replace("{file: v.clv}", "{file: v.clv, memory: swap}"),
+    }
+    for n, t in scenes.items():
+        cases.append(Case(f"volume/{n}", ["volume", "render", "--scene", "{f}", "--out", "{out}"],
+                          {"s.yaml": t, "v.clv": good}, names=["s.yaml"]))
+    o = ["volume", "generate", "--kind", "shapes"]
+    cases += [
+        Case("volume/generate_shapes_dims_zero", o + ["--dims", "0,4,4", "--out", "{out}.clv"], names=["--dims"]),
+        Case("volume/generate_shapes_dims_two", o + ["--dims", "4,4", "--out", "{out}.clv"], names=["--dims"]),
+        Case("volume/generate_shapes_block_side_1", o + ["--size", "8", "--layout", "blocked", "--block-side", "1",
+                                                         "--out", "{out}.clv"], names=["--block-side"]),
+        Case("volume/generate_shapes_layout", o + ["--size", "8", "--layout", "zigzag", "--out", "{out}.clv"],
+             names=["--layout"]),
+        Case("volume/generate_shapes_sample_300", o + ["--size", "8", "--sample", "300", "--out", "{out}.clv"],
+             names=["--sample"]),
+        Case("volume/generate_shapes_size_one", o + ["--size", "1", "--object-size", "1", "--out", "{out}.clv"], names=["out.clv"]),
+        Case("volume/generate_shapes_huge_json", o + ["--size", "2000", "--out", "{out}.json"], names=["--out"]),
+        Case("volume/bench_unknown_study", ["volume", "bench", "--study", "seed001-everything", "--out", "{out}"],
+             names=["--study"]),
+    ]
+    # Seed 003's studies: no scenes, a scene that is not method: slicing, a bad key in one, bad --sizes.
+    sl = ("method: slicing\nvolume: {generate: {kind: constant, size: 4}}\ncamera: {type: pinhole, width: 8, "
+          "height: 8, fov_deg: 30, eye: [400, 0, 0], target: [0, 0, 0]}\nslicing:\n  transfer_functions: "
+          "[{a: [[0, 1]]}]\n")
+    b = ["volume", "bench", "--warmup", "0", "--repeats", "1"]
+    cases += [
+        Case("volume/bench_seed003_no_scenes", b + ["--study", "seed003-table3", "--out", "{out}"],
+             names=["--slicing-scenes"]),
+        Case("volume/bench_seed003_not_slicing", b + ["--study", "seed003-table3", "--slicing-scenes", "{f}", "--out",
+                                                      "{out}"], {"s.yaml": sl.replace("method: slicing\n", "")},
+             names=["s.yaml", "method: slicing"]),
+        Case("volume/bench_seed003_bad_key", b + ["--study", "seed003-figures", "--slicing-scenes", "{f}", "--out",
+                                                  "{out}"], {"s.yaml": sl + "  quality: 2\n"}, names=["s.yaml:6"]),
+        Case("volume/bench_seed003_sizes_one", b + ["--study", "seed003-table4", "--slicing-scenes", "{f}", "--sizes",
+                                                    "1x1x1", "--out", "{out}"], {"s.yaml": sl}, names=["--sizes"]),
+        Case("volume/bench_seed003_sizes_text", b + ["--study", "seed003-table4", "--slicing-scenes", "{f}", "--sizes",
+                                                     "4x4", "--out", "{out}"], {"s.yaml": sl}, names=["--sizes"]),
+    ]
+    return cases
+
+
+def vlb_header(dims="2 2 2", typ="int16", endian="little", spacing="1. 1. 2.", rng="-1117 2248", window="0 1",
+               version="VLB.1"):
+    return f"{version}\n{dims}\n{typ}\n{endian}\n{spacing}\n{rng}\n{window}\n".encode()
+
+
+def medical_cases():
+    """Seed 003's medical volume files (.vlb, .nrrd, .nhdr): lying sample counts, unknown types,
+    zero, negative and overflowing dimensions, truncated headers, unsupported encodings, corrupt
+    gzip; each refused with FILE:LINE (or the data file) before anything is allocated."""
+    cam = "camera: {type: pinhole, width: 8, height: 8, fov_deg: 30, eye: [40, -30, 20], target: [1, 1, 1]}\n"
+    nrrd = b"NRRD0004\ntype: int16\ndimension: 3\nsizes: 2 2 2\nendian: little\n"
+    files = {
+        "vlb_samples_short": ("v.vlb", vlb_header() + b"\1" * 15),
+        "vlb_samples_long": ("v.vlb", vlb_header() + b"\1" * 17),
+        "vlb_type_unknown": ("v.vlb", vlb_header(typ="int24") + b"\1" * 24),
+        "vlb_type_int64": ("v.vlb", vlb_header(typ="int64") + b"\1" * 64),
+        "vlb_dims_zero": ("v.vlb", vlb_header(dims="0 2 2")),
+        "vlb_dims_negative": ("v.vlb", vlb_header(dims="-2 2 2") + b"\1" * 16),
+        "vlb_dims_two": ("v.vlb", vlb_header(dims="2 2") + b"\1" * 8),
+        "vlb_dims_overflow": ("v.vlb", vlb_header(dims="2147483647 2147483647 2147483647") + b"\1" * 16),
+        "vlb_dims_over_the_limit": ("v.vlb", vlb_header(dims="65535 65535 65535") + b"\1" * 16),
+        "vlb_dims_claim_terabytes_double": ("v.vlb", vlb_header(dims="2147483647 2147483647 2", typ="double")),
+        "vlb_header_cut": ("v.vlb", vlb_header()[:20]),
+        "vlb_empty": ("v.vlb", b""),
+        "vlb_version_2": ("v.vlb", vlb_header(version="VLB.2") + b"\1" * 16),
+        "vlb_endian_middle": ("v.vlb", vlb_header(endian="middle") + b"\1" * 16),
+        "vlb_spacing_zero": ("v.vlb", vlb_header(spacing="1 0 1") + b"\1" * 16),
+        "vlb_range_reversed": ("v.vlb", vlb_header(rng="5 -5") + b"\1" * 16),
+        "vlb_window_empty": ("v.vlb", vlb_header(window="1 1") + b"\1" * 16),
+        "vlb_float_nan": ("v.vlb", vlb_header(dims="2 1 1", typ="float") + b"\0\0\x80\x3f\0\0\xc0\x7f"),
+        "vlb_binary": ("v.vlb", bytes((i * 97 + 13) % 256 for i in range(4096))),
+        "nrrd_samples_short": ("v.nrrd", nrrd + b"encoding: raw\n\n" + b"\1" * 15),
+        "nrrd_encoding_ascii": ("v.nrrd", nrrd + b"encoding: ascii\n\n1 2 3 4 5 6 7 8\n"),
+        "nrrd_gzip_corrupt": ("v.nrrd", nrrd + b"encoding: gzip\n\n" + b"\x1f\x8b" + b"\1" * 30),
+        "nrrd_gzip_bomb_claim": ("v.nrrd", nrrd.replace(b"2 2 2", b"4096 4096 1024") + b"encoding: gzip\n\n\x1f\x8b\1"),
+        "nrrd_dimension_4": ("v.nrrd", b"NRRD0004\ntype: int16\ndimension: 4\n"),
+        "nrrd_sizes_zero": ("v.nrrd", b"NRRD0004\ntype: int16\ndimension: 3\nsizes: 0 2 2\n"),
+        "nrrd_oblique": ("v.nrrd", nrrd + b"encoding: raw\nspace directions: (1,1,0) (0,1,0) (0,0,1)\n\n" + b"\1" * 16),
+        "nrrd_no_data": ("v.nrrd", nrrd + b"encoding: raw\n"),
+        "nrrd_text": ("v.nrrd", b"this is not a volume\n"),
+        "nhdr_data_missing": ("v.nhdr", nrrd + b"encoding: raw\ndata file: w.raw\n"),
+    }
+    named = {"nhdr_data_missing": "w.raw"}
+    cases = []
+    for n, (name, data) in files.items():
+        names = [named.get(n, name)]
+        cases.append(Case(f"volume/{n}/info", ["volume", "info", "{f}"], {name: data}, names=names))
+        scene = "model: transfer_function\nvolume: {file: %s}\n" % name + cam
+        cases.append(Case(f"volume/{n}/render", ["volume", "render", "--scene", "{f}", "--out", "{out}"],
+                          {"s.yaml": scene, name: data}, names=names))
+    good = vlb_header(dims="4 4 4") + bytes(range(128))
+    tf = "model: transfer_function\nvolume: {file: v.vlb, %s}\n" + cam
+    scenes = {
+        "vlb_normalise_unknown": tf % "normalise: minmax",
+        "vlb_window_units_unknown": tf % "window_units: percent",
+        "normalise_for_generated": "model: transfer_function\nvolume: {generate: {kind: ct_phantom, dims: [8, 8, 8]}, "
+                                   "normalise: header}\n" + cam,
+        "ct_phantom_noise_negative": "model: transfer_function\nvolume: {generate: {kind: ct_phantom, dims: [8, 8, 8], "
+                                     "noise_hu: -1}}\n" + cam,
+    }
+    for n, t in scenes.items():
+        cases.append(Case(f"volume/{n}", ["volume", "render", "--scene", "{f}", "--out", "{out}"],
+                          {"s.yaml": t, "v.vlb": good}, names=["s.yaml"]))
+    o = ["volume", "generate", "--kind", "ct_phantom"]
+    cases += [
+        Case("volume/generate_ct_phantom_dims_one", o + ["--dims", "1,4,4", "--out", "{out}.vlb"], names=["ct_phantom"]),
+        Case("volume/generate_ct_phantom_spacing_zero", o + ["--spacing", "1,0,2", "--out", "{out}.vlb"],
+             names=["--spacing"]),
+        Case("volume/generate_ct_phantom_noise_negative", o + ["--noise-hu", "-3", "--out", "{out}.vlb"],
+             names=["--noise-hu"]),
+        Case("volume/generate_noise_hu_for_turbulence", ["volume", "generate", "--noise-hu", "3", "--out", "{out}.vlb"],
+             names=["--noise-hu"]),
+        Case("volume/generate_ct_phantom_box", o + ["--box", "0,0,0,1,1,1", "--out", "{out}.vlb"], names=["--box"]),
+        Case("volume/generate_shapes_vlb", ["volume", "generate", "--kind", "shapes", "--size", "8", "--out", "{out}.vlb"],
+             names=["--out"]),
     ]
     return cases
 
@@ -627,7 +825,7 @@ def main():
     ap.add_argument("--list", action="store_true")
     a = ap.parse_args()
     cases = (mesh_cases() + manifest_cases() + kl_cases() + scene_cases() + reproduce_cases() + sweep_cases() +
-             option_cases() + volume_cases())
+             option_cases() + volume_cases() + clv_cases() + medical_cases())
     cases = [c for c in cases if a.only in c.name]
     if a.list:
         for c in cases:

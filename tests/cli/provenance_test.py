@@ -64,6 +64,9 @@ def main():
                              "--voxel-mm", "8", "--width", "160", "--height", "120", "--out", "man"],
              "man/truth/truth.json"),
             ("volume render", ["volume", "render", "--scene", "vol.yaml", "--out", "vol"], "vol/render.json"),
+            ("fog render", ["fog", "render", "--scene", "sphere", "--width", "16", "--height", "12", "--table-n", "8",
+                            "--out", "fog"], "fog/render.json"),
+            ("fog bench", ["fog", "bench", "--study", "model", "--repeats", "1", "--out", "fogb"], "fogb/bench.json"),
         ]
         with open("vol.yaml", "w") as f:
             f.write("model: hg\nvolume: {generate: {kind: turbulence_sphere, size: 8}}\n"

@@ -1,6 +1,7 @@
 // Weighing experiments: the melt checks, the comparison of curves and the chart
 // (mass_series.h).
 
+#include <meltlab/core/statistics.h>
 #include <meltlab/core/error.h>
 #include <meltlab/verify/mass_series.h>
 
@@ -22,14 +23,6 @@ double grams_per_unit(const std::string& quantity, double density_kg_m3) {
   if (quantity == "volume_m3") return density_kg_m3 * 1000.0;
   if (quantity == "volume_cm3") return density_kg_m3 * 1e-3;
   throw InvariantError(fmt::format("mass series: unknown quantity '{}'", quantity));
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  if (v.size() % 2 == 1) return *mid;
-  return 0.5 * (*mid + *std::max_element(v.begin(), mid));
 }
 
 /// The deviation of reading i from the straight line through readings a and b (any order of

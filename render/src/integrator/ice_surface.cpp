@@ -1,6 +1,7 @@
 // Ray tracer of melting ice on a wet ground (integrator/ice_surface.h).
 
 #include <meltlab/render/integrator/ice_surface.h>
+#include <meltlab/render/fog/scene_fog.h>
 #include <meltlab/core/error.h>
 
 #include <fmt/format.h>
@@ -43,6 +44,8 @@ IceRenderer::IceRenderer(RenderScene scene) : scene_(std::move(scene)) {
   if (!scene_.ice.texture_file.empty())
     ice_texture_ = textures.image(read_rgb_image(scene_.ice.texture_file), "ice texture");
   if (scene_.camera) camera_ = scene_.camera;
+  if (scene_.fog)
+    fog_ = std::make_unique<fog::FogShader>(*scene_.fog, std::vector<double>{scene_.ice.n_spec, scene_.ground.n_spec});
 }
 IceRenderer::~IceRenderer() = default;
 
@@ -90,6 +93,13 @@ ShadingPlan IceRenderer::plan() const {
 
 namespace {
 
+// The first surface along a primary ray (the fog pass needs its distance, point and normal).
+struct FirstSurface {
+  bool hit = false, ice = false;
+  double t = 0;
+  Vector3d p = Vector3d::Zero(), n = Vector3d::UnitZ();  ///< n: unit, facing the eye
+};
+
 // The scene of one frame as the rays see it: the ice (the BVH and its material), the ground
 // with its material, the environment. Read-only while the tiles run.
 class FrameScene final : public IceSurroundings {
@@ -107,10 +117,22 @@ class FrameScene final : public IceSurroundings {
   double eps() const { return eps_; }
 
   // Radiance along the primary ray o + t·d (d unit) with `ice` the ice's material; `rd` the
-  // ray's footprint or nullptr.
-  Rgb primary_radiance(const IceShader& ice, const Vector3d& o, const Vector3d& d, const RayDifferential* rd) const {
+  // ray's footprint or nullptr; `first` (if given) receives the first surface (for the fog pass).
+  Rgb primary_radiance(const IceShader& ice, const Vector3d& o, const Vector3d& d, const RayDifferential* rd,
+                       FirstSurface* first = nullptr) const {
     MeshHit h;
-    if (!bvh_.intersect(o, d, 0.0, ground_t(o, d), h)) return background(o, d, rd);
+    const double t_ground = ground_t(o, d);
+    const bool on_ice = bvh_.intersect(o, d, 0.0, t_ground, h);
+    if (first) {
+      *first = FirstSurface{};
+      if (on_ice) {
+        const Vector3d n = bvh_.shading_normal(h);
+        *first = FirstSurface{true, true, h.t, o + h.t * d, n.dot(d) > 0 ? Vector3d(-n) : n};
+      } else if (t_ground < ground_far_) {
+        *first = FirstSurface{true, false, t_ground, o + t_ground * d, Vector3d::UnitZ()};
+      }
+    }
+    if (!on_ice) return background(o, d, rd);
     SurfaceHit hit{o + h.t * d, h.ng, bvh_.shading_normal(h), {}};
     if (!rd) return ice.shade(hit, d, nullptr);
     // The footprint at the hit: where the neighbouring rays meet the triangle's plane.
@@ -194,12 +216,20 @@ RgbImage IceRenderer::render() {
   const double z_top = std::max(bvh_.upper().z(), ground_z) + object_size_;
   const RayGenerator rays(cam, z_top);
   RgbImage img = rgb_image(w, h);
+  const fog::FogMaterial fog_ice = fog::FogShader::material(scene_.ice.cd, scene_.ice.cs, scene_.ice.n_spec);
+  const fog::FogMaterial fog_ground =
+      fog::FogShader::material(scene_.ground.cd, scene_.ground.cs, scene_.ground.n_spec);
   tbb::parallel_for(tbb::blocked_range2d<int>(0, h, 16, 0, w, 16), [&](const tbb::blocked_range2d<int>& r) {
     for (int j = r.rows().begin(); j < r.rows().end(); ++j)
       for (int i = r.cols().begin(); i < r.cols().end(); ++i) {
         const CameraRay ray = rays.generate_ray(i, j);
         if (!ray.ok) {
           set_rgb(img, i, j, Rgb::Zero());
+        } else if (fog_) {  // the fog pass on the shaded pixel (no footprints)
+          FirstSurface first;
+          const Rgb c = frame.primary_radiance(*ice, ray.origin, ray.direction, nullptr, &first);
+          const fog::SurfaceHit hit{first.p, first.n, first.ice ? &fog_ice : &fog_ground};
+          set_rgb(img, i, j, fog_->apply(c, ray.origin, ray.direction, first.t, first.hit ? &hit : nullptr));
         } else if (!footprints_) {
           set_rgb(img, i, j, frame.primary_radiance(*ice, ray.origin, ray.direction, nullptr));
         } else {  // the footprint: the rays through the next pixel to the right and below

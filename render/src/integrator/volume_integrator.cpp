@@ -1,10 +1,13 @@
 // The volume integrator (see integrator/volume_integrator.h).
 
+#include <meltlab/core/time.h>
 #include <meltlab/render/integrator/volume_integrator.h>
 #include <meltlab/render/integrator/fast_exp.h>
 
 #include <meltlab/core/error.h>
 #include <meltlab/core/hash.h>
+
+#include "volume_tracer_state.h"
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -22,22 +25,34 @@
 
 namespace meltlab::render {
 
+using detail::SampleGrid;
+using detail::TracerState;
+
 namespace {
 
 using Vec3 = Eigen::Vector3d;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::size_t kMaxLights = 16;
 
-double ms_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
+void validate_settings(const VolumeRenderSettings& s);
 
 void validate(const Volume& volume, const VolumeRenderSettings& s) {
   if (volume.empty()) throw InputError("volume render: the volume is empty");
+  validate_settings(s);
+  if (s.model == OpticalModel::kTransferFunction)
+    detail::validate_tf(s, false);
+  else if (s.traversal == Traversal::kObjectOrder)
+    throw InputError(
+        "volume render: the object-order traversal renders the transfer_function model of a bricked volume");
+}
+
+void validate_settings(const VolumeRenderSettings& s) {
   auto bad = [](const std::string& what) { throw InputError("volume render: " + what); };
   if (s.samples < 1) bad(fmt::format("vlr.sampling.n must be >= 1 (got {})", s.samples));
   if (s.step_rule == StepRule::kFitSegment && !(s.step > 0 && std::isfinite(s.step)))
     bad("the fit_segment step rule needs sampling.step > 0");
+  if (s.step_rule == StepRule::kFixedStep && !(s.step > 0 && std::isfinite(s.step)))
+    bad("the fixed_step rule needs sampling.step > 0");
   if (!(s.kappa >= 0 && std::isfinite(s.kappa))) bad(fmt::format("kappa must be finite and >= 0 (got {})", s.kappa));
   if (!(s.gamma > 0 && std::isfinite(s.gamma))) bad(fmt::format("gamma must be finite and > 0 (got {})", s.gamma));
   if (!(s.hg_c > -1 && s.hg_c < 1)) bad(fmt::format("vlr.hg.c must be in (-1, 1) (got {})", s.hg_c));
@@ -65,16 +80,66 @@ void validate(const Volume& volume, const VolumeRenderSettings& s) {
 /// a trilinear stencil located in it may read — the kB + 1 samples from its first, widened by one
 /// sample each side to absorb rounding in locating points — has a value > 0 (values <= 0 count as
 /// empty: e = 0). A point whose stencil's lower corner lies in a dead macrocell has f <= 0 exactly.
+///
+/// reach[c] is the radius of the cube of macrocells around c that all share c's state (live or
+/// dead): r when every macrocell within L∞ distance r of c (inside the grid) has c's state, capped
+/// at kMaxReach. A ray then runs (live) or jumps (dead) to the faces of that cube at once instead
+/// of stopping at every macrocell face — the "proximity clouds" of Cohen & Sheffer (1994) in the
+/// Chebyshev metric. Where no macrocell is dead, a live run spans the whole grid.
 struct Macrocells {
   static constexpr int kB = 4;
+  static constexpr int kMaxReach = 12;
   int bx = 0, by = 0, bz = 0;
-  std::vector<std::uint8_t> live;  // empty: skipping disabled
+  std::vector<std::uint8_t> live;   // empty: skipping disabled
+  std::vector<std::uint8_t> reach;  // per macrocell, see above
 
   bool enabled() const { return !live.empty(); }
-  bool is_live(int cx, int cy, int cz) const {
-    return live[std::size_t(cx) + std::size_t(bx) * (std::size_t(cy) + std::size_t(by) * std::size_t(cz))] != 0;
+  std::size_t index(int cx, int cy, int cz) const {
+    return std::size_t(cx) + std::size_t(bx) * (std::size_t(cy) + std::size_t(by) * std::size_t(cz));
   }
+  bool is_live(int cx, int cy, int cz) const { return live[index(cx, cy, cz)] != 0; }
 };
+
+/// The Chebyshev distance, capped at cap, from every cell of a bx × by × bz grid to the nearest cell
+/// with target set: d(p) = min over q with target(q) of max_i |p_i − q_i|, in three separable passes
+/// d ← min_q max(|p − q|, d(q)) along x, y and z (exact for the L∞ metric).
+std::vector<std::uint8_t> chebyshev_distance(const std::vector<std::uint8_t>& target, int bx, int by, int bz, int cap) {
+  const int n[3] = {bx, by, bz};
+  std::vector<std::uint8_t> d(target.size());
+  for (std::size_t c = 0; c < target.size(); ++c) d[c] = target[c] ? 0 : std::uint8_t(cap);
+  std::vector<std::uint8_t> next(d.size());
+  const std::size_t stride[3] = {1, std::size_t(bx), std::size_t(bx) * std::size_t(by)};
+  for (int ax = 0; ax < 3; ++ax) {
+    const int u = ax == 0 ? 1 : 0, w = ax == 2 ? 1 : 2;  // the two other axes
+    tbb::parallel_for(tbb::blocked_range<int>(0, n[w]), [&](const tbb::blocked_range<int>& r) {
+      for (int b = r.begin(); b < r.end(); ++b)
+        for (int a = 0; a < n[u]; ++a) {
+          const std::size_t base = std::size_t(a) * stride[u] + std::size_t(b) * stride[w];
+          for (int p = 0; p < n[ax]; ++p) {
+            int best = d[base + std::size_t(p) * stride[ax]];
+            const int q0 = std::max(0, p - cap), q1 = std::min(n[ax] - 1, p + cap);
+            for (int q = q0; q <= q1 && best > 0; ++q)
+              best = std::min(best, std::max(std::abs(p - q), int(d[base + std::size_t(q) * stride[ax]])));
+            next[base + std::size_t(p) * stride[ax]] = std::uint8_t(best);
+          }
+        }
+    });
+    d.swap(next);
+  }
+  return d;
+}
+
+/// reach (see Macrocells) from the live flags: the distance to the nearest macrocell of the other
+/// state, minus one.
+void build_reach(Macrocells& m) {
+  constexpr int cap = Macrocells::kMaxReach + 1;
+  std::vector<std::uint8_t> dead(m.live.size());
+  for (std::size_t c = 0; c < dead.size(); ++c) dead[c] = m.live[c] ? 0 : 1;
+  const auto to_dead = chebyshev_distance(dead, m.bx, m.by, m.bz, cap);
+  const auto to_live = chebyshev_distance(m.live, m.bx, m.by, m.bz, cap);
+  m.reach.resize(m.live.size());
+  for (std::size_t c = 0; c < m.live.size(); ++c) m.reach[c] = std::uint8_t((m.live[c] ? to_dead[c] : to_live[c]) - 1);
+}
 
 Macrocells build_macrocells(const Volume& v) {
   Macrocells m;
@@ -106,6 +171,7 @@ Macrocells build_macrocells(const Volume& v) {
     });
     return 0;
   });
+  build_reach(m);
   return m;
 }
 
@@ -164,13 +230,14 @@ class Sampler {
     // The first sample at or beyond where the ray leaves macrocell c (along t): a dead macrocell is
     // empty one sample beyond its faces, so the rounding of the exit does not matter; a live one's
     // run may end a sample early or late, which only means that sample is located again.
-    auto next_after_exit = [&](const int c[3], std::int64_t i) {
+    // With reach r: where it leaves the cube of macrocells c ± r, all of c's state.
+    auto next_after_exit = [&](const int c[3], int r, std::int64_t i) {
       double t_exit = kInf;
       for (int ax = 0; ax < 3; ++ax) {
         if (gv[ax] > 0.0) {
-          if (c[ax] + 1 < nb[ax]) t_exit = std::min(t_exit, ((c[ax] + 1) * B - g0[ax]) * inv_gv[ax]);
+          if (c[ax] + r + 1 < nb[ax]) t_exit = std::min(t_exit, ((c[ax] + r + 1) * B - g0[ax]) * inv_gv[ax]);
         } else if (gv[ax] < 0.0) {
-          if (c[ax] > 0) t_exit = std::min(t_exit, (c[ax] * B - g0[ax]) * inv_gv[ax]);
+          if (c[ax] - r > 0) t_exit = std::min(t_exit, ((c[ax] - r) * B - g0[ax]) * inv_gv[ax]);
         }
       }
       const double q = std::ceil((t_exit - a) / h);
@@ -183,8 +250,9 @@ class Sampler {
         const int c[3] = {std::clamp(int(std::floor(g0[0] + t * gv[0])), 0, n_[0] - 1) / B,
                           std::clamp(int(std::floor(g0[1] + t * gv[1])), 0, n_[1] - 1) / B,
                           std::clamp(int(std::floor(g0[2] + t * gv[2])), 0, n_[2] - 1) / B};
-        run_end = next_after_exit(c, i);
-        if (!m_.is_live(c[0], c[1], c[2])) {
+        const std::size_t ci = m_.index(c[0], c[1], c[2]);
+        run_end = next_after_exit(c, m_.reach[ci], i);
+        if (!m_.live[ci]) {
           skipped += run_end - i;
           i = run_end;
           continue;
@@ -290,6 +358,8 @@ struct Kernel {
         return trace_quad<OpticalModel::kHG>(o, v, t0, t1, pixel_id, I, st);
       case OpticalModel::kHGAttenuated:
         return trace_quad<OpticalModel::kHGAttenuated>(o, v, t0, t1, pixel_id, I, st);
+      case OpticalModel::kTransferFunction:  // its own state (volume_tf.cpp)
+        break;
     }
     return 1.0;
   }
@@ -315,30 +385,9 @@ struct Kernel {
     constexpr bool emits = M != OpticalModel::kAbsorption;
     constexpr bool scatter = M == OpticalModel::kHG || M == OpticalModel::kHGAttenuated;
     constexpr bool attenuated = M == OpticalModel::kHGAttenuated;
-    double h = ds;
-    std::int64_t n_max;
-    double offset_fraction = 0;
-    switch (s.first_offset) {
-      case FirstOffset::kZero:
-        offset_fraction = 0;
-        break;
-      case FirstOffset::kHalf:
-        offset_fraction = 0.5;
-        break;
-      case FirstOffset::kJitter:
-        offset_fraction = unit_from_bits(splitmix64(s.jitter_seed ^ splitmix64(pixel_id)));
-        break;
-    }
-    const double length = t1 - t0;
-    if (s.step_rule == StepRule::kFitSegment) {
-      n_max = std::max<std::int64_t>(1, std::int64_t(std::ceil(length / ds)));
-      h = length / double(n_max);
-    } else {
-      // Samples t0 + (φ + i) h < t1.
-      const double q = (length / h) - offset_fraction;
-      n_max = q > 0 ? std::int64_t(std::ceil(q)) : 0;
-    }
-    const double a = t0 + offset_fraction * h;
+    const SampleGrid grid = detail::sample_grid(s, ds, t0, t1, pixel_id);
+    const double h = grid.h, a = grid.a;
+    const std::int64_t n_max = grid.n;
     const double kappa_h = s.kappa * h;
     const double source_step = s.emission_scale_by_ds ? h : 1.0;
     const double emission_k = s.kappa_in_source ? s.kappa : 1.0;
@@ -391,6 +440,41 @@ struct Kernel {
     double T = 1.0, ext = 0.0;
     std::int64_t taken = 0;
     bool terminated = false;
+    // The inclusive and exclusive quadratures defer the transmittance of the non-empty samples to
+    // batches of kBatch: the optical depths are summed in order as before, then the exponentials of
+    // a batch are taken in one loop the compiler vectorises (they were the longest chain of a
+    // sample), then the batch is composited in order. Every value and every sum is the one the
+    // per-sample loop computed, so the images are the same bit for bit; a ray that terminates
+    // (ERT) mid-batch stops at the same sample and its counter is restored to that sample.
+    constexpr bool batched = extinct && Q != Quadrature::kExponential;
+    constexpr int kBatch = batched ? 16 : 1;
+    int nb = 0;
+    float tau_b[kBatch];    // -κ h Σe (inclusive) or -κ Σ e w (exclusive), per sample
+    float T_b[kBatch];      // exp of it
+    double step_b[kBatch];  // the sample's g_step
+    double gr_b[kBatch], gg_b[kBatch], gb_b[kBatch];
+    std::int64_t taken_b[kBatch];  // `taken` after the sample
+    // Composites the batch in order; returns false (and stops) where the transmittance falls below
+    // the ERT threshold.
+    auto flush = [&]() {
+      if constexpr (batched) {
+        for (int j = 0; j < nb; ++j) T_b[j] = exp_nonpositive(tau_b[j]);
+        for (int j = 0; j < nb; ++j) {
+          const double Tj = double(T_b[j]);
+          const double k = (Q == Quadrature::kInclusive ? Tj : T) * step_b[j];
+          T = Tj;
+          if constexpr (emits) Ir += gr_b[j] * k, Ig += gg_b[j] * k, Ib += gb_b[j] * k;
+          if (T < s.ert_transmittance) {
+            terminated = true;
+            taken = taken_b[j];
+            nb = 0;
+            return false;
+          }
+        }
+        nb = 0;
+      }
+      return true;
+    };
     st.skipped += sampler.march(
         o, v, a, h, n_max, [&](std::int64_t i, double gx, double gy, double gz, float f, const Cell& cell) {
           ++taken;
@@ -444,26 +528,28 @@ struct Kernel {
             const double k = Q == Quadrature::kExponential ? w : g_step;
             Ir += gr * k, Ig += gg * k, Ib += gb * k;
             return true;
-          } else {
-            double k = 0;
+          } else if constexpr (batched) {
             // T = exp(-τ) from the optical depth τ summed in double, never a running product (which
-            // would drift by the rounding of every factor); the exponentials in float (glibc's expf is
-            // several times faster than exp; ~1 ulp, 6e-8 relative, below the float sampling of the
-            // volume); 1 - e^{-x} as -expm1 so a thin step keeps its digits.
+            // would drift by the rounding of every factor); the exponentials in float (~1 ulp, 6e-8
+            // relative, below the float sampling of the volume). Inclusive: the sample's own step
+            // is in its T; exclusive: the sample is weighted by the T before it.
             if constexpr (Q == Quadrature::kInclusive) {
               ext += w == h ? e : e * (w / h);
-              T = double(exp_nonpositive(float(-kappa_h * ext)));
-              k = T * g_step;
-            } else if constexpr (Q == Quadrature::kExclusive) {
-              k = T * g_step;
-              ext += e * w;
-              T = double(exp_nonpositive(float(-s.kappa * ext)));
+              tau_b[nb] = float(-kappa_h * ext);
             } else {
-              const double sigma = s.kappa * e;
-              k = T * (sigma > 0 ? double(-std::expm1(float(-sigma * w))) / sigma : w);
               ext += e * w;
-              T = double(exp_nonpositive(float(-s.kappa * ext)));
+              tau_b[nb] = float(-s.kappa * ext);
             }
+            step_b[nb] = g_step;
+            gr_b[nb] = gr, gg_b[nb] = gg, gb_b[nb] = gb;
+            taken_b[nb] = taken;
+            return ++nb < kBatch || flush();
+          } else {
+            // The exponential quadrature: 1 - e^{-x} as -expm1 so a thin step keeps its digits.
+            const double sigma = s.kappa * e;
+            const double k = T * (sigma > 0 ? double(-std::expm1(float(-sigma * w))) / sigma : w);
+            ext += e * w;
+            T = double(exp_nonpositive(float(-s.kappa * ext)));
             if constexpr (emits) Ir += gr * k, Ig += gg * k, Ib += gb * k;
             if (T < s.ert_transmittance) {
               terminated = true;
@@ -472,6 +558,7 @@ struct Kernel {
             return true;
           }
         });
+    if (nb > 0) flush();
     I += Rgb(Ir, Ig, Ib);
     st.samples += taken;
     if (terminated) ++st.terminated;
@@ -658,18 +745,8 @@ ShadowCache build_cache_impl(const Kernel<S>& k, const LightTerm& l, const Volum
   return c;
 }
 
-/// The tracer's state behind a virtual interface (one dispatch per ray): the volume and the settings
-/// it owns (the kernel refers to them), the kernel, and the shadow caches.
-struct TracerState {
-  virtual ~TracerState() = default;
-  virtual double trace(const Vec3& o, const Vec3& v, double t0, double t1, std::uint64_t pixel, Rgb& I,
-                       VolumeRenderStats& st) const = 0;
-  virtual double optical_depth(const Vec3& x, const Vec3& d, double max_distance, std::int64_t& samples) const = 0;
-  Box3 box;
-  double cache_ms = 0;
-  std::int64_t cache_samples = 0;
-};
-
+/// The state of seed 000's models: the volume and the settings it owns (the kernel refers to them),
+/// the kernel, and the shadow caches.
 template <class S>
 struct TypedTracerState final : TracerState {
   Volume volume;
@@ -756,8 +833,43 @@ std::optional<RayInterval> intersect_box(const Box3& box, const Vec3& o, const V
 }
 
 double primary_step(const Volume& volume, const VolumeRenderSettings& s) {
-  if (s.step_rule == StepRule::kFitSegment) return s.step;
+  if (s.step_rule == StepRule::kFitSegment || s.step_rule == StepRule::kFixedStep) return s.step;
   return volume.domain().diagonal() / s.samples;
+}
+
+SampleGrid detail::sample_grid(const VolumeRenderSettings& s, double ds, double t0, double t1, std::uint64_t pixel_id) {
+  SampleGrid g;
+  double h = ds;
+  std::int64_t n_max;
+  double offset_fraction = 0;
+  switch (s.first_offset) {
+    case FirstOffset::kZero:
+      offset_fraction = 0;
+      break;
+    case FirstOffset::kHalf:
+      offset_fraction = 0.5;
+      break;
+    case FirstOffset::kJitter:
+      offset_fraction = unit_from_bits(splitmix64(s.jitter_seed ^ splitmix64(pixel_id)));
+      break;
+  }
+  const double length = t1 - t0;
+  if (s.step_rule == StepRule::kFitSegment) {
+    n_max = std::max<std::int64_t>(1, std::int64_t(std::ceil(length / ds)));
+    h = length / double(n_max);
+  } else if (s.step_rule == StepRule::kFixedStep) {
+    // Seed 001: floor(length / s) whole steps from the entry, each sampled φ of the way in.
+    const double q = std::floor(length / h);
+    n_max = q > 0 ? std::int64_t(q) : 0;
+  } else {
+    // Samples t0 + (φ + i) h < t1.
+    const double q = (length / h) - offset_fraction;
+    n_max = q > 0 ? std::int64_t(std::ceil(q)) : 0;
+  }
+  g.a = t0 + offset_fraction * h;
+  g.h = h;
+  g.n = n_max;
+  return g;
 }
 
 std::vector<VolumeLight> effective_lights(const Volume& volume, const VolumeRenderSettings& s) {
@@ -769,16 +881,49 @@ std::vector<VolumeLight> effective_lights(const Volume& volume, const VolumeRend
 
 struct VolumeTracer::Impl {
   std::unique_ptr<TracerState> state;
+  VolumeRenderSettings settings;
 };
 
 VolumeTracer::VolumeTracer(const Volume& volume, const VolumeRenderSettings& settings,
                            const std::vector<ShadowCache>& caches)
     : impl_(std::make_unique<Impl>()) {
   validate(volume, settings);
+  impl_->settings = settings;
+  if (settings.model == OpticalModel::kTransferFunction) {
+    impl_->state = detail::make_tf_state(volume, settings, nullptr);
+    return;
+  }
   impl_->state = visit_samples(volume, [&](const auto& samples) -> std::unique_ptr<TracerState> {
     using S = typename std::remove_cv_t<std::remove_pointer_t<decltype(samples.data)>>;
     return std::make_unique<TypedTracerState<S>>(volume, settings, caches);
   });
+}
+
+VolumeTracer::VolumeTracer(const Volume& volume, const VolumeRenderSettings& settings,
+                           std::shared_ptr<const VolumeRangeIndex> ranges)
+    : impl_(std::make_unique<Impl>()) {
+  validate(volume, settings);
+  impl_->settings = settings;
+  if (settings.model != OpticalModel::kTransferFunction)
+    throw InputError("volume render: a range index is for the transfer_function model");
+  impl_->state = detail::make_tf_state(volume, settings, std::move(ranges));
+}
+
+VolumeTracer::VolumeTracer(const BrickedVolume& volume, const VolumeRenderSettings& settings,
+                           std::shared_ptr<const VolumeRangeIndex> ranges)
+    : impl_(std::make_unique<Impl>()) {
+  check_volume_render_settings(volume, settings);
+  impl_->settings = settings;
+  impl_->state = detail::make_tf_state(volume, settings, std::move(ranges));
+}
+
+void check_volume_render_settings(const BrickedVolume& volume, const VolumeRenderSettings& s) {
+  if (volume.empty()) throw InputError("volume render: the volume is empty");
+  if (s.model != OpticalModel::kTransferFunction)
+    throw InputError(fmt::format("volume render: a bricked volume renders the transfer_function model only (not {})",
+                                 optical_model_name(s.model)));
+  validate_settings(s);
+  detail::validate_tf(s, true);
 }
 
 VolumeTracer::~VolumeTracer() = default;
@@ -808,6 +953,7 @@ double VolumeTracer::transmittance(const Vec3& x, const Vec3& d, double max_dist
 const Box3& VolumeTracer::box() const { return impl_->state->box; }
 double VolumeTracer::cache_build_ms() const { return impl_->state->cache_ms; }
 std::int64_t VolumeTracer::cache_shadow_samples() const { return impl_->state->cache_samples; }
+double VolumeTracer::index_build_ms() const { return impl_->state->index_ms; }
 
 VolumeFrame render_volume(const Volume& volume, const Camera& camera, const VolumeRenderSettings& settings) {
   return render_volume(volume, camera, settings, {});
@@ -816,7 +962,18 @@ VolumeFrame render_volume(const Volume& volume, const Camera& camera, const Volu
 VolumeFrame render_volume(const Volume& volume, const Camera& camera, const VolumeRenderSettings& s,
                           const std::vector<ShadowCache>& caches) {
   const VolumeTracer tracer(volume, s, caches);
-  const TracerState& k = *tracer.impl_->state;
+  return tracer.render(camera);
+}
+
+VolumeFrame render_volume(const BrickedVolume& volume, const Camera& camera, const VolumeRenderSettings& s) {
+  const VolumeTracer tracer(volume, s);
+  return tracer.render(camera);
+}
+
+VolumeFrame VolumeTracer::render(const Camera& camera) const {
+  const TracerState& k = *impl_->state;
+  if (auto own = k.render(camera)) return std::move(*own);
+  const VolumeRenderSettings& s = impl_->settings;
   VolumeFrame frame;
   frame.stats.shadow_cache_ms = k.cache_ms;
   frame.stats.shadow_samples = k.cache_samples;
@@ -950,9 +1107,17 @@ std::string optical_model_name(OpticalModel m) {
       return "hg";
     case OpticalModel::kHGAttenuated:
       return "hg_attenuated";
+    case OpticalModel::kTransferFunction:
+      return "transfer_function";
   }
   return "emission_absorption";
 }
+
+std::string ess_scheme_name(EmptySpaceScheme e) {
+  return e == EmptySpaceScheme::kOneLevel ? "one_level" : "multi_level";
+}
+
+std::string traversal_name(Traversal t) { return t == Traversal::kObjectOrder ? "object_order" : "image_order"; }
 
 std::string quadrature_name(Quadrature q) {
   switch (q) {

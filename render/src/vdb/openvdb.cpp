@@ -148,6 +148,44 @@ struct OpenVdbPeer::Impl {
 };
 
 OpenVdbPeer::OpenVdbPeer(const Volume& volume) : impl_(std::make_unique<Impl>()) { impl_->grid = to_grid(volume); }
+
+OpenVdbPeer::OpenVdbPeer(const Volume& v, const std::function<float(float)>& density)
+    : impl_(std::make_unique<Impl>()) {
+  initialise();
+  auto grid = openvdb::FloatGrid::create(0.0f);
+  grid->setName("density");
+  grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+  // Slabs of x, z fastest (OpenVDB's LayoutZYX); the density of each stored value once (8-bit volumes).
+  std::vector<float> lut;
+  if (v.type() == SampleType::kUint8) {
+    lut.resize(256);
+    for (int i = 0; i < 256; ++i) lut[std::size_t(i)] = density(float(i) * float(v.value_scale()));
+  }
+  constexpr int kSlab = 16;
+  std::vector<float> slab(std::size_t(kSlab) * std::size_t(v.ny()) * std::size_t(v.nz()));
+  for (int x0 = 0; x0 < v.nx(); x0 += kSlab) {
+    const int x1 = std::min(v.nx(), x0 + kSlab);
+    const openvdb::CoordBBox box(openvdb::Coord(x0, 0, 0), openvdb::Coord(x1 - 1, v.ny() - 1, v.nz() - 1));
+    visit_samples(v, [&](const auto& s) {
+      for (int x = x0; x < x1; ++x)
+        for (int y = 0; y < v.ny(); ++y)
+          for (int z = 0; z < v.nz(); ++z) {
+            const auto stored = s.data[x * s.sx + y * s.sy + z * s.sz];
+            slab[(std::size_t(x - x0) * std::size_t(v.ny()) + std::size_t(y)) * std::size_t(v.nz()) + std::size_t(z)] =
+                lut.empty() ? density(float(stored) * s.scale) : lut[std::size_t(stored)];
+          }
+      return 0;
+    });
+    openvdb::tools::Dense<float, openvdb::tools::LayoutZYX> dense(box, slab.data());
+    openvdb::tools::copyFromDense(dense, *grid, 0.0f);
+  }
+  openvdb::Mat4d m = openvdb::Mat4d::identity();
+  m.preScale(openvdb::Vec3d(v.spacing().x(), v.spacing().y(), v.spacing().z()));
+  m.postTranslate(openvdb::Vec3d(v.origin().x(), v.origin().y(), v.origin().z()));
+  grid->setTransform(openvdb::math::Transform::createLinearTransform(m));
+  grid->pruneGrid();
+  impl_->grid = grid;
+}
 OpenVdbPeer::~OpenVdbPeer() = default;
 
 std::int64_t OpenVdbPeer::active_voxels() const { return std::int64_t(impl_->grid->activeVoxelCount()); }

@@ -4,6 +4,7 @@
 
 #include <meltlab/core/error.h>
 #include <meltlab/core/hash.h>
+#include <meltlab/core/limits.h>
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -12,7 +13,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 #include <string_view>
+#include <vector>
 
 namespace meltlab::render {
 
@@ -97,7 +100,49 @@ double turbulence(double px, double py, double pz, const TurbulenceOptions& o) {
   return o.clip == NoiseClip::kNone ? sum : std::clamp(sum, 0.0, 1.0);
 }
 
+namespace {
+
+/// Seed 001's volumes: 8-bit node samples, z fastest (the layout of its files), unit spacing.
+Volume generate_voxels(const VolumeGenerateOptions& o) {
+  std::unique_ptr<VoxelSource> source;
+  if (o.kind == VolumeKind::kShapes) {
+    ShapesOptions so = o.shapes;
+    so.dims = {o.nx, o.ny, o.nz};
+    source = std::make_unique<ShapesVolume>(so);
+  } else {
+    source = std::make_unique<SkullPhantom>(std::array<int, 3>{o.nx, o.ny, o.nz}, o.shapes.seed);
+  }
+  if (o.nx < 2 || o.ny < 2 || o.nz < 2)
+    throw InputError(fmt::format("volume generator: {} needs at least 2 voxels per axis", volume_kind_name(o.kind)));
+  const std::int64_t n = checked_mul(checked_mul(o.nx, o.ny), o.nz);
+  check_count("volume generator", "samples", n, input_limits().volume_samples, "volume_samples");
+  auto storage = std::make_shared<std::vector<std::uint8_t>>(static_cast<std::size_t>(n));
+  std::uint8_t* bytes = storage->data();
+  // The same storage viewed z fastest: i = z + y nz + x ny nz.
+  const std::int64_t sy = o.nz, sx = std::int64_t(o.ny) * o.nz;
+  tbb::parallel_for(tbb::blocked_range<int>(0, o.nx), [&](const tbb::blocked_range<int>& r) {
+    std::vector<VoxelCoord> c(std::size_t(o.nz));
+    for (int x = r.begin(); x < r.end(); ++x)
+      for (int y = 0; y < o.ny; ++y) {
+        for (int z = 0; z < o.nz; ++z) c[std::size_t(z)] = VoxelCoord{x, y, z};
+        source->fill(c.data(), c.size(), bytes + x * sx + y * sy);
+      }
+  });
+  Volume v = Volume::wrap(storage, bytes, SampleType::kUint8, o.nx, o.ny, o.nz, sx, sy, 1);
+  v.set_placement(SamplePlacement::kNodes);
+  v.set_value_scale(1.0);
+  return v;
+}
+
+}  // namespace
+
 Volume generate_volume(const VolumeGenerateOptions& o) {
+  if (o.kind == VolumeKind::kShapes || o.kind == VolumeKind::kSkull) return generate_voxels(o);
+  if (o.kind == VolumeKind::kCtPhantom) {
+    CtPhantomOptions ct = o.ct;
+    ct.dims = {o.nx, o.ny, o.nz};
+    return normalised_volume(generate_ct_phantom(ct), NormSource::kScanned, 0, 0, nullptr, "ct_phantom");
+  }
   if (o.noise.octaves < 1 || o.noise.octaves > 16)
     throw InputError(fmt::format("volume generator: octaves must be in [1, 16] (got {})", o.noise.octaves));
   if (!(o.noise.gain > 0) || !(o.noise.lacunarity > 0) || !(o.noise.base_frequency > 0) ||
@@ -133,6 +178,9 @@ Volume generate_volume(const VolumeGenerateOptions& o) {
                   w = turbulence(px, py, pz, o.noise) * (0.15 + 0.85 * rho) * std::min(1.0, 8.0 * (1.0 - rho));
                 break;
               case VolumeKind::kConstant:
+              case VolumeKind::kShapes:
+              case VolumeKind::kSkull:
+              case VolumeKind::kCtPhantom:
                 break;
             }
           }
@@ -152,16 +200,24 @@ std::string volume_kind_name(VolumeKind kind) {
       return "fireball";
     case VolumeKind::kConstant:
       return "constant";
+    case VolumeKind::kShapes:
+      return "shapes";
+    case VolumeKind::kSkull:
+      return "skull";
+    case VolumeKind::kCtPhantom:
+      return "ct_phantom";
   }
   return "turbulence_box";
 }
 
 VolumeKind parse_volume_kind(const std::string& name, const std::string& what) {
-  for (VolumeKind k :
-       {VolumeKind::kTurbulenceBox, VolumeKind::kTurbulenceSphere, VolumeKind::kFireball, VolumeKind::kConstant})
+  for (VolumeKind k : {VolumeKind::kTurbulenceBox, VolumeKind::kTurbulenceSphere, VolumeKind::kFireball,
+                       VolumeKind::kConstant, VolumeKind::kShapes, VolumeKind::kSkull, VolumeKind::kCtPhantom})
     if (volume_kind_name(k) == name) return k;
   throw InputError(
-      fmt::format("{}: unknown volume kind '{}' (turbulence_box, turbulence_sphere, fireball, constant)", what, name));
+      fmt::format("{}: unknown volume kind '{}' (turbulence_box, turbulence_sphere, fireball, constant, shapes, skull, "
+                  "ct_phantom)",
+                  what, name));
 }
 
 std::string volume_content_hash(const Volume& v) {

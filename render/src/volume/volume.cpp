@@ -112,24 +112,25 @@ bool Volume::x_fastest_packed() const {
   return stride_[0] == 1 && stride_[1] == n_[0] && stride_[2] == std::int64_t(n_[0]) * n_[1];
 }
 
-void Volume::fit_to_box(const Box3& box) {
+void PlacedGrid::fit_to_box(const Box3& box) {
   const Eigen::Vector3d size = box.size();
   if (!(size.minCoeff() > 0.0) || !size.allFinite())
     throw InputError(
         fmt::format("volume box must have positive, finite sides (got {} x {} x {})", size.x(), size.y(), size.z()));
   for (int a = 0; a < 3; ++a) {
     if (placement_ == SamplePlacement::kCellCentred) {
-      spacing_[a] = size[a] / n_[a];
+      spacing_[a] = size[a] / n_[std::size_t(a)];
       origin_[a] = box.lo[a] + 0.5 * spacing_[a];
     } else {
-      if (n_[a] < 2) throw InputError("a volume of node samples needs at least 2 samples per axis to span a box");
-      spacing_[a] = size[a] / (n_[a] - 1);
+      if (n_[std::size_t(a)] < 2)
+        throw InputError("a volume of node samples needs at least 2 samples per axis to span a box");
+      spacing_[a] = size[a] / (n_[std::size_t(a)] - 1);
       origin_[a] = box.lo[a];
     }
   }
 }
 
-Box3 Volume::domain() const {
+Box3 PlacedGrid::domain() const {
   Box3 b;
   const Eigen::Vector3d n(n_[0], n_[1], n_[2]);
   if (placement_ == SamplePlacement::kCellCentred) {
@@ -215,9 +216,7 @@ std::array<float, 2> Volume::value_range() const {
 
 Volume Volume::to_float32() const {
   Volume out = allocate(n_[0], n_[1], n_[2], SampleType::kFloat32);
-  out.origin_ = origin_;
-  out.spacing_ = spacing_;
-  out.placement_ = placement_;
+  out.place_like(*this);
   out.scale_ = 1.0;
   auto* o = static_cast<float*>(out.mutable_);
   visit_samples(*this, [&](const auto& s) {

@@ -9,6 +9,7 @@
 #include <meltlab/core/limits.h>
 #include <meltlab/render/vdb/openvdb.h>
 #include <meltlab/render/volume/generate.h>
+#include <meltlab/render/volume/nrrd_file.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -56,17 +57,22 @@ Volume read_meltlab_volume(const fs::path& header) {
   for (double d : dims)
     if (!(d >= 1 && d <= 2147483647.0 && d == std::floor(d)))
       c.fail_at("dims", "'dims' must be three whole numbers >= 1");
-  const std::string type = c.get_choice("sample_type", "float32", {"float32", "uint8", "uint16"});
-  c.get_choice("endianness", "little", {"little"});
+  const std::string type = c.get_choice("sample_type", "float32",
+                                        {"float32", "uint8", "uint16", "int8", "int16", "int32", "uint32", "float64"});
+  const bool big = c.get_choice("endianness", "little", {"little", "big"}) == "big";
   c.get_choice("order", "x_fastest", {"x_fastest"});
   const std::string placement = c.get_choice("placement", "cell_centred", {"cell_centred", "nodes"});
   const Eigen::Vector3d origin = c.get_vec3("origin", Eigen::Vector3d::Zero());
   const Eigen::Vector3d spacing = c.get_vec3("spacing", Eigen::Vector3d::Ones());
   if (!(spacing.minCoeff() > 0)) c.fail_at("spacing", "'spacing' must be three numbers > 0");
-  const SampleType st = type == "uint8"    ? SampleType::kUint8
+  // float32, uint8 and uint16 little-endian: used as stored; anything else converted to float32.
+  const bool as_stored = !big && (type == "float32" || type == "uint8" || type == "uint16");
+  const SampleType st = !as_stored         ? SampleType::kFloat32
+                        : type == "uint8"  ? SampleType::kUint8
                         : type == "uint16" ? SampleType::kUint16
                                            : SampleType::kFloat32;
-  const double scale = c.get<double>("value_scale", st == SampleType::kUint8    ? 1.0 / 255
+  const double scale = c.get<double>("value_scale", !as_stored                  ? 1.0
+                                                    : st == SampleType::kUint8  ? 1.0 / 255
                                                     : st == SampleType::kUint16 ? 1.0 / 65535
                                                                                 : 1.0);
   if (!(scale > 0)) c.fail_at("value_scale", "'value_scale' must be > 0");
@@ -81,14 +87,25 @@ Volume read_meltlab_volume(const fs::path& header) {
   check_count(header.string(), "volume samples", count, input_limits().volume_samples, "volume_samples");
   const fs::path raw = fs::path(data).is_absolute() ? fs::path(data) : header.parent_path() / data;
   const std::int64_t size = check_input_file(raw, "raw volume");
-  const std::int64_t expected = checked_mul(count, sample_bytes(st));
+  const ScalarType stored = *parse_scalar_type(type);
+  const std::int64_t expected = checked_mul(count, scalar_bytes(stored));
   if (size != expected)
     throw InputError(fmt::format("{}: holds {} bytes, but its header {} declares {} x {} x {} {} samples = {} bytes",
                                  raw.string(), size, header.string(), nx, ny, nz, type, expected));
-  Volume v = Volume::allocate(nx, ny, nz, st, header.string());
+  Volume v;
   std::ifstream in(raw, std::ios::binary);
-  in.read(static_cast<char*>(v.mutable_data()), std::streamsize(expected));
-  if (in.gcount() != std::streamsize(expected)) throw InputError(fmt::format("{}: read error", raw.string()));
+  if (as_stored) {
+    v = Volume::allocate(nx, ny, nz, st, header.string());
+    in.read(static_cast<char*>(v.mutable_data()), std::streamsize(expected));
+    if (in.gcount() != std::streamsize(expected)) throw InputError(fmt::format("{}: read error", raw.string()));
+  } else {
+    ScalarVolume s = ScalarVolume::allocate({nx, ny, nz}, stored, header.string());
+    in.read(reinterpret_cast<char*>(s.bytes.data()), std::streamsize(expected));
+    if (in.gcount() != std::streamsize(expected)) throw InputError(fmt::format("{}: read error", raw.string()));
+    if (big) swap_sample_bytes(s.bytes, stored);
+    check_finite_samples(s, raw.string());
+    v = normalised_volume(s, NormSource::kNone, 0, 0, nullptr, header.string());
+  }
   v.set_placement(placement == "nodes" ? SamplePlacement::kNodes : SamplePlacement::kCellCentred);
   v.set_origin(origin);
   v.set_spacing(spacing);
@@ -143,9 +160,64 @@ void write_volume(const fs::path& header, const Volume& v, const std::map<std::s
   write_text_atomically(header, j.dump(2) + "\n");
 }
 
-Volume read_volume(const fs::path& file) {
-  if (file.extension() == ".vdb") return read_vdb(file);
-  return read_meltlab_volume(file);
+bool is_medical_volume_file(const fs::path& file) {
+  const std::string ext = file.extension().string();
+  return ext == ".vlb" || ext == ".nrrd" || ext == ".nhdr";
+}
+
+Volume read_volume(const fs::path& file, const VolumeReadOptions& options, VolumeReadInfo* info) {
+  VolumeReadInfo local;
+  VolumeReadInfo& r = info ? *info : local;
+  const std::string ext = file.extension().string();
+  if (ext == ".vdb") {
+    r.format = "vdb";
+    Volume v = read_vdb(file);
+    r.stored_type = sample_type_name(v.type());
+    return v;
+  }
+  if (ext == ".vlb") {
+    const VlbFile f = read_vlb(file);
+    r.format = "vlb";
+    r.vlb = f.header;
+    r.stored_type = scalar_type_name(f.header.type);
+    r.samples_hash = scalar_content_hash(f.volume);
+    const auto range = vlb_norm_range(f.header, options.norm, options.window_units);
+    Normalisation n;
+    Volume v = normalised_volume(f.volume, options.norm, range[0], range[1], &n, file.string());
+    r.normalisation = n;
+    return v;
+  }
+  if (ext == ".nrrd" || ext == ".nhdr") {
+    if (options.norm == NormSource::kHeader || options.norm == NormSource::kWindow)
+      throw InputError(
+          fmt::format("{}: normalise: {} needs a VLB file (a NRRD file declares no range or window; "
+                      "use scanned or none)",
+                      file.string(), norm_source_name(options.norm)));
+    NrrdHeader h;
+    const ScalarVolume s = read_nrrd(file, &h);
+    r.format = "nrrd";
+    r.stored_type = scalar_type_name(s.type);
+    r.samples_hash = scalar_content_hash(s);
+    Normalisation n;
+    Volume v = normalised_volume(s, options.norm, 0, 0, &n, file.string());
+    v.set_placement(h.placement);
+    r.normalisation = n;
+    return v;
+  }
+  r.format = "meltlab-volume";
+  Volume v = read_meltlab_volume(file);
+  r.stored_type = sample_type_name(v.type());
+  return v;
+}
+
+void write_medical_volume(const fs::path& file, const ScalarVolume& volume) {
+  const std::string ext = file.extension().string();
+  if (ext == ".vlb")
+    write_vlb(file, volume);
+  else if (ext == ".nrrd" || ext == ".nhdr")
+    write_nrrd(file, volume);
+  else
+    throw InputError(fmt::format("{}: not a medical volume file name (.vlb, .nrrd or .nhdr)", file.string()));
 }
 
 }  // namespace meltlab::render

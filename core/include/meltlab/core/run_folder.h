@@ -39,6 +39,8 @@ class RunFolder {
   const std::filesystem::path& path() const { return committed_ ? target_ : staging_; }
   /// The folder the user named.
   const std::filesystem::path& target() const { return target_; }
+  /// The record file a finished run of this kind holds ("run.json", "fit.json").
+  const std::string& marker() const { return options_.marker; }
   /// Moves the finished run into place. Throws InputError if the file system refuses.
   void commit();
 

@@ -11,6 +11,7 @@
 // Colours are linear RGB.
 
 #include <meltlab/render/camera.h>
+#include <meltlab/render/fog/scene_fog.h>
 #include <meltlab/render/material/ground.h>
 #include <meltlab/render/material/ice.h>
 #include <meltlab/render/texture/assets.h>
@@ -48,11 +49,14 @@ struct RenderScene {
   GroundMaterial ground;
   EnvironmentOptions environment;
   RenderOutputs outputs;
+  /// Seed 002's spotlights in homogeneous fog (fog/scene_fog.h); unset: no fog.
+  std::optional<fog::SceneFog> fog;
 };
 
 /// Reads a scene (all keys optional; defaults above). Top-level keys: camera (camera.h's
 /// format), width, height, texture_filter, lights [{to_light, colour}], ice {...}, ground {...},
-/// environment {width, height, to_sun, sun_radiance, file, layout}, outputs {exr, png, exposure, gamma}.
+/// environment {width, height, to_sun, sun_radiance, file, layout}, outputs {exr, png, exposure, gamma},
+/// fog {kt, albedo, far, spotlights [...], table {...}, ...} (fog/scene_fog.h).
 /// Enumerations: ice.model monograph|physical, ice.fresnel full|schlick, ice.specular RsV|RsL.
 /// Throws InputError naming `source`, the line and the key.
 RenderScene parse_render_scene(const YAML::Node& node, const std::string& source);

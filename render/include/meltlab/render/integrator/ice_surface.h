@@ -11,6 +11,9 @@
 // ground beyond 10⁶ object sizes (the horizon), sees the environment. Secondary rays of the
 // physical ice that meet the ice again see its environment value (no further recursion). No
 // shadows and no ice seen through the ground, as in the monograph.
+// Fog (scene `fog:`, seed 002): after a pixel is shaded, fog/scene_fog.h's FogShader attenuates
+// it by e^{-k_t m} (m: the first surface, ice or ground, or the fog's `far`) and adds each
+// spotlight's airlight and surface terms with the hit material's Phong coefficients.
 //
 // Texture lookups (scene `texture_filter`, texture/lookup.h): the materials look their
 // textures up through one interface, bilinear or MIP-mapped. Only for MIP-mapped lookups does
@@ -36,6 +39,10 @@
 #include <vector>
 
 namespace meltlab::render {
+
+namespace fog {
+class FogShader;
+}
 
 /// Which terms a frame computes (from the scene's weights and the current mask).
 struct ShadingPlan : IcePlan, GroundPlan {
@@ -81,6 +88,7 @@ class IceRenderer {
   std::unique_ptr<const EnvironmentTexture> environment_;
   std::unique_ptr<const ImageTexture> ground_texture_, normal_map_;
   std::unique_ptr<const ImageTexture> ice_texture_;  ///< nullptr: the procedural milky ice
+  std::unique_ptr<fog::FogShader> fog_;              ///< scene `fog:` (fog/scene_fog.h)
   bool sized_ = false;
   double object_size_ = 1.0;
   std::string last_plan_log_;

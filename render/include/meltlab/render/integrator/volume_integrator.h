@@ -32,9 +32,32 @@
 //
 // Determinism: each pixel depends only on its own ray, so serial and parallel renders are
 // bitwise identical.
+//
+// Seed 001 (Majer, CPU rendering of large volumes; spec ../shared/spec/cpu-large-volumes.md) adds
+// an optical model, two storages and a traversal (render/src/integrator/volume_tf.cpp):
+//   - the transfer-function model (OpticalModel::kTransferFunction): per sample a 1-D TF gives a
+//     colour c (0-255) and an opacity α₀ (volume/transfer_function.h), α₀ is corrected for the step
+//     (α = 1 - (1 - α₀)^{s/s₀}, or the thesis's printed s₀/s), c is Phong-shaded from the gradient
+//     where |∇f| exceeds a threshold, and the samples are alpha-composited front to back
+//     (C += (1 - A) α c, A += (1 - A) α) with early termination once A > 1 - ert_transmittance
+//     (the source's 0.99 is ert_transmittance 0.01). The frame holds I = C/255 and T = 1 - A.
+//   - storage: the linear layout (a Volume, e.g. a .clv file viewed z fastest in place, in RAM or
+//     memory-mapped) or seed 001's blocks with a one-voxel overlap (BrickedVolume); both are read by
+//     one lookup rule (the position clamped to the volume, the cell's lower corner min(⌊x⌋, N - 2)),
+//     so the two layouts give bit-identical images.
+//   - empty-space skipping: the source's one-level index (4³ cells, S + 1 voxels, a lookup per
+//     sample, one step at a time) or the multi-level one (min/max per 4³ cell and 32³ region, TF-
+//     independent; empty runs crossed in one jump on the same sample grid); both exact with the
+//     range test (no pixel changes); per-block visibility for bricks.
+//   - traversal: image order (per pixel, whole rays) or the source's object-order renderer for
+//     bricks — tiles × blocks, each tile's blocks near to far, one task per tile in flight (a TBB
+//     flow graph: render node and a serial compositor node), global ERT; the samples lie on each
+//     ray's global grid t₀ + k s, so it is bit-identical to image order.
 
 #include <meltlab/core/image.h>
 #include <meltlab/render/camera.h>
+#include <meltlab/render/volume/bricked_volume.h>
+#include <meltlab/render/volume/transfer_function.h>
 #include <meltlab/render/volume/volume.h>
 
 #include <Eigen/Core>
@@ -56,12 +79,14 @@ enum class OpticalModel {
   kEmissionAbsorption,  ///< [4.9]
   kHG,                  ///< [4.9] + HG single scattering, lights unshadowed (T'' = 1)
   kHGAttenuated,        ///< [3.18]: the same with the shadow transmittance T'' to every light
+  kTransferFunction,    ///< seed 001: 1-D TF, opacity correction, Phong from gradients, alpha compositing
 };
 
 /// vlr.sampling.ds_rule.
 enum class StepRule {
   kDiagonalOverN,  ///< Δs = (box diagonal) / n [4.6]: no ray gets more than n samples (the source)
   kFitSegment,     ///< per ray, ceil(length / step) equal steps (each ray's segment exactly covered)
+  kFixedStep,      ///< seed 001: floor(length / step) whole steps from the entry, one sample each
 };
 /// vlr.sampling.first_offset: where the first sample lies past the entry point.
 enum class FirstOffset {
@@ -111,6 +136,47 @@ enum class EmissionField {
   kRadial,    ///< C at the box centre to C_rim at the inscribed sphere's surface (a flame: yellow to red)
 };
 
+/// clv.gradient.scheme (seed 001's shading), in value per voxel.
+enum class GradientScheme {
+  kCentral,   ///< (P(x + 1) - P(x - 1)) / 2 per axis, trilinear P, positions clamped (the thesis, n = 1)
+  kOneSided,  ///< P(x) - P(x + 1) per axis (the repo; already pointing out of dense material)
+};
+
+/// Phong shading of the TF model (clv.shade.*): where |∇f| > threshold, with n̂ the outward normal,
+/// L the light's propagation direction, r = L reflected about n̂ and v₋ towards the eye:
+///   c' = c (max(n̂ · (-L), 0) + ka) + ks max(r · v₋, 0)^q (1, 1, 1)   (0-255 units).
+struct TfShading {
+  bool enabled = true;
+  GradientScheme gradient = GradientScheme::kCentral;
+  double threshold = 2.0;                                              ///< clv.shade.grad_threshold
+  Eigen::Vector3d light_dir = -Eigen::Vector3d(4, 3, 2).normalized();  ///< L (the repo's static light)
+  double ka = 0.16, q = 128, ks = 120;                                 ///< the repo's values
+};
+
+/// The transfer-function model (OpticalModel::kTransferFunction, seed 001).
+struct TfModel {
+  TransferFunction table = TransferFunction::shapes();  ///< clv.tf.table
+  double reference_step = 0;                            ///< s₀ (scene units); 0 = one voxel (the smallest spacing)
+  OpacityExponent exponent = OpacityExponent::kStepOverReference;  ///< clv.tf.opacity_exponent
+  TfShading shading;
+};
+
+/// Empty-space skipping of the TF model (acceleration.skip_empty on).
+enum class EmptySpaceScheme {
+  kOneLevel,    ///< the source's EmptyIndex: the 4³ cell of every sample looked up, one step at a time
+  kMultiLevel,  ///< min/max per 4³ cell and 32³ region: whole empty runs crossed in one jump
+};
+/// How a 4³ cell is found empty (clv.ess.index_test).
+enum class EmptyCellTest {
+  kRange,  ///< no value in the cell's [min, max] (S + 1 voxels) has α > 0: exact for any TF
+  kVoxel,  ///< no voxel of the S + 1 has α > 0 (the repo): misses interpolated values between them
+};
+/// How rays traverse the volume (TF model).
+enum class Traversal {
+  kImageOrder,   ///< per pixel, the whole ray (TBB tiles when parallel)
+  kObjectOrder,  ///< seed 001's tiles x blocks renderer with global ERT (bricked volumes only)
+};
+
 /// Every parameter of a render (the spec's vlr.* choices with their defaults).
 struct VolumeRenderSettings {
   OpticalModel model = OpticalModel::kEmissionAbsorption;
@@ -147,6 +213,15 @@ struct VolumeRenderSettings {
   double ert_transmittance = 0.0;                 ///< stop a ray once T falls below this (0: never)
   bool skip_empty = true;                         ///< empty-space skipping (changes no pixel)
   VolumeAddress address = VolumeAddress::kClamp;  ///< vlr.tex.address
+  // --- seed 001: the TF model, its empty-space skipping and traversal ---
+  TfModel tf;
+  EmptySpaceScheme ess = EmptySpaceScheme::kMultiLevel;
+  EmptyCellTest ess_test = EmptyCellTest::kRange;
+  Traversal traversal = Traversal::kImageOrder;
+  int tile = 10;                      ///< clv.par.tile: tile side in pixels (object order)
+  int render_threads = 0;             ///< clv.par.render_threads (object order; 0: every hardware thread)
+  bool restrict_canvas = true;        ///< cast rays only inside the volume's projected rectangle
+  bool record_sample_counts = false;  ///< per-pixel sample counts in VolumeFrame::sample_counts
   // --- rays and output ---
   RayGeneration ray_generation = RayGeneration::kAnalytic;
   CameraInside camera_inside = CameraInside::kReject;
@@ -191,6 +266,12 @@ struct VolumeRenderStats {
   std::int64_t silhouette_mismatch = 0;  ///< two-pass: pixels covered by one pass only
   double shadow_cache_ms = 0;            ///< time to build the shadow caches
   double render_ms = 0;                  ///< time of the ray casting itself
+  // --- the object-order traversal (seed 001) ---
+  std::int64_t blocks_visible = 0;    ///< blocks of the volume visible under the TF (queued somewhere)
+  std::int64_t block_tasks = 0;       ///< (tile, block) tasks rendered
+  std::int64_t queue_empty = 0;       ///< tasks after which no other task was waiting for a render thread
+  std::int64_t order_violations = 0;  ///< segments that arrived behind a later one of the same ray (0)
+  double render_busy_ms = 0;          ///< summed time the render threads spent in tasks
 };
 
 /// A rendered frame: linear radiance I (3 channels) and the transmittance T (1 channel) of every
@@ -199,6 +280,7 @@ struct VolumeFrame {
   ImageF radiance;       ///< RGB
   ImageF transmittance;  ///< T per pixel (1 where the ray missed the volume)
   VolumeRenderStats stats;
+  std::vector<std::uint32_t> sample_counts;  ///< per pixel, row-major (record_sample_counts)
 };
 
 /// A shadow cache of one light: T to the light at the volume's samples (or a finer/coarser grid).
@@ -209,10 +291,18 @@ struct ShadowCache {
 /// The integrator for callers that cast their own rays (the photo renderer of voxel ice, which
 /// adds a ground behind the ice): the per-render state — empty-space macrocells, lights, shadow
 /// caches — is built once, then rays are traced from any thread.
+class VolumeRangeIndex;
+
 class VolumeTracer {
  public:
-  /// Throws InputError for bad settings. Builds the shadow caches unless given (one per light).
+  /// Throws InputError for bad settings. Builds the shadow caches unless given (one per light);
+  /// for the TF model the empty-space index (from `ranges` when given, see build_range_index).
   VolumeTracer(const Volume& volume, const VolumeRenderSettings& settings, const std::vector<ShadowCache>& caches = {});
+  VolumeTracer(const Volume& volume, const VolumeRenderSettings& settings,
+               std::shared_ptr<const VolumeRangeIndex> ranges);
+  /// A bricked volume: the TF model only (InputError otherwise).
+  VolumeTracer(const BrickedVolume& volume, const VolumeRenderSettings& settings,
+               std::shared_ptr<const VolumeRangeIndex> ranges = nullptr);
   ~VolumeTracer();
   VolumeTracer(const VolumeTracer&) = delete;
   VolumeTracer& operator=(const VolumeTracer&) = delete;
@@ -230,15 +320,35 @@ class VolumeTracer {
   /// exact shadow march of the settings (shadow step, start offset, empty-space skipping).
   double transmittance(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double max_distance = 1e300,
                        VolumeRenderStats* stats = nullptr) const;
+  /// A frame seen by the camera, with this state (render_volume builds a tracer and calls this).
+  VolumeFrame render(const Camera& camera) const;
   const Box3& box() const;
   double cache_build_ms() const;
   std::int64_t cache_shadow_samples() const;
+  /// Time spent building the TF model's empty-space flags and block visibility (0 for others).
+  double index_build_ms() const;
 
  private:
-  friend VolumeFrame render_volume(const Volume&, const Camera&, const VolumeRenderSettings&,
-                                   const std::vector<ShadowCache>&);
   struct Impl;
   std::unique_ptr<Impl> impl_;
+};
+
+/// The TF-independent part of the TF model's empty-space index: min and max of the stored values
+/// over every 4³ cell's S + 1 = 5 voxels per axis, and over every block of a bricked volume. Build
+/// it once per volume and share it between tracers with different TFs, switches or traversals.
+class VolumeRangeIndex {
+ public:
+  static std::shared_ptr<const VolumeRangeIndex> build(const Volume& volume);
+  static std::shared_ptr<const VolumeRangeIndex> build(const BrickedVolume& volume);
+  virtual ~VolumeRangeIndex() = default;
+  std::array<int, 3> dims() const { return dims_; }
+  double build_ms() const { return build_ms_; }
+  std::int64_t memory_bytes() const { return memory_bytes_; }
+
+ protected:
+  std::array<int, 3> dims_{0, 0, 0};
+  double build_ms_ = 0;
+  std::int64_t memory_bytes_ = 0;
 };
 
 /// Throws the InputError render_volume would throw for these settings (checked before any work).
@@ -253,6 +363,15 @@ VolumeFrame render_volume(const Volume& volume, const Camera& camera, const Volu
 /// inside render_volume when absent). Lets a sequence of frames reuse them while only the camera moves.
 VolumeFrame render_volume(const Volume& volume, const Camera& camera, const VolumeRenderSettings& settings,
                           const std::vector<ShadowCache>& caches);
+
+/// The same for a bricked volume (the TF model; image or object order).
+VolumeFrame render_volume(const BrickedVolume& volume, const Camera& camera, const VolumeRenderSettings& settings);
+void check_volume_render_settings(const BrickedVolume& volume, const VolumeRenderSettings& settings);
+
+/// clv.output.final_multiply: the 8-bit image of a TF frame over black, truncated as the source:
+/// premultiplied (pixel = C, correct) or source_double (pixel = C·A, the source's double multiply).
+enum class TfOutput { kPremultiplied, kSourceDouble };
+Image8 tf_output_image(const VolumeFrame& frame, TfOutput output);
 
 /// The shadow cache of light `light_index` of the settings (its lights, or the default light).
 ShadowCache build_shadow_cache(const Volume& volume, const VolumeRenderSettings& settings, int light_index,
@@ -276,5 +395,7 @@ std::vector<VolumeLight> effective_lights(const Volume& volume, const VolumeRend
 /// Names of the enum values as written in scene files and run records.
 std::string optical_model_name(OpticalModel m);
 std::string quadrature_name(Quadrature q);
+std::string ess_scheme_name(EmptySpaceScheme e);
+std::string traversal_name(Traversal t);
 
 }  // namespace meltlab::render

@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -48,6 +49,11 @@ struct OpenVdbRenderSettings {
 class OpenVdbPeer {
  public:
   explicit OpenVdbPeer(const Volume& volume);
+  /// Seed 001's peer: a FloatGrid of density(value) per voxel (e.g. the extinction -ln(1 - α) of a
+  /// transfer function at the voxel's value: classification before interpolation, as a sparse
+  /// renderer has it), inactive where 0; converted in slabs of x through tools::copyFromDense
+  /// (threaded), not timed per frame.
+  OpenVdbPeer(const Volume& volume, const std::function<float(float)>& density);
   ~OpenVdbPeer();
   OpenVdbPeer(const OpenVdbPeer&) = delete;
   OpenVdbPeer& operator=(const OpenVdbPeer&) = delete;

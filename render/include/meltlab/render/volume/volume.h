@@ -117,31 +117,22 @@ struct VolumeSamples {
   }
 };
 
-/// A dense scalar volume (see the header comment). Cheap to copy: copies share the samples.
-class Volume {
+/// What the dense Volume and the BrickedVolume (bricked_volume.h) share: samples of one type held
+/// through a shared owner, the count per axis, the placement in the world (origin, spacing, cell-
+/// centred or node samples; see the header comment) and the value scale. Not used on its own.
+class PlacedGrid {
  public:
-  Volume() = default;
-
-  /// A new volume of zeros, x fastest, owning its samples. Throws InputError for dimensions
-  /// < 1 or a sample count over input_limits().volume_samples (`what` names it in the message).
-  static Volume allocate(int nx, int ny, int nz, SampleType type, const std::string& what = "volume");
-  /// A volume over samples owned elsewhere: `owner` keeps `data` alive; strides in elements.
-  static Volume wrap(std::shared_ptr<const void> owner, const void* data, SampleType type, int nx, int ny, int nz,
-                     std::int64_t sx, std::int64_t sy, std::int64_t sz);
-  /// A cell-centred float view of a Grid3 (no copy; the grid must outlive the volume and every
-  /// copy of it): origin at the centre of cell (0, 0, 0), spacing h.
-  static Volume view_of(const Grid3<float>& grid);
-
+  bool empty() const { return data_ == nullptr; }
+  SampleType type() const { return type_; }
   int nx() const { return n_[0]; }
   int ny() const { return n_[1]; }
   int nz() const { return n_[2]; }
   std::array<int, 3> dims() const { return n_; }
   std::int64_t sample_count() const { return std::int64_t(n_[0]) * n_[1] * n_[2]; }
-  bool empty() const { return data_ == nullptr; }
-  SampleType type() const { return type_; }
-  std::array<std::int64_t, 3> strides() const { return stride_; }
-  /// True when x is fastest and rows/slices are packed (stride 1, nx, nx*ny).
-  bool x_fastest_packed() const;
+  /// Raw pointer to the samples (of the stored type, in the grid's layout).
+  const void* data() const { return data_; }
+  /// Writable samples of a grid that owns them (allocate()); nullptr otherwise.
+  void* mutable_data() const { return mutable_; }
 
   // --- placement in the world ---
   Eigen::Vector3d origin() const { return origin_; }
@@ -150,8 +141,8 @@ class Volume {
   void set_placement(SamplePlacement p) { placement_ = p; }
   void set_origin(const Eigen::Vector3d& o) { origin_ = o; }
   void set_spacing(const Eigen::Vector3d& s) { spacing_ = s; }
-  /// Places the volume so that its domain is `box` (origin and spacing from the box and the
-  /// placement). Throws InputError for an empty box or a node volume with a dimension of 1.
+  /// Places the grid so that its domain is `box` (origin and spacing from the box and the
+  /// placement). Throws InputError for an empty box or a node grid with a dimension of 1.
   void fit_to_box(const Box3& box);
   Box3 domain() const;
   /// Index coordinates of a world point (sample centres at integers).
@@ -163,6 +154,46 @@ class Volume {
   // --- values ---
   double value_scale() const { return scale_; }
   void set_value_scale(double s) { scale_ = s; }
+  /// Takes origin, spacing, placement and value scale from `other` (a copy in another layout).
+  void place_like(const PlacedGrid& other) {
+    origin_ = other.origin_;
+    spacing_ = other.spacing_;
+    placement_ = other.placement_;
+    scale_ = other.scale_;
+  }
+
+ protected:
+  PlacedGrid(SampleType type, SamplePlacement placement) : type_(type), placement_(placement) {}
+
+  std::shared_ptr<const void> owner_;
+  const void* data_ = nullptr;
+  void* mutable_ = nullptr;
+  SampleType type_;
+  std::array<int, 3> n_{0, 0, 0};
+  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero(), spacing_ = Eigen::Vector3d::Ones();
+  SamplePlacement placement_;
+  double scale_ = 1.0;
+};
+
+/// A dense scalar volume (see the header comment). Cheap to copy: copies share the samples.
+class Volume : public PlacedGrid {
+ public:
+  Volume() : PlacedGrid(SampleType::kFloat32, SamplePlacement::kCellCentred) {}
+
+  /// A new volume of zeros, x fastest, owning its samples. Throws InputError for dimensions
+  /// < 1 or a sample count over input_limits().volume_samples (`what` names it in the message).
+  static Volume allocate(int nx, int ny, int nz, SampleType type, const std::string& what = "volume");
+  /// A volume over samples owned elsewhere: `owner` keeps `data` alive; strides in elements.
+  static Volume wrap(std::shared_ptr<const void> owner, const void* data, SampleType type, int nx, int ny, int nz,
+                     std::int64_t sx, std::int64_t sy, std::int64_t sz);
+  /// A cell-centred float view of a Grid3 (no copy; the grid must outlive the volume and every
+  /// copy of it): origin at the centre of cell (0, 0, 0), spacing h.
+  static Volume view_of(const Grid3<float>& grid);
+
+  std::array<std::int64_t, 3> strides() const { return stride_; }
+  /// True when x is fastest and rows/slices are packed (stride 1, nx, nx*ny).
+  bool x_fastest_packed() const;
+
   /// The value of sample (i, j, k) (inside the volume).
   float value(int i, int j, int k) const;
   /// Sets the stored sample from a value: float32 stores it, 8/16-bit store
@@ -194,10 +225,6 @@ class Volume {
     s.scale = static_cast<float>(scale_);
     return s;
   }
-  /// Raw pointer to the samples (of the stored type).
-  const void* data() const { return data_; }
-  /// Writable samples of a volume that owns them (allocate()); nullptr otherwise.
-  void* mutable_data() const { return mutable_; }
 
   /// A float32 copy, x fastest (values, not stored numbers: scale 1), same placement.
   Volume to_float32() const;
@@ -205,15 +232,7 @@ class Volume {
   Volume quantised(SampleType type) const;
 
  private:
-  std::shared_ptr<const void> owner_;
-  const void* data_ = nullptr;
-  void* mutable_ = nullptr;
-  SampleType type_ = SampleType::kFloat32;
-  std::array<int, 3> n_{0, 0, 0};
   std::array<std::int64_t, 3> stride_{1, 0, 0};
-  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero(), spacing_ = Eigen::Vector3d::Ones();
-  SamplePlacement placement_ = SamplePlacement::kCellCentred;
-  double scale_ = 1.0;
 };
 
 /// Calls fn(samples) with the typed view of the volume's stored type (one dispatch per call,

@@ -1,0 +1,233 @@
+// Seed 003's slicing renderer (render/slicing/) against the one volume integrator's ray caster at
+// equal sample density: seed 001's skull-like phantom (256 x 256 x 68 uint8, spacing 1 : 1 : 2 in
+// a 256 x 256 x 136 box) standing in for seed 003's CT phantom, the spec's 30° camera at
+// 1000 x 730, the same piecewise-constant TF (the skull table, opaque bone, here α 0.3) in both.
+// Slicing Blend at QC (plane spacing Δd = QC · h0); the ray caster's TF model with fixed steps
+// Δs = QC · h0, shading off, no ERT, empty-space skipping off or on.
+// Wall-clock time (UseRealTime; both run on TBB threads); the ratio of medians in one run is the
+// comparison (the machine is shared).
+//
+// Seed 003's own case (issue 17 §4): the CT phantom (render/volume/ct_phantom.h, 256 x 256 x 113
+// int16 HU at spacing 1 : 1 : 2, noise σ 20 HU, seed 1) normalised to [0, 1] by its scanned extrema
+// as the scene's `generate: {kind: ct_phantom}` does (float32), at 1000 x 730 with the 30° camera
+// placed so that the head covers about 70 % of the frame (the `coverage` counter: the share of
+// pixels with α > 0.01), one piecewise-constant TF readable by both renderers, a CT preset in
+// normalised values (the scanned range is about −1100 … 1100 HU): skin (0.23, 0.455] ≈ −600 … −100
+// HU α 0.05 (the air–fat transition and the fat layer), bone (0.75, 1] ≈ above 550 HU α 0.6;
+// water, muscle and air invisible. Blend at QC 0.5, 1, 2 (args: QC × 100, empty-space cell edge in
+// voxels, early termination × 1000, 0 = off: the default renderer is /4/0), the combined mode at
+// QC 1 (gradients radius 2, 8 bits, built once outside the timing), the ray caster at equal
+// density (Δs = QC · h0) without and with its empty-space skipping. Counters: samples (plane
+// samples, jumped ones included), visited (positions computed), fetched (not in empty cells). CPU time
+// of the whole process (MeasureProcessCPUTime: every TBB thread) beside the wall time, since the
+// cores are shared: "CPU" / "Time" ≈ the cores the frame kept busy.
+//   --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+//   --benchmark_filter=Phantom   (issue 17's goal: BM_PhantomBlend/100/4/0 <= 150 ms)
+
+#include <meltlab/render/integrator/volume_integrator.h>
+#include <meltlab/render/slicing/slicing_renderer.h>
+#include <meltlab/core/image.h>
+#include <meltlab/render/volume/generate.h>
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+namespace {
+
+using namespace meltlab;
+
+const render::Volume& skull() {
+  static const render::Volume v = [] {
+    render::VolumeGenerateOptions g;
+    g.kind = render::VolumeKind::kSkull;
+    g.nx = 256, g.ny = 256, g.nz = 68;
+    g.shapes.seed = 1;
+    render::Volume out = render::generate_volume(g);
+    out.fit_to_box(render::Box3{Eigen::Vector3d(-128, -128, -68), Eigen::Vector3d(128, 128, 68)});
+    return out;
+  }();
+  return v;
+}
+
+render::Camera camera() {
+  const double fy = 0.5 * 730 / std::tan(15.0 * M_PI / 180);
+  return render::Pinhole::look_at(1000, 730, fy, Eigen::Vector3d(420, -560, 300).normalized() * 620,
+                                  Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ());
+}
+
+render::TransferFunction bone() {
+  std::vector<render::TfRange> r(1);
+  r[0] = {40, 240, false, false, Eigen::Vector3d(255, 250, 240), 0.3};
+  return render::TransferFunction(r, "bone");
+}
+
+/// The ray caster's TF model at the slicing's sample density (fixed step QC x h0 = state.range(0)
+/// / 100 x the smallest spacing; empty-space skipping if state.range(1)), no shading, no ERT.
+void ray_cast_frames(benchmark::State& state, const render::Volume& volume, const render::Camera& cam,
+                     const render::TransferFunction& tf) {
+  render::VolumeRenderSettings s;
+  s.model = render::OpticalModel::kTransferFunction;
+  s.tf.table = tf;
+  s.tf.shading.enabled = false;
+  s.step_rule = render::StepRule::kFixedStep;
+  s.step = double(state.range(0)) / 100 * volume.spacing().minCoeff();
+  s.skip_empty = state.range(1) != 0;
+  s.ert_transmittance = 0;
+  const render::VolumeTracer tracer(volume, s);
+  std::int64_t samples = 0;
+  for (auto _ : state) {
+    const auto f = tracer.render(cam);
+    samples = f.stats.samples;
+    benchmark::DoNotOptimize(f.radiance.data());
+  }
+  state.counters["samples"] = double(samples);
+  state.counters["ns_per_sample"] = benchmark::Counter(
+      double(samples) * 1e-9, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+// arg: QC x 100
+void BM_SlicingBlend(benchmark::State& state) {
+  render::SlicingSettings s;
+  s.quality_class = double(state.range(0)) / 100;
+  s.value_range = std::make_pair(0.0, 1.0);  // raw values: the same table as the ray caster's
+  s.tfs[0] = bone();
+  const render::SlicingRenderer r(skull(), s);
+  const auto cam = camera();
+  std::int64_t samples = 0;
+  for (auto _ : state) {
+    const auto f = r.render(cam);
+    samples = f.stats.samples;
+    benchmark::DoNotOptimize(f.rgb.data());
+  }
+  state.counters["samples"] = double(samples);
+  state.counters["ns_per_sample"] = benchmark::Counter(
+      double(samples) * 1e-9, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+// args: QC x 100, empty-space skipping (0/1)
+void BM_RayCastTf(benchmark::State& state) { ray_cast_frames(state, skull(), camera(), bone()); }
+
+// --- seed 003's CT phantom ---
+
+const render::Volume& phantom() {
+  static const render::Volume v = [] {
+    render::VolumeGenerateOptions g;
+    g.kind = render::VolumeKind::kCtPhantom;
+    g.nx = 256, g.ny = 256, g.nz = 113;
+    return render::generate_volume(g);
+  }();
+  return v;
+}
+
+render::Camera phantom_camera() {
+  const Eigen::Vector3d centre = phantom().domain().centre();
+  const double fy = 0.5 * 730 / std::tan(15.0 * M_PI / 180);
+  return render::Pinhole::look_at(1000, 730, fy, centre + Eigen::Vector3d(420, -560, 300).normalized() * 380, centre,
+                                  Eigen::Vector3d::UnitZ());
+}
+
+render::TransferFunction phantom_tf() {
+  std::vector<render::TfRange> r(2);
+  r[0] = {0.23, 0.455, false, true, Eigen::Vector3d(230, 170, 140), 0.05};
+  r[1] = {0.75, 1.0, false, true, Eigen::Vector3d(255, 250, 240), 0.6};
+  return render::TransferFunction(r, "skin_bone");
+}
+
+double coverage(const ImageF& alpha) {
+  std::int64_t n = 0;
+  for (std::size_t i = 0; i < alpha.size(); ++i) n += alpha.values()[i] > 0.01f;
+  return double(n) / double(alpha.size());
+}
+
+void slicing_counters(benchmark::State& state, const render::SlicingStats& st, double cover) {
+  state.counters["samples"] = double(st.samples);
+  state.counters["fetched"] = double(st.samples - st.skipped);
+  state.counters["visited"] = double(st.visited);
+  state.counters["coverage"] = cover;
+  state.counters["ns_per_sample"] = benchmark::Counter(
+      double(st.samples) * 1e-9, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+// args: QC x 100, empty-space cell edge (voxels), early termination x 1000 (0: off)
+void BM_PhantomBlend(benchmark::State& state) {
+  render::SlicingSettings s;
+  s.quality_class = double(state.range(0)) / 100;
+  s.skip_cell = int(state.range(1));
+  s.early_termination = double(state.range(2)) / 1000;
+  s.tfs[0] = phantom_tf();
+  const render::SlicingRenderer r(phantom(), s);
+  const auto cam = phantom_camera();
+  render::SlicingFrame f;
+  for (auto _ : state) {
+    f = r.render(cam);
+    benchmark::DoNotOptimize(f.rgb.data());
+  }
+  slicing_counters(state, f.stats, coverage(f.alpha));
+}
+
+// args: QC x 100, empty-space cell edge (voxels)
+void BM_PhantomCombined(benchmark::State& state) {
+  render::SlicingSettings s;
+  s.mode = render::SlicingMode::kCombined;
+  s.quality_class = double(state.range(0)) / 100;
+  s.skip_cell = int(state.range(1));
+  s.tfs[0] = phantom_tf();
+  static const render::GradientVolume grad = render::build_gradient_volume(phantom(), s.gradient);
+  const render::SlicingRenderer r(phantom(), s, grad);
+  const auto cam = phantom_camera();
+  render::SlicingFrame f;
+  for (auto _ : state) {
+    f = r.render(cam);
+    benchmark::DoNotOptimize(f.rgb.data());
+  }
+  slicing_counters(state, f.stats, coverage(f.alpha));
+}
+
+// args: QC x 100, empty-space skipping (0/1)
+void BM_PhantomRayCast(benchmark::State& state) { ray_cast_frames(state, phantom(), phantom_camera(), phantom_tf()); }
+
+BENCHMARK(BM_PhantomBlend)
+    ->Args({50, 4, 0})
+    ->Args({100, 4, 0})
+    ->Args({200, 4, 0})
+    ->Args({100, 2, 0})
+    ->Args({100, 8, 0})
+    ->Args({100, 4, 990})
+    ->Args({50, 4, 990})
+    ->Args({200, 4, 990})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+BENCHMARK(BM_PhantomCombined)
+    ->Args({100, 8})
+    ->Args({100, 4})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+BENCHMARK(BM_PhantomRayCast)
+    ->Args({100, 0})
+    ->Args({100, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+
+BENCHMARK(BM_SlicingBlend)
+    ->Arg(100)
+    ->Arg(200)
+    ->Arg(400)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+BENCHMARK(BM_RayCastTf)
+    ->Args({100, 0})
+    ->Args({100, 1})
+    ->Args({200, 0})
+    ->Args({400, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,451 @@
+// Seed 003's slicing renderer (see slicing/slicing_renderer.h).
+
+#include <meltlab/render/slicing/slicing_renderer.h>
+
+#include <meltlab/core/error.h>
+#include <meltlab/core/time.h>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range2d.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace meltlab::render {
+
+namespace {
+
+/// Per-tile counters, summed after the frame.
+struct TileCounts {
+  std::int64_t rays = 0, samples = 0, classified = 0, skipped = 0, terminated = 0, visited = 0;
+};
+
+/// A TF evaluated as TransferFunction::alpha_at and ::evaluate do, bit for bit, without their
+/// out-of-line calls: α first, the colour only for visible samples (the constant kind's colour
+/// divided by 255 once here, as evaluate divides it per call: the same quotient).
+class InlineTf {
+ public:
+  explicit InlineTf(const TransferFunction& tf) : linear_(tf.kind() == TfKind::kPiecewiseLinear) {
+    if (linear_) {
+      curves_ = tf.curves();
+    } else {
+      ranges_ = tf.ranges();
+      for (const auto& r : ranges_) rgb01_.push_back(r.rgb / 255.0);
+    }
+  }
+  /// α(v); `piece` remembers the constant kind's range for rgb().
+  double alpha(double v, int& piece) const {
+    if (linear_) return curve_at(curves_[3], v);
+    for (std::size_t i = 0; i < ranges_.size(); ++i)
+      if (ranges_[i].contains(v)) return piece = int(i), ranges_[i].alpha;
+    return piece = -1, 0.0;
+  }
+  Eigen::Vector3d rgb(double v, int piece) const {
+    if (linear_) return {curve_at(curves_[0], v), curve_at(curves_[1], v), curve_at(curves_[2], v)};
+    return piece < 0 ? Eigen::Vector3d::Zero() : rgb01_[std::size_t(piece)];
+  }
+
+ private:
+  /// TfCurve::at with a forward scan for the segment (the point upper_bound finds).
+  static double curve_at(const TfCurve& c, double x) {
+    const auto& pts = c.points;
+    if (pts.empty()) return 0;
+    if (!(x > pts.front().x())) return pts.front().y();
+    if (x >= pts.back().x()) return pts.back().y();
+    std::size_t i = 1;
+    while (!(x < pts[i].x())) ++i;
+    const Eigen::Vector2d& b = pts[i];
+    const Eigen::Vector2d& a = pts[i - 1];
+    const double t = (x - a.x()) / (b.x() - a.x());
+    return a.y() + t * (b.y() - a.y());
+  }
+  bool linear_;
+  std::array<TfCurve, 4> curves_;
+  std::vector<TfRange> ranges_;
+  std::vector<Eigen::Vector3d> rgb01_;
+};
+
+}  // namespace
+
+std::string slicing_mode_name(SlicingMode m) {
+  return m == SlicingMode::kBlend ? "blend" : m == SlicingMode::kMip ? "mip" : "combined";
+}
+
+bool slicing_needs_gradients(const SlicingSettings& s) { return s.mode != SlicingMode::kBlend || s.lit_blend; }
+
+void check_slicing_settings(const Volume& volume, const SlicingSettings& s) {
+  auto bad = [](const std::string& m) { throw InputError("slicing: " + m); };
+  if (volume.empty()) bad("no volume");
+  if (!(s.quality_class >= 0.01 && s.quality_class <= 1000))
+    bad(fmt::format("quality_class must be in [0.01, 1000] (the source's [0.1, inf); got {})", s.quality_class));
+  if (s.tile < 1 || s.tile > 4096) bad(fmt::format("tile must be in [1, 4096] (got {})", s.tile));
+  if (s.value_range && !(s.value_range->second > s.value_range->first)) bad("the value range needs hi > lo");
+  const BlinnPhong& L = s.light;
+  if (!(L.ambient >= 0 && L.diffuse >= 0 && L.specular >= 0 && L.exponent >= 0 && L.gate >= 0 &&
+        std::isfinite(L.ambient + L.diffuse + L.specular + L.exponent + L.gate) && L.light_camera.allFinite()))
+    bad("the light's ambient, diffuse, specular, exponent and gate must be finite and >= 0");
+  if (slicing_needs_gradients(s) && (s.gradient.radius < 1 || s.gradient.radius > 4))
+    bad(fmt::format("gradient radius must be in [1, 4] (got {})", s.gradient.radius));
+  if (slicing_needs_gradients(s) && s.gradient.bits != 4 && s.gradient.bits != 8)
+    bad(fmt::format("gradient bits must be 8 or 4 (got {})", s.gradient.bits));
+  if (!s.background.allFinite()) bad("the background must be finite");
+  if (s.skip_cell != 2 && s.skip_cell != 4 && s.skip_cell != 8 && s.skip_cell != 16)
+    bad(fmt::format("skip_cell must be 2, 4, 8 or 16 voxels (got {})", s.skip_cell));
+  if (!(s.early_termination >= 0 && s.early_termination <= 1))
+    bad(fmt::format("early_termination must be in [0, 1] (0: off; got {})", s.early_termination));
+}
+
+SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& settings,
+                                 std::optional<GradientVolume> gradients)
+    : volume_(volume), s_(settings), grad_(std::move(gradients)) {
+  check_slicing_settings(volume, settings);
+  if (s_.value_range) {
+    lo_ = s_.value_range->first, hi_ = s_.value_range->second;
+  } else {
+    const auto r = volume.value_range();
+    lo_ = r[0], hi_ = r[1] > r[0] ? r[1] : r[0] + 1;  // a constant volume maps to 0
+  }
+  if (slicing_needs_gradients(s_)) {
+    if (!grad_) grad_ = build_gradient_volume(volume, s_.gradient);
+    if (grad_->dims != volume.dims())
+      throw InputError("slicing: the gradient volume does not match the data volume's dimensions");
+  } else {
+    grad_.reset();
+  }
+  if (s_.skip_empty) {
+    const int kCellShift = cell_shift_ = s_.skip_cell == 2 ? 1 : s_.skip_cell == 4 ? 2 : s_.skip_cell == 8 ? 3 : 4;
+    // Min and max over each cell's voxels [e c, e c + e] (e the cell edge; the + e is the trilinear neighbour).
+    for (int a = 0; a < 3; ++a) cells_[std::size_t(a)] = ((volume.dims()[std::size_t(a)] - 1) >> kCellShift) + 1;
+    live_.assign(std::size_t(cells_[0]) * cells_[1] * cells_[2], 0);
+    std::array<bool, 4> used{true, false, false, false};
+    if (!s_.mask.empty()) {
+      const auto h = s_.mask.histogram();
+      for (int i = 0; i < 4; ++i) used[std::size_t(i)] = h[std::size_t(i) + 1] > 0;
+    }
+    const double inv = 1.0 / (hi_ - lo_);
+    visit_samples(volume, [&](const auto v) {
+      tbb::parallel_for(0, cells_[2], [&](int ck) {
+        for (int cj = 0; cj < cells_[1]; ++cj)
+          for (int ci = 0; ci < cells_[0]; ++ci) {
+            double mn = 1e300, mx = -1e300;
+            for (int k = ck << kCellShift; k <= std::min((ck + 1) << kCellShift, v.nz - 1); ++k)
+              for (int j = cj << kCellShift; j <= std::min((cj + 1) << kCellShift, v.ny - 1); ++j)
+                for (int i = ci << kCellShift; i <= std::min((ci + 1) << kCellShift, v.nx - 1); ++i) {
+                  const double x = double(v.at(i, j, k));
+                  mn = std::min(mn, x);
+                  mx = std::max(mx, x);
+                }
+            const double pad = 1e-5 * std::max({std::abs(mn), std::abs(mx), 1.0});
+            const double a = (mn - pad - lo_) * inv, b = (mx + pad - lo_) * inv;
+            bool live = false;
+            for (int t = 0; t < 4; ++t)
+              live = live || (used[std::size_t(t)] && s_.tfs[std::size_t(t)].visible_in(a, b));
+            live_[std::size_t(ci) + std::size_t(cells_[0]) * (std::size_t(cj) + std::size_t(cells_[1]) * ck)] = live;
+          }
+      });
+    });
+    // Chebyshev distance to the nearest live cell: breadth-first search from every live cell over
+    // the 26 neighbours (exact for the chessboard metric), capped at 255.
+    dist_.assign(live_.size(), 255);
+    std::vector<int> queue;
+    for (std::size_t i = 0; i < live_.size(); ++i)
+      if (live_[i]) dist_[i] = 0, queue.push_back(int(i));
+    const int cx = cells_[0], cy = cells_[1], cz = cells_[2];
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const int c = queue[head];
+      const int d = dist_[std::size_t(c)] + 1;
+      if (d > 255) continue;
+      const int ci = c % cx, cj = (c / cx) % cy, ck = c / (cx * cy);
+      for (int dk = -1; dk <= 1; ++dk)
+        for (int dj = -1; dj <= 1; ++dj)
+          for (int di = -1; di <= 1; ++di) {
+            const int i = ci + di, j = cj + dj, k = ck + dk;
+            if (i < 0 || j < 0 || k < 0 || i >= cx || j >= cy || k >= cz) continue;
+            const std::size_t n = std::size_t(i) + std::size_t(cx) * (std::size_t(j) + std::size_t(cy) * k);
+            if (dist_[n] > d) dist_[n] = std::uint8_t(d), queue.push_back(int(n));
+          }
+    }
+  }
+}
+
+SlicingFrame SlicingRenderer::render(const Camera& camera) const {
+  const auto* pin = std::get_if<Pinhole>(&camera);
+  if (!pin) throw InputError("slicing: the slicing renderer needs a pinhole camera");
+  const RayGenerator rays(camera);
+  const Box3 box = volume_.domain();
+  const Eigen::Isometry3d world_from_camera = pin->camera_from_world.inverse();
+  const Eigen::Vector3d eye = world_from_camera.translation();
+  if (box.contains(eye)) throw InputError("slicing: the eye is inside the volume's box");
+  const double h0 = volume_.spacing().minCoeff();
+  const SliceStack stack = slice_stack(box, eye, slice_spacing(s_.quality_class, volume_.spacing()), s_.d_range);
+  const Eigen::Vector3d light_pos = eye + world_from_camera.linear() * (s_.light.light_camera * box.diagonal());
+  const int W = pin->width, H = pin->height;
+  SlicingFrame frame;
+  frame.raw = ImageF(W, H, 3);
+  frame.alpha = ImageF(W, H, 1);
+  frame.stats.slices = stack.count;
+  frame.stats.slice_spacing = stack.spacing;
+  const bool lit = slicing_needs_gradients(s_);
+  const bool use_mask = !s_.mask.empty();
+  const bool skip = !live_.empty();
+  const int cell_shift = cell_shift_;
+  const std::size_t cells_x = std::size_t(cells_[0]), cells_y = std::size_t(cells_[1]);
+  const std::uint8_t* const dist_cells = dist_.data();  // the distance map answers "live" too (0)
+  const std::array<int, 3> dims = volume_.dims();
+  const double inv_range = 1.0 / (hi_ - lo_);
+  const Eigen::Vector3d origin = volume_.origin(), inv_spacing = volume_.spacing().cwiseInverse();
+  std::array<VolumeSamples<std::uint8_t>, 3> gch;
+  double grad_scale = 0;
+  if (lit) {
+    for (int c = 0; c < 3; ++c) gch[std::size_t(c)] = grad_->channel(c);
+    grad_scale = 1;
+  }
+  std::vector<InlineTf> tfs;
+  for (const auto& tf : s_.tfs) tfs.emplace_back(tf);
+  const bool front_to_back =
+      s_.early_termination > 0 && s_.mode == SlicingMode::kBlend && s_.blend == BlendOperator::kOver;
+  const double stop_alpha = s_.early_termination;
+  const int T = s_.tile;
+  const int tiles_x = (W + T - 1) / T, tiles_y = (H + T - 1) / T;
+  std::vector<TileCounts> counts(std::size_t(tiles_x) * tiles_y);
+  const auto t0 = std::chrono::steady_clock::now();
+  visit_samples(volume_, [&](const auto samples) {
+    auto do_tile = [&](int tx, int ty) {
+      TileCounts& cnt = counts[std::size_t(ty) * tiles_x + tx];
+      for (int y = ty * T; y < std::min(H, (ty + 1) * T); ++y)
+        for (int x = tx * T; x < std::min(W, (tx + 1) * T); ++x) {
+          const CameraRay ray = rays.generate_ray(x, y);
+          const RaySlices rs = ray_slices(stack, box, ray.origin, ray.direction);
+          SliceAccumulator acc;
+          if (!rs.empty()) {
+            ++cnt.rays;
+            const double exponent = s_.opacity_correction ? (stack.spacing / rs.cos_psi) / h0 : 1.0;
+            const Eigen::Vector3d to_eye = -ray.direction;
+            // The move of g (index units) from one visited plane to the next (t_k is linear in k and
+            // falls with k: back to front walks towards the eye).
+            const Eigen::Vector3d delta =
+                (front_to_back ? 1.0 : -1.0) * (stack.spacing / rs.cos_psi) * ray.direction.cwiseProduct(inv_spacing);
+            // The last α seen and its corrected value: std::pow only when α changes along the ray
+            // (a piecewise-constant TF repeats a handful of values; the same bits either way).
+            double last_a = -1, last_ac = 0;
+            const int n_samples = rs.k_last - rs.k_first + 1;
+            for (int step = 0; step < n_samples; ++step) {
+              const int k = front_to_back ? rs.k_last - step : rs.k_first + step;
+              ++cnt.samples;
+              ++cnt.visited;
+              const Eigen::Vector3d p = ray.origin + rs.t(stack, k) * ray.direction;
+              const Eigen::Vector3d g = (p - origin).cwiseProduct(inv_spacing);
+              const float gx = float(g.x()), gy = float(g.y()), gz = float(g.z());
+              const float fx = std::floor(gx), fy = std::floor(gy), fz = std::floor(gz);
+              if (skip) {
+                const int c0 = std::clamp(int(fx), 0, dims[0] - 1) >> cell_shift;
+                const int c1 = std::clamp(int(fy), 0, dims[1] - 1) >> cell_shift;
+                const int c2 = std::clamp(int(fz), 0, dims[2] - 1) >> cell_shift;
+                const std::size_t cell = std::size_t(c0) + cells_x * (std::size_t(c1) + cells_y * std::size_t(c2));
+                const int dist = dist_cells[cell];  // 0: live
+                if (dist != 0) {
+                  ++cnt.skipped;
+                  // Jump the run of empty planes: every cell within D - 1 of this one (max norm) is
+                  // empty, D = dist_ the distance to the nearest live cell; so is every sample whose
+                  // clamped voxel index lies in the box of those cells, [e (c - D + 1), e (c + D) - 1]
+                  // per axis (e the cell edge; a side at the volume's border reaches to infinity,
+                  // where clamping keeps the index in the box). With g moving by delta per plane, the
+                  // planes while g stays 0.01 index units inside that box (for the float rounding of
+                  // g and of t_k) are empty and are counted as skipped without being visited. On an
+                  // axis where g moves by more than 1e-6 per plane it moves monotonically (round-off
+                  // is ~1e-12), so only the side ahead bounds the run.
+                  const int r = dist - 1;
+                  const int cc[3] = {c0, c1, c2};
+                  double run = double(n_samples - 1 - step);
+                  for (int a = 0; a < 3; ++a) {
+                    const double d = delta[a];
+                    const bool open_hi = cc[a] + r >= cells_[std::size_t(a)] - 1, open_lo = cc[a] - r <= 0;
+                    const double hi = double((cc[a] + r + 1) << cell_shift), lo = double((cc[a] - r) << cell_shift);
+                    if (d > 1e-6) {
+                      if (!open_hi) run = std::min(run, (hi - 0.01 - g[a]) / d);
+                    } else if (d < -1e-6) {
+                      if (!open_lo) run = std::min(run, (g[a] - lo - 0.01) / -d);
+                    } else if ((!open_hi && g[a] > hi - 0.01) || (!open_lo && g[a] < lo + 0.01)) {
+                      // (Almost) still on this axis: t_k's round-off could move g either way across
+                      // a box side it sits on; jump only from 0.01 inside both sides.
+                      run = 0;
+                    }
+                  }
+                  if (run >= 1) {
+                    const int n = int(run);
+                    step += n;
+                    cnt.samples += n;
+                    cnt.skipped += n;
+                  }
+                  continue;
+                }
+              }
+              const int m = use_mask ? s_.mask.lookup(p) : 1;
+              if (m == 0) continue;
+              ++cnt.classified;
+              const int i0 = int(fx), j0 = int(fy), k0 = int(fz);
+              const float wx = gx - fx, wy = gy - fy, wz = gz - fz;
+              const float f = samples.trilinear_cell(i0, j0, k0, wx, wy, wz);
+              const InlineTf& tf = tfs[std::size_t(m - 1)];
+              const double fn = (double(f) - lo_) * inv_range;
+              int piece = -1;
+              const double a = tf.alpha(fn, piece);
+              if (!(a > 0)) continue;
+              double ac = a;
+              if (exponent != 1.0) {
+                if (a != last_a) last_a = a, last_ac = 1.0 - std::pow(1.0 - a, exponent);
+                ac = last_ac;
+              }
+              Eigen::Vector3d c = tf.rgb(fn, piece);
+              if (lit) {
+                Eigen::Vector3d e;
+                for (int ch = 0; ch < 3; ++ch) e[ch] = gch[std::size_t(ch)].trilinear_cell(i0, j0, k0, wx, wy, wz);
+                const Eigen::Vector3d gd = (2.0 * e - Eigen::Vector3d::Ones()) * grad_scale;
+                const Eigen::Vector3d gw = gd.cwiseProduct(inv_spacing);  // index units -> world direction
+                if (gd.norm() > s_.light.gate && gw.norm() > 0) {
+                  const Eigen::Vector3d nrm = -gw.normalized();
+                  const Eigen::Vector3d l = (light_pos - p).normalized();
+                  const Eigen::Vector3d h = (l + to_eye).normalized();
+                  const double diff = std::max(nrm.dot(l), 0.0);
+                  const double spec = std::pow(std::max(nrm.dot(h), 0.0), s_.light.exponent);
+                  c = c * (s_.light.ambient + s_.light.diffuse * diff) +
+                      Eigen::Vector3d::Constant(s_.light.specular * spec);
+                }
+              }
+              if (front_to_back) {
+                const double w = (1 - acc.A) * ac;
+                acc.C += w * c;
+                acc.A += w;
+                if (acc.A >= stop_alpha) {
+                  ++cnt.terminated;
+                  break;
+                }
+                continue;
+              }
+              switch (s_.mode) {
+                case SlicingMode::kBlend:
+                  if (s_.blend == BlendOperator::kOver)
+                    acc.blend_over(c, ac);
+                  else
+                    acc.blend_additive(c, ac);
+                  break;
+                case SlicingMode::kMip:
+                  acc.mip(c, a);
+                  break;
+                case SlicingMode::kCombined:
+                  acc.combined(c, a, ac);
+                  break;
+              }
+            }
+          }
+          Eigen::Vector3d out;
+          if (s_.mode == SlicingMode::kBlend)
+            out = acc.C + (1 - acc.A) * s_.background;
+          else
+            out = acc.A > 0 ? acc.C : s_.background;
+          for (int ch = 0; ch < 3; ++ch) frame.raw.at(x, y, ch) = float(out[ch]);
+          frame.alpha.at(x, y) = float(acc.A);
+        }
+    };
+    if (s_.parallel)
+      tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const auto& r) {
+        for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
+          for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) do_tile(tx, ty);
+      });
+    else
+      for (int ty = 0; ty < tiles_y; ++ty)
+        for (int tx = 0; tx < tiles_x; ++tx) do_tile(tx, ty);
+  });
+  frame.stats.render_ms = ms_since(t0);
+  for (const auto& c : counts) {
+    frame.stats.rays += c.rays;
+    frame.stats.samples += c.samples;
+    frame.stats.classified += c.classified;
+    frame.stats.skipped += c.skipped;
+    frame.stats.terminated += c.terminated;
+    frame.stats.visited += c.visited;
+  }
+  const auto t1 = std::chrono::steady_clock::now();
+  frame.rgb = apply_bloom(frame.raw, s_.post);
+  frame.stats.post_ms = ms_since(t1);
+  return frame;
+}
+
+SlicingFrame render_slicing(const Volume& volume, const Camera& camera, const SlicingSettings& settings) {
+  return SlicingRenderer(volume, settings).render(camera);
+}
+
+std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSettings& s, const Volume& volume,
+                                                              const Camera& camera) {
+  std::vector<std::pair<std::string, std::string>> r;
+  auto add = [&](const std::string& k, const std::string& v) { r.emplace_back("vsi." + k, v); };
+  auto num = [](double x) { return fmt::format("{:.17g}", x); };
+  add("data.norm_source",
+      s.value_range ? fmt::format("given [{}, {}]", num(s.value_range->first), num(s.value_range->second)) : "scanned");
+  add("data.internal_bits", sample_type_name(volume.type()));
+  add("grad.radius", std::to_string(s.gradient.radius));
+  add("grad.neighbourhood", s.gradient.neighbourhood == GradientNeighbourhood::kBall ? "ball" : "cube");
+  add("grad.encode", "1/2 + 1/2 g / max|g|");
+  add("grad.bits", std::to_string(s.gradient.bits));
+  add("grad.boundary", "clamp");
+  add("grad.used", slicing_needs_gradients(s) ? "true" : "false (unlit Blend)");
+  add("tf.count", "4");
+  for (int i = 0; i < 4; ++i) {
+    const auto& tf = s.tfs[std::size_t(i)];
+    add(fmt::format("tf{}.kind", i + 1),
+        tf.kind() == TfKind::kPiecewiseLinear ? "piecewise_linear" : "piecewise_constant");
+    add(fmt::format("tf{}.name", i + 1), tf.name());
+  }
+  add("tf.resolution/curve", "exact: control points evaluated per sample (no table), piecewise linear");
+  if (s.mask.empty()) {
+    add("mask.resolution", "none (TF 1 everywhere)");
+  } else {
+    const auto d = s.mask.dims();
+    add("mask.resolution", fmt::format("{} x {} x {}", d[0], d[1], d[2]));
+    const auto h = s.mask.histogram();
+    add("mask.histogram", fmt::format("[{}, {}, {}, {}, {}]", h[0], h[1], h[2], h[3], h[4]));
+  }
+  add("mask.filter", "nearest");
+  add("mask.object_shape", "box | sphere | ellipsoid (normalised box coordinates)");
+  add("slice.normal", "centre - camera");
+  add("slice.normalise_n", "true");
+  add("slice.d_range", s.d_range == SliceRange::kTight ? "tight corner range" : "conservative +-D");
+  add("slice.qc_map", "dd = QC * h0");
+  add("slice.quality_class", num(s.quality_class));
+  add("slice.spacing", num(slice_spacing(s.quality_class, volume.spacing())));
+  add("slice.order", "back to front");
+  if (const auto* p = std::get_if<Pinhole>(&camera))
+    add("camera.fov", fmt::format("{:.6g} deg (vertical)", 2 * std::atan(0.5 * p->height / p->fy) * 180 / M_PI));
+  add("cpu.realisation", "per-pixel ray-plane sampling");
+  add("mode", slicing_mode_name(s.mode));
+  add("blend.operator", s.blend == BlendOperator::kOver ? "over" : "additive");
+  add("blend.opacity_correction", s.opacity_correction ? "on, dref = h0, along-ray spacing dd / cos psi" : "off");
+  add("mip.rule", "max alpha wins");
+  add("combined.rule", "OUR INTERPRETATION (spec 2.6): a >= A_max replaces, else over-blends the lit colour");
+  add("light.model", fmt::format("Blinn-Phong ambient {} diffuse {} specular {} exponent {}", num(s.light.ambient),
+                                 num(s.light.diffuse), num(s.light.specular), num(s.light.exponent)));
+  add("light.position", fmt::format("eye + camera-frame ({}, {}, {}) box diagonals", num(s.light.light_camera.x()),
+                                    num(s.light.light_camera.y()), num(s.light.light_camera.z())));
+  add("light.gate", num(s.light.gate));
+  add("shade.modes", s.lit_blend ? "mip, combined and blend" : "mip and combined");
+  add("post.adjust", fmt::format("contrast {} brightness {} gamma {}", num(s.post.adjust.contrast),
+                                 num(s.post.adjust.brightness), num(s.post.adjust.gamma)));
+  add("post.bloom", s.post.enabled ? "on" : "off");
+  add("post.threshold", num(s.post.threshold) + " of Rec. 709 luminance");
+  add("post.sigma/radius", fmt::format("{} half-res px, radius ceil(3 sigma)", num(s.post.sigma)));
+  add("post.bloom_blend", fmt::format("additive, gain {}", num(s.post.gain)));
+  add("post.render_target", "float32");
+  add("skip_empty",
+      s.skip_empty ? fmt::format("{}^3 cells, runs of empty planes jumped, exact (same image)", s.skip_cell) : "off");
+  add("blend.early_termination",
+      s.early_termination > 0
+          ? (s.mode == SlicingMode::kBlend && s.blend == BlendOperator::kOver
+                 ? fmt::format("front to back, stop at A >= {} (beyond the source)", num(s.early_termination))
+                 : "off (only Blend over; ignored in this mode)")
+          : "off (the source's back-to-front order)");
+  return r;
+}
+
+}  // namespace meltlab::render

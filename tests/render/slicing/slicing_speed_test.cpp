@@ -1,0 +1,181 @@
+// The slicing renderer's speed paths (render/slicing/slicing_renderer.h) against its plain path:
+// jumping runs of empty planes changes no pixel for any cell size, mode, mask or camera; early ray
+// termination is off by default, ignored where it does not apply, equal to back to front up to
+// float round-off when it cannot stop early, and within its bound when it does.
+
+#include <meltlab/core/error.h>
+#include <meltlab/render/slicing/slicing_renderer.h>
+#include <meltlab/render/slicing/test_fields.h>
+#include <meltlab/render/volume/generate.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace meltlab::render {
+namespace {
+
+Camera camera_30deg(int w, int h, const Box3& box, const Eigen::Vector3d& dir) {
+  const double fy = 0.5 * h / std::tan(15.0 * M_PI / 180.0);
+  Eigen::Vector3d up(0, 0, 1);
+  if (std::abs(dir.normalized().z()) > 0.99) up = Eigen::Vector3d(0, 1, 0);
+  return Pinhole::look_at(w, h, fy, box.centre() + dir, box.centre(), up);
+}
+
+/// A small CT phantom (nested shells with noise, spacing 1 : 1 : 2) normalised as a scene does.
+const Volume& phantom() {
+  static const Volume v = [] {
+    VolumeGenerateOptions g;
+    g.kind = VolumeKind::kCtPhantom;
+    g.nx = 48, g.ny = 44, g.nz = 21;
+    return generate_volume(g);
+  }();
+  return v;
+}
+
+/// Skin (air–fat transition and fat) faint, bone strong; water and muscle invisible: thin live shells.
+TransferFunction skin_bone() {
+  std::vector<TfRange> r(2);
+  r[0] = {0.23, 0.455, false, true, Eigen::Vector3d(230, 170, 140), 0.08};
+  r[1] = {0.75, 1.0, false, true, Eigen::Vector3d(255, 250, 240), 0.6};
+  return TransferFunction(r, "skin_bone");
+}
+
+TransferFunction highlight() {
+  std::array<TfCurve, 4> c;
+  c[0].points = {{0.0, 1.0}};
+  c[1].points = {{0.0, 0.3}, {1.0, 0.6}};
+  c[2].points = {{0.0, 0.1}};
+  c[3].points = {{0.3, 0.0}, {0.5, 0.4}, {1.0, 0.7}};
+  return TransferFunction::piecewise_linear(c, "highlight");
+}
+
+double max_abs_diff(const ImageF& a, const ImageF& b) {
+  double m = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, std::abs(double(a.values()[i]) - double(b.values()[i])));
+  return m;
+}
+
+/// The cameras of the tests: oblique, axis-aligned (ray moves of 0 on two axes), close (rays leave
+/// through the volume's sides, where clamped indices meet the jump's open box sides).
+std::vector<Camera> cameras(const Box3& box) {
+  const double d = box.diagonal();
+  return {camera_30deg(44, 32, box, Eigen::Vector3d(0.9, -1.3, 0.7).normalized() * 1.6 * d),
+          camera_30deg(40, 30, box, Eigen::Vector3d(0, 0, 1) * 1.8 * d),
+          camera_30deg(36, 28, box, Eigen::Vector3d(-0.5, 0.4, -0.3).normalized() * 0.75 * d)};
+}
+
+TEST(SlicingSpeed, JumpingEmptyRunsChangesNoPixelForAnyCellSizeModeOrMask) {
+  const Volume& v = phantom();
+  MaskVolume mask({12, 11, 9}, v.domain(), 1);
+  MaskEdit cut;  // the top cut away
+  cut.centre = Eigen::Vector3d(0.5, 0.5, 0.9), cut.half_size = Eigen::Vector3d(0.6, 0.6, 0.2), cut.index = 0;
+  mask.apply(cut);
+  MaskEdit hl;  // a region with the second TF
+  hl.shape = MaskShape::kSphere, hl.centre = Eigen::Vector3d(0.4, 0.45, 0.5), hl.half_size.setConstant(0.2);
+  hl.index = 2;
+  mask.apply(hl);
+  for (const Camera& cam : cameras(v.domain()))
+    for (int variant = 0; variant < 5; ++variant) {
+      SlicingSettings s;
+      s.tfs[0] = skin_bone();
+      s.tfs[1] = highlight();
+      s.quality_class = 0.7;
+      s.mode = variant == 2 ? SlicingMode::kMip : variant == 3 ? SlicingMode::kCombined : SlicingMode::kBlend;
+      s.blend = variant == 1 ? BlendOperator::kAdditive : BlendOperator::kOver;
+      if (variant == 4) s.mask = mask, s.lit_blend = true;
+      s.skip_empty = false;
+      const SlicingRenderer plain_renderer(v, s);
+      const SlicingFrame plain = plain_renderer.render(cam);
+      EXPECT_EQ(plain.stats.visited, plain.stats.samples);
+      ASSERT_GT(plain.stats.classified, 0);
+      for (int cell : {2, 4, 8, 16}) {
+        s.skip_empty = true;
+        s.skip_cell = cell;
+        const SlicingFrame f =
+            SlicingRenderer(
+                v, s,
+                plain_renderer.gradients() ? std::optional<GradientVolume>(*plain_renderer.gradients()) : std::nullopt)
+                .render(cam);
+        const std::string what = "variant " + std::to_string(variant) + ", cell " + std::to_string(cell);
+        EXPECT_EQ(f.raw, plain.raw) << what;
+        EXPECT_EQ(f.alpha, plain.alpha) << what;
+        EXPECT_EQ(f.stats.samples, plain.stats.samples) << what;  // jumped planes are still counted
+        EXPECT_LE(f.stats.visited, f.stats.samples) << what;
+        // The test must exercise the jumps, not only the per-sample check: cells of 2 to 8 voxels
+        // leave empty runs on every ray set here (16 makes 3 x 3 x 2 cells on this volume, all live).
+        if (cell <= 8) {
+          EXPECT_LT(f.stats.visited, f.stats.samples) << what;
+        }
+      }
+    }
+}
+
+TEST(SlicingSpeed, EarlyTerminationIsOffByDefaultAndIgnoredOutsideBlendOver) {
+  const Volume& v = phantom();
+  const Camera cam = cameras(v.domain())[0];
+  SlicingSettings s;
+  EXPECT_EQ(s.early_termination, 0.0);
+  s.tfs[0] = skin_bone();
+  for (int variant = 0; variant < 3; ++variant) {
+    s.mode = variant == 1 ? SlicingMode::kMip : variant == 2 ? SlicingMode::kCombined : SlicingMode::kBlend;
+    s.blend = variant == 0 ? BlendOperator::kAdditive : BlendOperator::kOver;
+    s.early_termination = 0;
+    const SlicingFrame a = render_slicing(v, cam, s);
+    s.early_termination = 0.5;
+    const SlicingFrame b = render_slicing(v, cam, s);
+    EXPECT_EQ(a.raw, b.raw) << variant;
+    EXPECT_EQ(b.stats.terminated, 0) << variant;
+  }
+}
+
+TEST(SlicingSpeed, FrontToBackEqualsBackToFrontUpToRoundOffAndStopsWithinItsBound) {
+  const Volume& v = phantom();
+  for (const Camera& cam : cameras(v.domain())) {
+    SlicingSettings s;
+    s.tfs[0] = skin_bone();
+    s.quality_class = 0.5;
+    s.background = Eigen::Vector3d(0.2, 0.4, 0.9);
+    const SlicingFrame back_to_front = render_slicing(v, cam, s);
+    // Threshold 1: a ray stops only where A is 1 in double precision, so nothing behind can count;
+    // the two orders differ by double round-off, a float ulp at most after the cast (values <= 1
+    // carry ulps <= 6e-8; 1e-6 leaves room for a few).
+    s.early_termination = 1.0;
+    const SlicingFrame whole = render_slicing(v, cam, s);
+    EXPECT_LE(max_abs_diff(whole.raw, back_to_front.raw), 1e-6);
+    EXPECT_LE(max_abs_diff(whole.alpha, back_to_front.alpha), 1e-6);
+    // Threshold 0.99: what is left behind the stop is (1 - A) <= 0.01 times a mixture of colours and
+    // the background, all in [0, 1]; so every channel moves by at most 0.01 (+ the round-off above).
+    s.early_termination = 0.99;
+    const SlicingFrame stopped = render_slicing(v, cam, s);
+    EXPECT_LE(max_abs_diff(stopped.raw, back_to_front.raw), 0.01 + 1e-6);
+    EXPECT_LE(max_abs_diff(stopped.alpha, back_to_front.alpha), 0.01 + 1e-6);
+    EXPECT_GT(stopped.stats.terminated, 0);
+    EXPECT_LT(stopped.stats.samples, back_to_front.stats.samples);
+    for (std::size_t i = 0; i < stopped.alpha.size(); ++i)
+      if (back_to_front.alpha.values()[i] >= 0.995f) {
+        EXPECT_GE(stopped.alpha.values()[i], 0.99f - 1e-6f);
+      }
+  }
+}
+
+TEST(SlicingSpeed, BadCellSizeOrTerminationThresholdIsRefused) {
+  const Volume& v = phantom();
+  SlicingSettings s;
+  s.tfs[0] = skin_bone();
+  for (int cell : {0, 1, 3, 5, 32}) {
+    s.skip_cell = cell;
+    EXPECT_THROW(check_slicing_settings(v, s), InputError) << cell;
+  }
+  s.skip_cell = 4;
+  for (double t : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    s.early_termination = t;
+    EXPECT_THROW(check_slicing_settings(v, s), InputError) << t;
+  }
+  s.early_termination = 0.99;
+  EXPECT_NO_THROW(check_slicing_settings(v, s));
+}
+
+}  // namespace
+}  // namespace meltlab::render
