@@ -149,13 +149,17 @@ void merge_positions(TriMesh<Real>& m, MergeMode merge, MeltWorkspace& ws) {
       m.position.set(r, m.position[r] + m.position[ks]);
     m.vertex_alive[ks] = 0;
   }
+  std::vector<PackedPosition<Real>>& packed = ws.packed_positions<Real>();
+  const bool keep_packed = ws.packed_valid && packed.size() == m.vertex_slots();
   for (Index r : ws.touched_roots) {
-    auto& size = ws.cluster_size[static_cast<std::size_t>(r)];
-    if (merge == MergeMode::kClusterMean) {
-      const auto rs = static_cast<std::size_t>(r);
-      m.position.set(rs, m.position[rs] / static_cast<Real>(size));
-    }
+    const auto rs = static_cast<std::size_t>(r);
+    auto& size = ws.cluster_size[rs];
+    if (merge == MergeMode::kClusterMean) m.position.set(rs, m.position[rs] / static_cast<Real>(size));
     size = 0;
+    if (keep_packed) {
+      const Vec3<Real> p = m.position[rs];
+      packed[rs] = PackedPosition<Real>{{p.x(), p.y(), p.z(), Real(0)}};
+    }
   }
 }
 

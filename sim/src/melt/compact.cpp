@@ -52,6 +52,7 @@ void compact_workspace(TriMesh<Real>& m, MeltWorkspace& ws) {
   ws.clear_dirty();
   ws.adj.invalidate();
   ws.schedule.invalidate();
+  ws.packed_valid = false;
   ws.dirty.assign(m.vertex_slots(), 0);
   ws.root.assign(m.vertex_slots(), 0);
   ws.cluster_size.assign(m.vertex_slots(), 0);

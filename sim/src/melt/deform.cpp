@@ -47,10 +47,11 @@ struct VertexGroup {
   VertexSums<Real>* sums;  // 8 records, read and cleared for the next cycle
   const Index* count;      // triangles per vertex
   const std::uint8_t* alive;
-  Real *px, *py, *pz;     // positions, 8 per column (in and out)
-  Real *nx, *ny, *nz;     // out: normals
-  Real *mx, *my, *mz;     // out: displacements
-  Index* triangle_count;  // out
+  Real *px, *py, *pz;            // positions, 8 per column (in and out)
+  Real *nx, *ny, *nz;            // out: normals
+  Real *mx, *my, *mz;            // out: displacements
+  Index* triangle_count;         // out
+  PackedPosition<Real>* packed;  // out: the moved positions as packed records
 };
 
 // Moves eight vertices (Eq. 2.10, 3.5, 3.6, 3.8) with lane arithmetic: every lane runs the
@@ -107,6 +108,7 @@ inline void move_group(const MoveConstants<Real>& c, const VertexGroup<Real>& g,
   L px = load_lanes<Real>(g.px), py = load_lanes<Real>(g.py), pz = load_lanes<Real>(g.pz);
   px = has ? px + mx : px, py = has ? py + my : py, pz = has ? pz + mz : pz;  // Eq. 3.8
   store_lanes<Real>(g.px, px), store_lanes<Real>(g.py, py), store_lanes<Real>(g.pz, pz);
+  for (std::size_t i = 0; i < kLanes; ++i) g.packed[i] = PackedPosition<Real>{{px[i], py[i], pz[i], Real(0)}};
   store_lanes<Real>(g.nx, has ? Nx : zero), store_lanes<Real>(g.ny, has ? Ny : zero);
   store_lanes<Real>(g.nz, has ? Nz : zero);
   store_lanes<Real>(g.mx, mx), store_lanes<Real>(g.my, my), store_lanes<Real>(g.mz, mz);
@@ -126,6 +128,7 @@ struct Sweep {
   const Index* counts;  // triangles per vertex (the list lengths)
   const VertexTriangles& adj;
   const DeformSchedule& plan;
+  PackedPosition<Real>* packed;       // positions as packed records: gathered, then written by the moves
   TriangleTerms<Real>* stored_terms;  // terms of the triangles of halo vertices
   const ScaleAt& scale_at;            // kg·kl: a number, or a function of the vertex slot
 };
@@ -169,7 +172,8 @@ void move_group_at(const Sweep<Real, ScaleAt>& w, std::size_t g, MoveMaxima<Real
                                 D[0] + v,
                                 D[1] + v,
                                 D[2] + v,
-                                &m.triangle_count[v]};
+                                &m.triangle_count[v],
+                                w.packed + v};
     move_group<Real, kMode>(w.c, grp, scale(v, grp.count, grp.alive), mx.move, mx.coord);
     return;
   }
@@ -177,6 +181,7 @@ void move_group_at(const Sweep<Real, ScaleAt>& w, std::size_t g, MoveMaxima<Real
   Index pad_count[kLanes] = {}, pad_tcount[kLanes] = {};
   std::uint8_t pad_alive[kLanes] = {};
   Real pad_p[3][kLanes] = {}, pad_n[3][kLanes], pad_d[3][kLanes];
+  PackedPosition<Real> pad_packed[kLanes];
   std::copy_n(&w.sums[v], n, pad_sums);
   std::fill_n(&w.sums[v], n, VertexSums<Real>{});
   std::copy_n(&w.counts[v], n, pad_count);
@@ -184,7 +189,7 @@ void move_group_at(const Sweep<Real, ScaleAt>& w, std::size_t g, MoveMaxima<Real
   for (int a = 0; a < 3; ++a) std::copy_n(P[a] + v, n, pad_p[a]);
   move_group<Real, kMode>(w.c,
                           {pad_sums, pad_count, pad_alive, pad_p[0], pad_p[1], pad_p[2], pad_n[0], pad_n[1], pad_n[2],
-                           pad_d[0], pad_d[1], pad_d[2], pad_tcount},
+                           pad_d[0], pad_d[1], pad_d[2], pad_tcount, pad_packed},
                           scale(v, pad_count, pad_alive), mx.move, mx.coord);
   for (int a = 0; a < 3; ++a) {
     std::copy_n(pad_p[a], n, P[a] + v);
@@ -192,6 +197,7 @@ void move_group_at(const Sweep<Real, ScaleAt>& w, std::size_t g, MoveMaxima<Real
     std::copy_n(pad_d[a], n, D[a] + v);
   }
   std::copy_n(pad_tcount, n, &m.triangle_count[v]);
+  std::copy_n(pad_packed, n, w.packed + v);
 }
 
 // Block b of the sweep: its triangles' terms, face normals, stored terms for halo vertices,
@@ -202,7 +208,7 @@ void sweep_block(const Sweep<Real, ScaleAt>& w, std::size_t b, TriangleBlockTerm
   TriMesh<Real>& m = w.m;
   const std::size_t first = b * kTriangleBlock;
   const std::size_t count = std::min(kTriangleBlock, m.triangle_slots() - first);
-  triangle_block_terms(m, first, count, terms);
+  triangle_block_terms(m, w.packed, first, count, terms);
   Real* const FN[3] = {m.face_normal.x().data(), m.face_normal.y().data(), m.face_normal.z().data()};
   const std::uint8_t* const alive = m.triangle_alive.data();
   for (std::size_t i = 0; i < count; ++i) {  // dead slots keep their face normal
@@ -261,7 +267,7 @@ void halo_group(const Sweep<Real, ScaleAt>& w, std::size_t g, MoveMaxima<Real>& 
 // The sweep of one cycle; returns a bound on how far any vertex moved: the largest |move|
 // plus the rounding of P + move (half an ulp of the largest coordinate per component).
 template <DeformMode kMode, class Real, class ScaleAt>
-double sweep(const Sweep<Real, ScaleAt>& w, Execution exec) {
+double sweep(const Sweep<Real, ScaleAt>& w, std::size_t parts, Execution exec) {
   std::atomic<double> max_move{0.0}, max_coord{0.0};
   auto publish = [&](const MoveMaxima<Real>& mx) {
     Real local_move = 0, local_coord = 0;
@@ -278,21 +284,29 @@ double sweep(const Sweep<Real, ScaleAt>& w, Execution exec) {
     atomic_max(max_coord, static_cast<double>(local_coord));
   };
   const DeformSchedule& plan = w.plan;
-  if (plan.parts() == 1 && plan.halo_groups().empty()) {
+  if (parts == 1) {
+    // One part: every triangle adds into its corners' records, then every group moves, in
+    // ascending order (the vertex arrays stream through the cache once, which measured faster
+    // than moving each group right after its last triangle; the corners were gathered from
+    // the packed copy of the old positions, so the order of the moves does not matter).
     MoveMaxima<Real> mx;
-    sweep_part<false, kMode>(w, 0, mx);
+    TriangleBlockTerms<Real> terms;
+    const std::size_t blocks = (w.m.triangle_slots() + kTriangleBlock - 1) / kTriangleBlock;
+    for (std::size_t b = 0; b < blocks; ++b) sweep_block<false>(w, b, terms);
+    const std::size_t groups = (w.m.vertex_slots() + kGroup - 1) / kGroup;
+    for (std::size_t g = 0; g < groups; ++g) move_group_at<Real, kMode>(w, g, mx);
     publish(mx);
   } else {
-    auto parts = [&](const tbb::blocked_range<std::size_t>& r) {
+    auto run_parts = [&](const tbb::blocked_range<std::size_t>& r) {
       MoveMaxima<Real> mx;
       for (std::size_t p = r.begin(); p < r.end(); ++p) sweep_part<true, kMode>(w, p, mx);
       publish(mx);
     };
     const tbb::blocked_range<std::size_t> all(0, plan.parts(), 1);
     if (exec == Execution::kSerial)
-      parts(all);
+      run_parts(all);
     else
-      tbb::parallel_for(all, parts, tbb::simple_partitioner());
+      tbb::parallel_for(all, run_parts, tbb::simple_partitioner());
     const auto halo = plan.halo_groups();
     for_range(exec, halo.size(), [&](std::size_t begin, std::size_t end) {
       MoveMaxima<Real> mx;
@@ -306,14 +320,14 @@ double sweep(const Sweep<Real, ScaleAt>& w, Execution exec) {
 }
 
 template <class Real, class ScaleAt>
-double sweep(const Sweep<Real, ScaleAt>& w, DeformMode mode, Execution exec) {
+double sweep(const Sweep<Real, ScaleAt>& w, DeformMode mode, std::size_t parts, Execution exec) {
   switch (mode) {
     case DeformMode::kCombined:
-      return sweep<DeformMode::kCombined>(w, exec);
+      return sweep<DeformMode::kCombined>(w, parts, exec);
     case DeformMode::kNormalOnly:
-      return sweep<DeformMode::kNormalOnly>(w, exec);
+      return sweep<DeformMode::kNormalOnly>(w, parts, exec);
     case DeformMode::kEdgeOnly:
-      return sweep<DeformMode::kEdgeOnly>(w, exec);
+      return sweep<DeformMode::kEdgeOnly>(w, parts, exec);
   }
   throw std::logic_error("deform: unknown DeformMode");
 }
@@ -332,25 +346,35 @@ std::size_t sweep_parts(Execution exec, std::size_t triangles, std::size_t reque
 template <class Real>
 void deform_pass(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execution exec, MeltWorkspace& ws) {
   prepare_workspace(ws, m);
-  ws.schedule.update(m, ws.adj, sweep_parts(exec, m.triangle_slots(), ws.deform_parts));
+  // One part needs no schedule (see sweep()); it is rebuilt when parts are asked for again.
+  const std::size_t parts = sweep_parts(exec, m.triangle_slots(), ws.deform_parts);
+  if (parts == 1)
+    ws.schedule.invalidate();
+  else
+    ws.schedule.update(m, ws.adj, parts);
   std::vector<VertexSums<Real>>& sums = ws.vertex_sums<Real>();
   sums.resize(m.vertex_slots());  // all zero: every group clears its records when it moves
   std::vector<TriangleTerms<Real>>& stored = ws.triangle_terms<Real>();
-  if (!ws.schedule.halo_groups().empty() && stored.size() < m.triangle_slots()) stored.resize(m.triangle_slots());
+  if (parts > 1 && !ws.schedule.halo_groups().empty() && stored.size() < m.triangle_slots())
+    stored.resize(m.triangle_slots());
   const MoveConstants<Real> c{static_cast<Real>(p.kE), static_cast<Real>(p.kN), p.edge_sum == EdgeSumMode::kMean,
                               p.tie == TieRule::kLessEqual};
   const Index* counts = ws.adj.counts().data();
+  std::vector<PackedPosition<Real>>& packed = ws.packed_positions<Real>();
+  if (!ws.packed_valid || packed.size() != m.vertex_slots()) pack_positions(m, packed);
+  ws.packed_valid = true;  // the moves keep it up to date
   // A constant kl costs nothing per vertex: s = kg·kl is folded into one number.
   if (kl.is_constant()) {
     const auto s = static_cast<Real>(p.kg * kl.value(Vec3<double>::Zero()));
-    const Sweep<Real, Real> w{m, c, sums.data(), counts, ws.adj, ws.schedule, stored.data(), s};
-    ws.cycle_move_bound = sweep(w, p.deform, exec);
+    const Sweep<Real, Real> w{m, c, sums.data(), counts, ws.adj, ws.schedule, packed.data(), stored.data(), s};
+    ws.cycle_move_bound = sweep(w, p.deform, parts, exec);
   } else {
     auto scale_at = [&](std::size_t v) {
       return static_cast<Real>(p.kg * kl.value(m.position[v].template cast<double>()));
     };
-    const Sweep<Real, decltype(scale_at)> w{m, c, sums.data(), counts, ws.adj, ws.schedule, stored.data(), scale_at};
-    ws.cycle_move_bound = sweep(w, p.deform, exec);
+    const Sweep<Real, decltype(scale_at)> w{
+        m, c, sums.data(), counts, ws.adj, ws.schedule, packed.data(), stored.data(), scale_at};
+    ws.cycle_move_bound = sweep(w, p.deform, parts, exec);
   }
 }
 

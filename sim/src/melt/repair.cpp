@@ -272,6 +272,7 @@ void repair_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report) {
     prepare_workspace(ws, m);
     invalidate_edge_keys(ws);  // rare: vertices moved and triangles changed
     ws.schedule.invalidate();
+    ws.packed_valid = false;
   }
   for (Index v : ws.dirty_list)
     if (m.vertex_alive[static_cast<std::size_t>(v)])

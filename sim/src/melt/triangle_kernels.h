@@ -1,6 +1,7 @@
 #pragma once
 // Private to the melt cycle: the per-triangle arithmetic of Alg. 1, computed a
-// block of triangles at a time. Positions are first gathered into structure-of-arrays
+// block of triangles at a time. Corner positions are first gathered (from a packed copy of
+// the position columns) into structure-of-arrays
 // buffers, then plain loops over them do the arithmetic (the compiler turns these into
 // SIMD instructions: sqrt and division are exactly rounded in SIMD too, and contraction is
 // off, so the result of every element is the same as a scalar evaluation). Serial and
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <cstddef>
+#include <vector>
 
 namespace meltlab::sim {
 
@@ -37,28 +39,48 @@ inline Real inverse_length(Real n2) {
   return n2 > Real(0) ? inv : Real(0);
 }
 
-/// Triangles [first, first + count) of `m`. A dead slot reads vertex 0 at all three corners:
-/// a point, whose normal and edges inverse_length() turns into zero terms.
+/// A vertex position as one four-number record (x, y, z, 0), aligned to its size: the sweep
+/// gathers a triangle corner with one 16/32-byte load from a packed copy of the positions
+/// (one cache line per corner) instead of three loads from the x, y, z columns.
 template <class Real>
-inline void triangle_block_terms(const TriMesh<Real>& m, std::size_t first, std::size_t count,
-                                 TriangleBlockTerms<Real>& out) {
-  // Corner positions gathered from the position columns into x, y, z arrays for the
-  // arithmetic below, which vectorises over them.
-  Real px[3][kTriangleBlock], py[3][kTriangleBlock], pz[3][kTriangleBlock];
+struct alignas(4 * sizeof(Real)) PackedPosition {
+  Real xyz[4];
+};
+
+/// Copies the position columns of `m` into `out` as packed records (resized to the vertex slots).
+template <class Real>
+inline void pack_positions(const TriMesh<Real>& m, std::vector<PackedPosition<Real>>& out) {
+  const std::size_t n = m.vertex_slots();
+  out.resize(n);
   const Real* X = m.position.x().data();
   const Real* Y = m.position.y().data();
   const Real* Z = m.position.z().data();
+  PackedPosition<Real>* o = out.data();
+  for (std::size_t v = 0; v < n; ++v) o[v] = PackedPosition<Real>{{X[v], Y[v], Z[v], Real(0)}};
+}
+
+/// Triangles [first, first + count) of `m`, with corner positions read from `packed` (the
+/// positions of `m` as pack_positions() copied them). A dead slot reads vertex 0 at all
+/// three corners: a point, whose normal and edges inverse_length() turns into zero terms.
+template <class Real>
+inline void triangle_block_terms(const TriMesh<Real>& m, const PackedPosition<Real>* packed, std::size_t first,
+                                 std::size_t count, TriangleBlockTerms<Real>& out) {
+  // Corners copied as whole records, then split into x, y, z arrays for the arithmetic
+  // below, which vectorises over them.
+  PackedPosition<Real> p[3][kTriangleBlock];
   out.count = count;
   for (std::size_t i = 0; i < count; ++i) {
     const std::size_t t = first + i;
     const bool alive = m.triangle_alive[t] != 0;
-    for (std::size_t k = 0; k < 3; ++k) {
-      const std::size_t v = alive ? static_cast<std::size_t>(m.triangle[t][k]) : 0;
-      px[k][i] = X[v];
-      py[k][i] = Y[v];
-      pz[k][i] = Z[v];
-    }
+    for (std::size_t k = 0; k < 3; ++k) p[k][i] = packed[alive ? static_cast<std::size_t>(m.triangle[t][k]) : 0];
   }
+  Real px[3][kTriangleBlock], py[3][kTriangleBlock], pz[3][kTriangleBlock];
+  for (std::size_t k = 0; k < 3; ++k)
+    for (std::size_t i = 0; i < count; ++i) {
+      px[k][i] = p[k][i].xyz[0];
+      py[k][i] = p[k][i].xyz[1];
+      pz[k][i] = p[k][i].xyz[2];
+    }
   for (std::size_t i = 0; i < count; ++i) {
     const Real abx = px[1][i] - px[0][i], aby = py[1][i] - py[0][i], abz = pz[1][i] - pz[0][i];
     const Real bcx = px[2][i] - px[1][i], bcy = py[2][i] - py[1][i], bcz = pz[2][i] - pz[1][i];
