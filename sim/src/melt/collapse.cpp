@@ -149,8 +149,8 @@ void merge_positions(TriMesh<Real>& m, MergeMode merge, MeltWorkspace& ws) {
       m.position.set(r, m.position[r] + m.position[ks]);
     m.vertex_alive[ks] = 0;
   }
-  std::vector<PackedPosition<Real>>& packed = ws.packed_positions<Real>();
-  const bool keep_packed = ws.packed_valid && packed.size() == m.vertex_slots();
+  std::vector<Real>& packed = ws.packed_positions<Real>();
+  const bool keep_packed = ws.packed_valid && packed.size() == 3 * m.vertex_slots() + 1;
   for (Index r : ws.touched_roots) {
     const auto rs = static_cast<std::size_t>(r);
     auto& size = ws.cluster_size[rs];
@@ -158,7 +158,7 @@ void merge_positions(TriMesh<Real>& m, MergeMode merge, MeltWorkspace& ws) {
     size = 0;
     if (keep_packed) {
       const Vec3<Real> p = m.position[rs];
-      packed[rs] = PackedPosition<Real>{{p.x(), p.y(), p.z(), Real(0)}};
+      packed[3 * rs] = p.x(), packed[3 * rs + 1] = p.y(), packed[3 * rs + 2] = p.z();
     }
   }
 }

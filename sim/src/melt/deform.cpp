@@ -4,17 +4,19 @@
 // edge vector to the next corner; every vertex sums them, normalises N (Eq. 2.10), takes
 // the mean M_E (Eq. 3.5) and moves by kg·kl(P)·M (Eq. 3.6, 3.8).
 //
-// One streaming sweep (deform_schedule.h): blocks of triangles in ascending order compute
-// their terms and add each corner's terms to the corner's sum record (one SIMD addition);
-// right after the block that completes the sums of a group of eight vertex slots, the group
-// moves, eight vertices at a time in SIMD lanes (lanes.h), each lane with the scalar
-// formulas' operations in their order, and clears its records for the next cycle. Parallel
-// sweeps run parts of the blocks side by side; vertices whose triangles lie in more than
-// one part gather their sums afterwards from their triangles' stored terms, in the same
-// ascending triangle order as the serial sweep adds them. Every vertex therefore adds the
-// same numbers in the same order whatever the execution: bitwise-identical meshes (with
-// -ffp-contract=off, see cmake/flags.cmake). A vertex's triangle count is the length of
-// its list.
+// Blocks of triangles in ascending order gather their corners from a packed (x, y, z, 0)
+// copy of the positions (workspace.h), compute their terms and add each corner's terms to
+// the corner's sum record (one SIMD addition); groups of eight vertex slots move eight
+// vertices at a time in SIMD lanes (lanes.h), each lane with the scalar formulas'
+// operations in their order, write the new positions to the columns and the packed copy,
+// and clear their records for the next cycle. A one-part (serial) sweep adds all triangles
+// first and then moves every group in ascending order. A sweep in parts (deform_schedule.h)
+// runs parts of the blocks side by side, and a group moves right after the block that
+// completes its sums; vertices whose triangles lie in more than one part gather their sums
+// afterwards from their triangles' stored terms, in the same ascending triangle order as
+// the serial sweep adds them. Every vertex therefore adds the same numbers in the same
+// order whatever the execution: bitwise-identical meshes (with -ffp-contract=off, see
+// cmake/flags.cmake). A vertex's triangle count is the length of its list.
 
 #include "deform_schedule.h"
 #include "triangle_kernels.h"
@@ -47,11 +49,11 @@ struct VertexGroup {
   VertexSums<Real>* sums;  // 8 records, read and cleared for the next cycle
   const Index* count;      // triangles per vertex
   const std::uint8_t* alive;
-  Real *px, *py, *pz;            // positions, 8 per column (in and out)
-  Real *nx, *ny, *nz;            // out: normals
-  Real *mx, *my, *mz;            // out: displacements
-  Index* triangle_count;         // out
-  PackedPosition<Real>* packed;  // out: the moved positions as packed records
+  Real *px, *py, *pz;     // positions, 8 per column (in and out)
+  Real *nx, *ny, *nz;     // out: normals
+  Real *mx, *my, *mz;     // out: displacements
+  Index* triangle_count;  // out
+  Real* packed;           // out: the moved positions as 8 packed triples
 };
 
 // Moves eight vertices (Eq. 2.10, 3.5, 3.6, 3.8) with lane arithmetic: every lane runs the
@@ -108,7 +110,7 @@ inline void move_group(const MoveConstants<Real>& c, const VertexGroup<Real>& g,
   L px = load_lanes<Real>(g.px), py = load_lanes<Real>(g.py), pz = load_lanes<Real>(g.pz);
   px = has ? px + mx : px, py = has ? py + my : py, pz = has ? pz + mz : pz;  // Eq. 3.8
   store_lanes<Real>(g.px, px), store_lanes<Real>(g.py, py), store_lanes<Real>(g.pz, pz);
-  for (std::size_t i = 0; i < kLanes; ++i) g.packed[i] = PackedPosition<Real>{{px[i], py[i], pz[i], Real(0)}};
+  interleave3<Real>(g.packed, px, py, pz);
   store_lanes<Real>(g.nx, has ? Nx : zero), store_lanes<Real>(g.ny, has ? Ny : zero);
   store_lanes<Real>(g.nz, has ? Nz : zero);
   store_lanes<Real>(g.mx, mx), store_lanes<Real>(g.my, my), store_lanes<Real>(g.mz, mz);
@@ -128,7 +130,7 @@ struct Sweep {
   const Index* counts;  // triangles per vertex (the list lengths)
   const VertexTriangles& adj;
   const DeformSchedule& plan;
-  PackedPosition<Real>* packed;       // positions as packed records: gathered, then written by the moves
+  Real* packed;                       // positions as packed triples: gathered, then written by the moves
   TriangleTerms<Real>* stored_terms;  // terms of the triangles of halo vertices
   const ScaleAt& scale_at;            // kg·kl: a number, or a function of the vertex slot
 };
@@ -173,7 +175,7 @@ void move_group_at(const Sweep<Real, ScaleAt>& w, std::size_t g, MoveMaxima<Real
                                 D[1] + v,
                                 D[2] + v,
                                 &m.triangle_count[v],
-                                w.packed + v};
+                                w.packed + 3 * v};
     move_group<Real, kMode>(w.c, grp, scale(v, grp.count, grp.alive), mx.move, mx.coord);
     return;
   }
@@ -181,7 +183,7 @@ void move_group_at(const Sweep<Real, ScaleAt>& w, std::size_t g, MoveMaxima<Real
   Index pad_count[kLanes] = {}, pad_tcount[kLanes] = {};
   std::uint8_t pad_alive[kLanes] = {};
   Real pad_p[3][kLanes] = {}, pad_n[3][kLanes], pad_d[3][kLanes];
-  PackedPosition<Real> pad_packed[kLanes];
+  Real pad_packed[3 * kLanes];
   std::copy_n(&w.sums[v], n, pad_sums);
   std::fill_n(&w.sums[v], n, VertexSums<Real>{});
   std::copy_n(&w.counts[v], n, pad_count);
@@ -197,7 +199,7 @@ void move_group_at(const Sweep<Real, ScaleAt>& w, std::size_t g, MoveMaxima<Real
     std::copy_n(pad_d[a], n, D[a] + v);
   }
   std::copy_n(pad_tcount, n, &m.triangle_count[v]);
-  std::copy_n(pad_packed, n, w.packed + v);
+  std::copy_n(pad_packed, 3 * n, w.packed + 3 * v);
 }
 
 // Block b of the sweep: its triangles' terms, face normals, stored terms for halo vertices,
@@ -360,8 +362,8 @@ void deform_pass(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execu
   const MoveConstants<Real> c{static_cast<Real>(p.kE), static_cast<Real>(p.kN), p.edge_sum == EdgeSumMode::kMean,
                               p.tie == TieRule::kLessEqual};
   const Index* counts = ws.adj.counts().data();
-  std::vector<PackedPosition<Real>>& packed = ws.packed_positions<Real>();
-  if (!ws.packed_valid || packed.size() != m.vertex_slots()) pack_positions(m, packed);
+  std::vector<Real>& packed = ws.packed_positions<Real>();
+  if (!ws.packed_valid || packed.size() != 3 * m.vertex_slots() + 1) pack_positions(m, packed);
   ws.packed_valid = true;  // the moves keep it up to date
   // A constant kl costs nothing per vertex: s = kg·kl is folded into one number.
   if (kl.is_constant()) {

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <cstddef>
+#include <cstring>
 #include <vector>
 
 namespace meltlab::sim {
@@ -39,47 +40,50 @@ inline Real inverse_length(Real n2) {
   return n2 > Real(0) ? inv : Real(0);
 }
 
-/// A vertex position as one four-number record (x, y, z, 0), aligned to its size: the sweep
-/// gathers a triangle corner with one 16/32-byte load from a packed copy of the positions
-/// (one cache line per corner) instead of three loads from the x, y, z columns.
+/// Copies the position columns of `m` into `out` as packed triples (x, y, z of vertex v at
+/// out[3v], out[3v + 1], out[3v + 2]) followed by one padding number, so that every vertex's
+/// triple can be read as four numbers (the next vertex's x, or the padding, as the fourth).
 template <class Real>
-struct alignas(4 * sizeof(Real)) PackedPosition {
-  Real xyz[4];
-};
-
-/// Copies the position columns of `m` into `out` as packed records (resized to the vertex slots).
-template <class Real>
-inline void pack_positions(const TriMesh<Real>& m, std::vector<PackedPosition<Real>>& out) {
+inline void pack_positions(const TriMesh<Real>& m, std::vector<Real>& out) {
   const std::size_t n = m.vertex_slots();
-  out.resize(n);
+  out.resize(3 * n + 1);
   const Real* X = m.position.x().data();
   const Real* Y = m.position.y().data();
   const Real* Z = m.position.z().data();
-  PackedPosition<Real>* o = out.data();
-  for (std::size_t v = 0; v < n; ++v) o[v] = PackedPosition<Real>{{X[v], Y[v], Z[v], Real(0)}};
+  Real* o = out.data();
+  for (std::size_t v = 0; v < n; ++v) {
+    o[3 * v] = X[v];
+    o[3 * v + 1] = Y[v];
+    o[3 * v + 2] = Z[v];
+  }
+  o[3 * n] = Real(0);
 }
 
 /// Triangles [first, first + count) of `m`, with corner positions read from `packed` (the
-/// positions of `m` as pack_positions() copied them). A dead slot reads vertex 0 at all
+/// positions of `m` as pack_positions() lays them out). A dead slot reads vertex 0 at all
 /// three corners: a point, whose normal and edges inverse_length() turns into zero terms.
 template <class Real>
-inline void triangle_block_terms(const TriMesh<Real>& m, const PackedPosition<Real>* packed, std::size_t first,
-                                 std::size_t count, TriangleBlockTerms<Real>& out) {
-  // Corners copied as whole records, then split into x, y, z arrays for the arithmetic
-  // below, which vectorises over them.
-  PackedPosition<Real> p[3][kTriangleBlock];
+inline void triangle_block_terms(const TriMesh<Real>& m, const Real* packed, std::size_t first, std::size_t count,
+                                 TriangleBlockTerms<Real>& out) {
+  // Corners copied as four-number records (one 16/32-byte load each: the packed triple and
+  // the number after it), then split into x, y, z arrays for the arithmetic below, which
+  // vectorises over them.
+  Real p[3][kTriangleBlock][4];
   out.count = count;
   for (std::size_t i = 0; i < count; ++i) {
     const std::size_t t = first + i;
     const bool alive = m.triangle_alive[t] != 0;
-    for (std::size_t k = 0; k < 3; ++k) p[k][i] = packed[alive ? static_cast<std::size_t>(m.triangle[t][k]) : 0];
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::size_t v = alive ? static_cast<std::size_t>(m.triangle[t][k]) : 0;
+      std::memcpy(p[k][i], packed + 3 * v, 4 * sizeof(Real));
+    }
   }
   Real px[3][kTriangleBlock], py[3][kTriangleBlock], pz[3][kTriangleBlock];
   for (std::size_t k = 0; k < 3; ++k)
     for (std::size_t i = 0; i < count; ++i) {
-      px[k][i] = p[k][i].xyz[0];
-      py[k][i] = p[k][i].xyz[1];
-      pz[k][i] = p[k][i].xyz[2];
+      px[k][i] = p[k][i][0];
+      py[k][i] = p[k][i][1];
+      pz[k][i] = p[k][i][2];
     }
   for (std::size_t i = 0; i < count; ++i) {
     const Real abx = px[1][i] - px[0][i], aby = py[1][i] - py[0][i], abz = pz[1][i] - pz[0][i];

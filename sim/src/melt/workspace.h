@@ -59,14 +59,14 @@ struct MeltWorkspace {
   // Deform: per-vertex sums, all zero between cycles (each group clears its records when it moves).
   std::vector<VertexSums<float>> sums_f;
   std::vector<VertexSums<double>> sums_d;
-  // Deform: a copy of the positions as packed (x, y, z, 0) records, from which the sweep
+  // Deform: a copy of the positions as packed triples (pack_positions()), from which the sweep
   // gathers triangle corners (one load per corner instead of three from the columns). The
   // vertex moves write it beside the columns (a vertex moves after its last triangle, so no
   // gather needs the old value afterwards); the collapse pass writes the roots it moves; any
   // other change of positions (repair, compaction) clears `packed_valid`, and the next sweep
   // copies all positions again.
-  std::vector<PackedPosition<float>> packed_f;
-  std::vector<PackedPosition<double>> packed_d;
+  std::vector<float> packed_f;
+  std::vector<double> packed_d;
   bool packed_valid = false;
 
   // Conservative skip of the short-edge test. An edge shrinks per cycle by at most twice the
@@ -96,7 +96,7 @@ struct MeltWorkspace {
       return terms_d;
   }
   template <class Real>
-  std::vector<PackedPosition<Real>>& packed_positions() {
+  std::vector<Real>& packed_positions() {
     if constexpr (std::is_same_v<Real, float>)
       return packed_f;
     else
