@@ -24,6 +24,12 @@ double process_cpu_ms() {
   return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
 }
 
+double thread_cpu_ms() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+}
+
 std::array<double, 3> load_averages() {
   double l[3] = {-1, -1, -1};
   if (::getloadavg(l, 3) != 3) return {-1, -1, -1};

@@ -15,14 +15,16 @@
 // normalised values (the scanned range is about −1100 … 1100 HU): skin (0.23, 0.455] ≈ −600 … −100
 // HU α 0.05 (the air–fat transition and the fat layer), bone (0.75, 1] ≈ above 550 HU α 0.6;
 // water, muscle and air invisible. Blend at QC 0.5, 1, 2 (args: QC × 100, empty-space cell edge in
-// voxels, early termination × 1000, 0 = off: the default renderer is /4/0), the combined mode at
+// voxels, early termination × 1000, 0 = off, tile edge, 0 = 16: the default renderer is /4/0/0), the
+// scene's piecewise-linear TF ("head" of slicing_phantom_*.yaml) at QC 1, the combined mode at
 // QC 1 (gradients radius 2, 8 bits, built once outside the timing), the ray caster at equal
 // density (Δs = QC · h0) without and with its empty-space skipping. Counters: samples (plane
-// samples, jumped ones included), visited (positions computed), fetched (not in empty cells). CPU time
+// samples, jumped ones included), visited (positions computed), fetched (not in empty cells),
+// cell_tests (visited samples whose empty-space cell was looked up; the others in live runs). CPU time
 // of the whole process (MeasureProcessCPUTime: every TBB thread) beside the wall time, since the
 // cores are shared: "CPU" / "Time" ≈ the cores the frame kept busy.
 //   --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
-//   --benchmark_filter=Phantom   (issue 17's goal: BM_PhantomBlend/100/4/0 <= 150 ms)
+//   --benchmark_filter=Phantom   (issue 17's goal: BM_PhantomBlend/100/4/0/0 <= 150 ms)
 
 #include <meltlab/render/integrator/volume_integrator.h>
 #include <meltlab/render/slicing/slicing_renderer.h>
@@ -144,18 +146,14 @@ void slicing_counters(benchmark::State& state, const render::SlicingStats& st, d
   state.counters["samples"] = double(st.samples);
   state.counters["fetched"] = double(st.samples - st.skipped);
   state.counters["visited"] = double(st.visited);
+  state.counters["cell_tests"] = double(st.cell_tests);
   state.counters["coverage"] = cover;
   state.counters["ns_per_sample"] = benchmark::Counter(
       double(st.samples) * 1e-9, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 
-// args: QC x 100, empty-space cell edge (voxels), early termination x 1000 (0: off)
-void BM_PhantomBlend(benchmark::State& state) {
-  render::SlicingSettings s;
-  s.quality_class = double(state.range(0)) / 100;
-  s.skip_cell = int(state.range(1));
-  s.early_termination = double(state.range(2)) / 1000;
-  s.tfs[0] = phantom_tf();
+/// Frames of the phantom at its camera with settings s, and the renderer's counters.
+void time_phantom(benchmark::State& state, const render::SlicingSettings& s) {
   const render::SlicingRenderer r(phantom(), s);
   const auto cam = phantom_camera();
   render::SlicingFrame f;
@@ -164,6 +162,35 @@ void BM_PhantomBlend(benchmark::State& state) {
     benchmark::DoNotOptimize(f.rgb.data());
   }
   slicing_counters(state, f.stats, coverage(f.alpha));
+}
+
+// args: QC x 100, empty-space cell edge (voxels), early termination x 1000 (0: off)
+void BM_PhantomBlend(benchmark::State& state) {
+  render::SlicingSettings s;
+  s.quality_class = double(state.range(0)) / 100;
+  s.skip_cell = int(state.range(1));
+  s.early_termination = double(state.range(2)) / 1000;
+  if (state.range(3) > 0) s.tile = int(state.range(3));
+  s.tfs[0] = phantom_tf();
+  time_phantom(state, s);
+}
+
+/// The scene's piecewise-linear TF (experiments/configs/volume/slicing_phantom_ones.yaml, "head").
+render::TransferFunction phantom_linear_tf() {
+  const double rows[6][5] = {{0.40, 0.95, 0.72, 0.60, 0}, {0.445, 0.95, 0.72, 0.60, 0.02}, {0.462, 0.95, 0.72, 0.60, 0},
+                             {0.62, 0.82, 0.78, 0.7, 0},  {0.80, 0.82, 0.78, 0.7, 0.025},  {1, 0.82, 0.78, 0.7, 0.025}};
+  std::array<render::TfCurve, 4> curves;
+  for (const auto& r : rows)
+    for (int c = 0; c < 4; ++c) curves[std::size_t(c)].points.emplace_back(r[0], r[c + 1]);
+  return render::TransferFunction::piecewise_linear(curves, "head");
+}
+
+// The scene's linear TF (seed 003's phantom scenes, evaluated exactly per sample); arg: QC x 100
+void BM_PhantomBlendLinear(benchmark::State& state) {
+  render::SlicingSettings s;
+  s.quality_class = double(state.range(0)) / 100;
+  s.tfs[0] = phantom_linear_tf();
+  time_phantom(state, s);
 }
 
 // args: QC x 100, empty-space cell edge (voxels)
@@ -188,17 +215,22 @@ void BM_PhantomCombined(benchmark::State& state) {
 void BM_PhantomRayCast(benchmark::State& state) { ray_cast_frames(state, phantom(), phantom_camera(), phantom_tf()); }
 
 BENCHMARK(BM_PhantomBlend)
-    ->Args({50, 4, 0})
-    ->Args({100, 4, 0})
-    ->Args({200, 4, 0})
-    ->Args({100, 2, 0})
-    ->Args({100, 8, 0})
-    ->Args({100, 4, 990})
-    ->Args({50, 4, 990})
-    ->Args({200, 4, 990})
+    ->Args({50, 4, 0, 0})
+    ->Args({100, 4, 0, 0})
+    ->Args({200, 4, 0, 0})
+    ->Args({100, 2, 0, 0})
+    ->Args({100, 8, 0, 0})
+    ->Args({100, 4, 990, 0})
+    ->Args({50, 4, 990, 0})
+    ->Args({200, 4, 990, 0})
+    ->Args({100, 4, 0, 4})
+    ->Args({100, 4, 0, 8})
+    ->Args({100, 4, 0, 32})
+    ->Args({100, 4, 0, 64})
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()
     ->UseRealTime();
+BENCHMARK(BM_PhantomBlendLinear)->Arg(100)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 BENCHMARK(BM_PhantomCombined)
     ->Args({100, 8})
     ->Args({100, 4})

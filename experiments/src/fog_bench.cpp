@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -508,8 +509,46 @@ double r_squared(const std::vector<double>& x, const std::vector<double>& y) {
   return vx > 0 && vy > 0 ? cov * cov / (vx * vy) : 0.0;
 }
 
+/// cpu_ms is the minimum over the runs: the noise a shared machine adds to a thread's CPU time
+/// (cache and memory-bandwidth contention, interrupts) is one-sided, so the minimum estimates the
+/// work itself; wall_ms is the median.
+struct OneThreadTiming {
+  double wall_ms = 0, cpu_ms = 0;
+};
+
+/// Per-pixel costs (the cost shapes, the speed ratio against marching) are properties of the work,
+/// so they are timed on ONE thread — a task arena of one slot, in which the calling thread does all
+/// the work — as that thread's CPU time, which moves far less with the machine's load than the wall
+/// time of a parallel pass on shared cores (the cost R² and spread of an earlier run under load 5
+/// were 0.97 and 26 %; the speed ratios of two runs 305× and 66×).
+class OneThreadTimer {
+ public:
+  /// One run of fn on the one thread: appends its wall and thread CPU time unless `record` is false.
+  template <class Fn>
+  void run(Fn&& fn, bool record) {
+    arena_.execute([&] {
+      const double c0 = thread_cpu_ms();
+      const auto t0 = std::chrono::steady_clock::now();
+      fn();
+      if (record) wall_.push_back(ms_since(t0)), cpu_.push_back(thread_cpu_ms() - c0);
+    });
+  }
+  OneThreadTiming result() const { return {median(wall_), *std::min_element(cpu_.begin(), cpu_.end())}; }
+
+ private:
+  tbb::task_arena arena_{1};
+  std::vector<double> wall_, cpu_;
+};
+
+template <class Fn>
+OneThreadTiming time_one_thread(int warmup, int runs, Fn&& fn) {
+  OneThreadTimer t;
+  for (int i = 0; i < warmup + runs; ++i) t.run(fn, i >= warmup);
+  return t.result();
+}
+
 void study_cost(const FogBenchOptions& o, const fs::path& dir, json& record) {
-  CsvTable csv("kind,x,lit_pixels,pixels,triangles,visibility_ms,shading_ms");
+  CsvTable csv("kind,x,lit_pixels,pixels,triangles,visibility_ms,shading_ms,shading_cpu_ms");
   const fog::FogModelOptions model;
   fog::TableOptions to;
   to.u_warp = kDefaultDesign.u;
@@ -517,33 +556,63 @@ void study_cost(const FogBenchOptions& o, const fs::path& dir, json& record) {
   to.v_interp = kDefaultDesign.v_interp;
   const fog::FogTableSet tables = fog::build_fog_tables(to, fog::TableFunction::kH, 20);
   const fog::FogFunctions fn = tables.functions();
+  // Runs of the shading of several G-buffers, round-robin (one run of each per round), so that a
+  // change of the machine's load over the study falls on all of them alike; at least 9 runs each
+  // (a case takes milliseconds).
+  const int runs = std::max(o.repeats, 9);
+  auto shade_round_robin = [&](const std::vector<const fog::GBuffer*>& gs, const std::vector<const fog::FogScene*>& ss,
+                               std::vector<fog::ShadeStats>& stats) {
+    const std::size_t n = gs.size();
+    std::vector<OneThreadTimer> timers(n);
+    stats.assign(n, {});
+    for (int r = 0; r < o.warmup + runs; ++r)
+      for (std::size_t i = 0; i < n; ++i)
+        timers[i].run([&] { fog::shade_fog(*gs[i], *ss[i], fn, model, &stats[i]); }, r >= o.warmup);
+    std::vector<OneThreadTiming> t(n);
+    for (std::size_t i = 0; i < n; ++i) t[i] = timers[i].result();
+    return t;
+  };
+  // The analytic G-buffers of some scenes, then their shading round-robin.
+  auto shade_scenes = [&](const std::vector<fog::FogScene>& scenes, std::vector<fog::ShadeStats>& stats) {
+    std::vector<fog::GBuffer> gbufs;
+    for (const auto& s : scenes) gbufs.push_back(fog::trace_analytic(s));
+    std::vector<const fog::GBuffer*> gs;
+    std::vector<const fog::FogScene*> ss;
+    for (std::size_t i = 0; i < scenes.size(); ++i) gs.push_back(&gbufs[i]), ss.push_back(&scenes[i]);
+    return shade_round_robin(gs, ss, stats);
+  };
   std::vector<double> lit, t_lit, lights, t_lights;
-  const std::vector<std::pair<int, int>> sizes =
-      o.quick ? std::vector<std::pair<int, int>>{{160, 120}, {320, 240}, {480, 360}, {640, 480}, {800, 600}}
-              : std::vector<std::pair<int, int>>{{320, 240}, {640, 480}, {800, 600}, {1024, 768}, {1280, 960}};
-  for (auto [w, h] : sizes) {
-    const fog::FogScene s = fog::scene_sphere(0.1, w, h);
-    const fog::GBuffer g = fog::trace_analytic(s);
-    fog::ShadeStats st;
-    const double ms = timed_median(o, [&] { fog::shade_fog(g, s, fn, model, &st); });
-    csv.row("pixels,{},{},{},0,0,{:.3f}", w * h, st.lit_pixels, w * h, ms);
-    lit.push_back(static_cast<double>(st.lit_pixels));
-    t_lit.push_back(ms);
+  {
+    const std::vector<std::pair<int, int>> sizes =
+        o.quick ? std::vector<std::pair<int, int>>{{160, 120}, {320, 240}, {480, 360}, {640, 480}, {800, 600}}
+                : std::vector<std::pair<int, int>>{{320, 240}, {640, 480}, {800, 600}, {1024, 768}, {1280, 960}};
+    std::vector<fog::FogScene> scenes;
+    for (auto [w, h] : sizes) scenes.push_back(fog::scene_sphere(0.1, w, h));
+    std::vector<fog::ShadeStats> st;
+    const auto t = shade_scenes(scenes, st);
+    for (std::size_t i = 0; i < sizes.size(); ++i) {
+      const int px = sizes[i].first * sizes[i].second;
+      csv.row("pixels,{},{},{},0,0,{:.3f},{:.3f}", px, st[i].lit_pixels, px, t[i].wall_ms, t[i].cpu_ms);
+      lit.push_back(static_cast<double>(st[i].lit_pixels));
+      t_lit.push_back(t[i].cpu_ms);
+    }
   }
   progress("cost: lit pixels done");
-  const int w = o.quick ? 240 : 480, h = o.quick ? 180 : 360;
-  for (int k : {1, 2, 4, 6, 8, 10, 12, 14, 16}) {
-    const fog::FogScene s = fog::scene_street(0.04, w, h, k);
-    const fog::GBuffer g = fog::trace_analytic(s);
-    fog::ShadeStats st;
-    const double ms = timed_median(o, [&] { fog::shade_fog(g, s, fn, model, &st); });
-    csv.row("lights,{},{},{},0,0,{:.3f}", k, st.lit_pixels, w * h, ms);
-    lights.push_back(k);
-    t_lights.push_back(ms);
+  {
+    const int w = o.quick ? 240 : 480, h = o.quick ? 180 : 360;
+    const std::vector<int> counts{1, 2, 4, 6, 8, 10, 12, 14, 16};
+    std::vector<fog::FogScene> scenes;
+    for (int k : counts) scenes.push_back(fog::scene_street(0.04, w, h, k));
+    std::vector<fog::ShadeStats> st;
+    const auto t = shade_scenes(scenes, st);
+    for (std::size_t i = 0; i < counts.size(); ++i) {
+      csv.row("lights,{},{},{},0,0,{:.3f},{:.3f}", counts[i], st[i].lit_pixels, w * h, t[i].wall_ms, t[i].cpu_ms);
+      lights.push_back(counts[i]);
+      t_lights.push_back(t[i].cpu_ms);
+    }
   }
   progress("cost: lights done");
-  // The four G-buffers first, then their shading timed round-robin (one run of each per round), so
-  // that a change of the machine's load over the study does not masquerade as a trend.
+  // The four G-buffers first (visibility through the BVH, parallel, wall time), then their shading.
   std::vector<double> shade_tri;
   const fog::FogScene s = fog::scene_sphere(0.1, o.quick ? 320 : 640, o.quick ? 240 : 480);
   const std::vector<int> tri_counts{1000, 10000, 100000, 1000000};
@@ -556,19 +625,15 @@ void study_cost(const FogBenchOptions& o, const fs::path& dir, json& record) {
     bvh_tris[i] = bvh.triangle_count();
     vis_ms[i] = timed_median(o, [&] { gbuf[i] = fog::trace_mesh(bvh, s.camera, s.far_m); });
   }
-  std::vector<std::vector<double>> runs(tri_counts.size());
-  std::vector<fog::ShadeStats> tri_stats(tri_counts.size());
-  for (int r = 0; r < o.warmup + o.repeats; ++r)
-    for (std::size_t i = 0; i < tri_counts.size(); ++i) {
-      const auto t0 = std::chrono::steady_clock::now();
-      fog::shade_fog(gbuf[i], s, fn, model, &tri_stats[i]);
-      if (r >= o.warmup) runs[i].push_back(ms_since(t0));
-    }
+  std::vector<const fog::GBuffer*> gs;
+  std::vector<const fog::FogScene*> ss;
+  for (const auto& g : gbuf) gs.push_back(&g), ss.push_back(&s);
+  std::vector<fog::ShadeStats> tri_stats;
+  const auto tt = shade_round_robin(gs, ss, tri_stats);
   for (std::size_t i = 0; i < tri_counts.size(); ++i) {
-    const double ms = median(runs[i]);
-    csv.row("triangles,{},{},{},{},{:.3f},{:.3f}", tri_counts[i], tri_stats[i].lit_pixels,
-            gbuf[i].width * gbuf[i].height, bvh_tris[i], vis_ms[i], ms);
-    shade_tri.push_back(ms);
+    csv.row("triangles,{},{},{},{},{:.3f},{:.3f},{:.3f}", tri_counts[i], tri_stats[i].lit_pixels,
+            gbuf[i].width * gbuf[i].height, bvh_tris[i], vis_ms[i], tt[i].wall_ms, tt[i].cpu_ms);
+    shade_tri.push_back(tt[i].cpu_ms);
   }
   progress("cost: triangles done");
   csv.write(dir / "cost.csv");
@@ -577,7 +642,10 @@ void study_cost(const FogBenchOptions& o, const fs::path& dir, json& record) {
                     {"r2_time_vs_lights", r_squared(lights, t_lights)},
                     {"shading_spread_over_triangles", (*hi - *lo) / median(shade_tri)},
                     {"tables", tables.describe()},
-                    {"timing", fmt::format("median of {} runs after {} warm-up", o.repeats, o.warmup)}};
+                    {"timing", fmt::format("shading on one thread, round-robin over the cases, {} runs after {} "
+                                           "warm-up; fits and spread of the minimum of the thread's CPU time "
+                                           "(shading_cpu_ms), shading_ms the median wall time",
+                                           runs, o.warmup)}};
 }
 
 // ---- speed against ray marching at equal error ------------------------------------------------
@@ -587,7 +655,8 @@ void study_speed(const FogBenchOptions& o, const fs::path& dir, json& record) {
   fog::FogModelOptions model;
   model.surface_direct = model.surface_fog = false;  // airlight only: the term both methods compute
   const int w = o.quick ? 128 : 320, h = o.quick ? 96 : 240;
-  // A marching frame longer than this ends the step refinement (quick: 3 s, full: 30 s).
+  // A marching frame (one thread's CPU time) longer than this ends the step refinement (quick: 3 s,
+  // full: 30 s).
   const double budget_ms = o.quick ? 3000 : 30000;
   json ratios = json::object();
   for (const E2Case& c :
@@ -602,9 +671,10 @@ void study_speed(const FogBenchOptions& o, const fs::path& dir, json& record) {
     for (int n : {16, 64, 256}) {
       const fog::FogFunctions fn = airlight_tables(fog::TableFunction::kH, kDefaultDesign, n).functions();
       std::vector<double> val;
-      const double ms = timed_median(o, [&] {
-        val = per_pixel(g, [&](const fog::GBufferPixel& p) { return airlight_sum(c.scene, g.eye, p, fn, model); });
-      });
+      const double ms =
+          time_one_thread(o.warmup, std::max(o.repeats, 5), [&] {
+            val = per_pixel(g, [&](const fog::GBufferPixel& p) { return airlight_sum(c.scene, g.eye, p, fn, model); });
+          }).cpu_ms;
       const ErrorStats e = relative_errors(val, ref);
       csv.row("{},analytic,N={},{},{},{:.3f},{:.1f},{:.6g},{:.6g},{:.6g},{:.6g},0", c.name, n, g.pixels.size(), e.count,
               ms, 1e6 * ms / px, e.median, e.p99, e.max, e.mean);
@@ -622,13 +692,11 @@ void study_speed(const FogBenchOptions& o, const fs::path& dir, json& record) {
     for (double step = 1.0; step > 1e-4; step *= 0.5) {
       std::vector<double> val;
       // Marching frames are long and need no warm-up (no tables): quick mode times one run, full
-      // mode the median of up to 3.
-      FogBenchOptions once = o;
-      once.warmup = 0;
-      once.repeats = o.quick ? 1 : std::min(o.repeats, 3);
-      const double ms = timed_median(once, [&] {
-        val = per_pixel(g, [&](const fog::GBufferPixel& p) { return march_sum(c.scene, g.eye, p, step); });
-      });
+      // mode the minimum of up to 3.
+      const double ms =
+          time_one_thread(0, o.quick ? 1 : std::min(o.repeats, 3), [&] {
+            val = per_pixel(g, [&](const fog::GBufferPixel& p) { return march_sum(c.scene, g.eye, p, step); });
+          }).cpu_ms;
       double steps = 0;
       for (const auto& p : g.pixels)
         steps += std::max(1.0, std::ceil(p.m / step)) * static_cast<double>(c.scene.lights.size());
@@ -668,7 +736,8 @@ void study_speed(const FogBenchOptions& o, const fs::path& dir, json& record) {
        "equal error: the coarsest marching step (1 m halved) whose E2 against R-air over the lit pixels is <= 1 % "
        "(median; and p99: 1 % at 99 % of the lit pixels), against the analytic model at N = 64 (H, the default axes "
        "cbrt/sqrt_hi/value), "
-       "airlight only, same G-buffer, same threads; times are medians of the repeats"},
+       "airlight only, same G-buffer; both on one thread, times the minimum of the thread's CPU time over the "
+       "runs (analytic: at least 5 after warm-up; marching: quick 1, full up to 3)"},
       {"ratios", ratios}};
 }
 

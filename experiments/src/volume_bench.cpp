@@ -74,6 +74,7 @@ render::VolumeRenderSettings seed_settings(OpticalModel model, int n) {
 
 struct Timed {
   double median_ms = 0, min_ms = 0, max_ms = 0;
+  double cpu_ms = 0;  ///< median process CPU time per frame (all threads): steadier than wall time under load
   render::VolumeFrame frame;
   double cache_ms = 0;
 };
@@ -89,13 +90,15 @@ Timed time_render(const render::Volume& v, const render::Camera& cam, const rend
     for (int l = 0; l < n; ++l) caches.push_back(render::build_shadow_cache(v, s, l));
     t.cache_ms = ms_since(t0);
   }
-  std::vector<double> ms;
+  std::vector<double> ms, cpu;
   for (int i = 0; i < warmup + repeats; ++i) {
+    const double c0 = process_cpu_ms();
     const auto t0 = std::chrono::steady_clock::now();
     t.frame = render::render_volume(v, cam, s, caches);
-    if (i >= warmup) ms.push_back(ms_since(t0));
+    if (i >= warmup) ms.push_back(ms_since(t0)), cpu.push_back(process_cpu_ms() - c0);
   }
   t.median_ms = median(ms);
+  t.cpu_ms = median(cpu);
   t.min_ms = *std::min_element(ms.begin(), ms.end());
   t.max_ms = *std::max_element(ms.begin(), ms.end());
   return t;
@@ -138,7 +141,8 @@ void study_tables(const VolumeBenchOptions& o, const fs::path& dir, json& record
   const std::vector<Config> configs = {
       {"5.1", 64, 512, {100, 64, 50}}, {"5.2", 64, 256, {100, 64}}, {"5.3", 128, 512, {50}}};
   CsvTable csv(
-      "table,volume,pixels,samples,model,median_ms,min_ms,max_ms,fps,primary_samples,shadow_samples,cache_build_ms");
+      "table,volume,pixels,samples,model,median_ms,min_ms,max_ms,fps,primary_samples,shadow_samples,cache_build_ms,"
+      "cpu_ms");
   std::map<int, render::Volume> volumes;
   for (const auto& c : configs) {
     if (!volumes.count(c.volume)) volumes.emplace(c.volume, turbulence(render::VolumeKind::kTurbulenceBox, c.volume));
@@ -154,9 +158,9 @@ void study_tables(const VolumeBenchOptions& o, const fs::path& dir, json& record
         const bool slow = model == OpticalModel::kHGAttenuated && sh == render::ShadowMethod::kMarch;
         const Timed t =
             time_render(v, camera(c.pixels), s, slow ? 0 : o.warmup, slow ? std::min(o.repeats, 3) : o.repeats);
-        csv.row("{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{},{},{:.3f}", c.table, c.volume, c.pixels, n,
+        csv.row("{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{},{},{:.3f},{:.3f}", c.table, c.volume, c.pixels, n,
                 model_key(model, sh), t.median_ms, t.min_ms, t.max_ms, 1000.0 / t.median_ms, t.frame.stats.samples,
-                t.frame.stats.shadow_samples, t.cache_ms);
+                t.frame.stats.shadow_samples, t.cache_ms, t.cpu_ms);
         progress(fmt::format("Table {} {}³ {}² n={} {}: {:.1f} ms", c.table, c.volume, c.pixels, n,
                              model_key(model, sh), t.median_ms));
       }

@@ -102,17 +102,22 @@ def clv_seed001(exp: Path, args):
     verdicts.append(f"GOAL ERT+ESS >= 20x over none on {v800}, one thread (source 12x): the source's one-level ESS "
                     f"{sp['ert_ess']:.1f}x, multi-level {sp.get('ert_ess_ml', 0):.1f}x: {yes(goal1)}")
     ok = ok and order_ok and goal1
+    # Target 9 on the minimum CPU time of the frames where the record has it (one-sided noise).
+    def cpu_min(v, m, mem):
+        r = next((x for x in tab if x["table"] == "5.2" and x["volume"] == v and x["method"] == m
+                  and x["memory"] == mem), None)
+        return float(r["cpu_min_ms"]) if r and r.get("cpu_min_ms") else cpu(v, m, mem)
     mem_rows = []
     for v in vols:
         for m in METHODS:
-            a, b = cpu(v, m, "ram"), cpu(v, m, "mmap")
+            a, b = cpu_min(v, m, "ram"), cpu_min(v, m, "mmap")
             if a and b:
                 mem_rows.append((v, m, abs(b - a) / a))
     worst = max(mem_rows, key=lambda x: x[2])
     mem_ok = all(x[2] < 0.05 for x in mem_rows)
     cold = {r["method"]: r for r in t52 if "cold" in r["method"] or "not_evicted" in r["method"]}
     cold_txt = ", ".join(f"{k}: {float(r['wall_ms']):.0f} ms wall" for k, r in cold.items())
-    verdicts.append(f"T9 |mmap - RAM| / RAM (CPU, warm pages) at most {100 * worst[2]:.1f} % ({worst[0]} {worst[1]}; "
+    verdicts.append(f"T9 |mmap - RAM| / RAM (minimum CPU time of interleaved frames, warm pages) at most {100 * worst[2]:.1f} % ({worst[0]} {worst[1]}; "
                     f"< 5 %: {yes(mem_ok)}); cold first frame: {cold_txt or 'not measured'}")
     ok = ok and mem_ok
 
@@ -167,13 +172,23 @@ def clv_seed001(exp: Path, args):
     scale_ok = threads is not None and par_speed >= 0.8 * threads
     total = none_wall / par_wall
     busy = threads is not None and par_load > threads
+    # On a busy machine the wall ratios measure the load. The unloaded estimate: the parallel frame's
+    # CPU work spread over the threads, valid when the workers never wait (queue-empty fraction
+    # near 0, recorded), i.e. speed-up = threads x serial CPU / parallel CPU, total = none CPU over
+    # the same.
+    par_empty = get("multi-thread object order", "ert_ess_ml", "queue_empty_fraction")
+    est_speed = threads * opt_cpu / par_cpu if threads else None
+    est_total = threads * none_cpu / par_cpu if threads else None
     verdicts.append(f"T11 {vol} at {px}²: optimisations alone {none_cpu / opt_src_cpu:.1f}x (source scheme) / "
                     f"{none_cpu / opt_cpu:.1f}x (multi-level), CPU time (source 15.0x); object order on {threads} "
                     f"threads {par_wall:.0f} ms = {par_speed:.2f}x the single-thread optimised frame, wall against wall "
                     f"(>= 0.8 x {threads}: {yes(scale_ok)}; source 25.3x on 6 cores), CPU work {work:.2f}x the serial "
                     f"frame's; total {total:.0f}x wall (>= 100x: {yes(total >= 100)}; source 379.5x)"
                     + (f" [load {par_load:.1f} on {threads} hardware threads: the wall ratios measure the load as much "
-                       f"as the renderer]" if busy else ""))
+                       f"as the renderer]" if busy else "")
+                    + (f"; unloaded estimate from CPU time (queue empty {par_empty:.1%} of block tasks): speed-up "
+                       f"{est_speed:.2f}x (>= 0.8 x {threads}: {yes(est_speed >= 0.8 * threads)}), total {est_total:.0f}x "
+                       f"(>= 100x: {yes(est_total >= 100)})" if est_speed else ""))
     if "2000" in vol and px == 700:
         g2 = par_wall <= 1500
         verdicts.append(f"GOAL 2000³ at 700² on {threads} threads <= 1.5 s: {par_wall:.0f} ms wall (source scheme "

@@ -93,11 +93,13 @@ ShadingPlan IceRenderer::plan() const {
 
 namespace {
 
-// The first surface along a primary ray (the fog pass needs its distance, point and normal).
+// The first surface along a primary ray (the fog pass needs its distance, point, normal and, on
+// the ground, the diffuse colour: the texture, shifted by the liquid, with the ray's footprint).
 struct FirstSurface {
   bool hit = false, ice = false;
   double t = 0;
   Vector3d p = Vector3d::Zero(), n = Vector3d::UnitZ();  ///< n: unit, facing the eye
+  Rgb diffuse_colour = Rgb(1, 1, 1);
 };
 
 // The scene of one frame as the rays see it: the ice (the BVH and its material), the ground
@@ -129,7 +131,10 @@ class FrameScene final : public IceSurroundings {
         const Vector3d n = bvh_.shading_normal(h);
         *first = FirstSurface{true, true, h.t, o + h.t * d, n.dot(d) > 0 ? Vector3d(-n) : n};
       } else if (t_ground < ground_far_) {
-        *first = FirstSurface{true, false, t_ground, o + t_ground * d, Vector3d::UnitZ()};
+        const Vector3d q = o + t_ground * d;
+        const Differential dq = rd ? plane_footprint(o, d, *rd, q, Vector3d::UnitZ(), ground_far_) : Differential{};
+        const WetGround::FogSurface g = ground_.fog_surface(q, d, rd ? &dq : nullptr);
+        *first = FirstSurface{true, false, t_ground, q, g.normal, g.diffuse_colour};
       }
     }
     if (!on_ice) return background(o, d, rd);
@@ -225,21 +230,31 @@ RgbImage IceRenderer::render() {
         const CameraRay ray = rays.generate_ray(i, j);
         if (!ray.ok) {
           set_rgb(img, i, j, Rgb::Zero());
-        } else if (fog_) {  // the fog pass on the shaded pixel (no footprints)
-          FirstSurface first;
-          const Rgb c = frame.primary_radiance(*ice, ray.origin, ray.direction, nullptr, &first);
-          const fog::SurfaceHit hit{first.p, first.n, first.ice ? &fog_ice : &fog_ground};
-          set_rgb(img, i, j, fog_->apply(c, ray.origin, ray.direction, first.t, first.hit ? &hit : nullptr));
-        } else if (!footprints_) {
-          set_rgb(img, i, j, frame.primary_radiance(*ice, ray.origin, ray.direction, nullptr));
-        } else {  // the footprint: the rays through the next pixel to the right and below
+          continue;
+        }
+        // The footprint: the rays through the next pixel to the right and below. A neighbour
+        // whose undistortion did not converge gives no footprint (finest level).
+        RayDifferential rd;
+        bool has_rd = false;
+        if (footprints_) {
           const CameraRay rx = rays.generate_ray(i + 1, j);
           const CameraRay ry = rays.generate_ray(i, j + 1);
-          const RayDifferential rd{{rx.origin - ray.origin, ry.origin - ray.origin},
-                                   {rx.direction - ray.direction, ry.direction - ray.direction}};
-          // A neighbour whose undistortion did not converge gives no footprint (finest level).
-          set_rgb(img, i, j, frame.primary_radiance(*ice, ray.origin, ray.direction, rx.ok && ry.ok ? &rd : nullptr));
+          rd = {{rx.origin - ray.origin, ry.origin - ray.origin},
+                {rx.direction - ray.direction, ry.direction - ray.direction}};
+          has_rd = rx.ok && ry.ok;
         }
+        if (!fog_) {
+          set_rgb(img, i, j, frame.primary_radiance(*ice, ray.origin, ray.direction, has_rd ? &rd : nullptr));
+          continue;
+        }
+        // The fog pass on the shaded pixel; on the ground its surface terms take the texture's
+        // colour (with the same footprint) and the liquid's normal.
+        FirstSurface first;
+        const Rgb c = frame.primary_radiance(*ice, ray.origin, ray.direction, has_rd ? &rd : nullptr, &first);
+        fog::FogMaterial ground_here = fog_ground;
+        ground_here.diffuse_colour = first.diffuse_colour;
+        const fog::SurfaceHit hit{first.p, first.n, first.ice ? &fog_ice : &ground_here};
+        set_rgb(img, i, j, fog_->apply(c, ray.origin, ray.direction, first.t, first.hit ? &hit : nullptr));
       }
   });
   stats_.trace_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

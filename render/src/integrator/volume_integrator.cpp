@@ -97,7 +97,6 @@ struct Macrocells {
   std::size_t index(int cx, int cy, int cz) const {
     return std::size_t(cx) + std::size_t(bx) * (std::size_t(cy) + std::size_t(by) * std::size_t(cz));
   }
-  bool is_live(int cx, int cy, int cz) const { return live[index(cx, cy, cz)] != 0; }
 };
 
 /// The Chebyshev distance, capped at cap, from every cell of a bx × by × bz grid to the nearest cell
@@ -165,8 +164,7 @@ Macrocells build_macrocells(const Volume& v) {
                     live = true;
                     break;
                   }
-            m.live[std::size_t(cx) + std::size_t(m.bx) * (std::size_t(cy) + std::size_t(m.by) * std::size_t(cz))] =
-                live ? 1 : 0;
+            m.live[m.index(cx, cy, cz)] = live ? 1 : 0;
           }
     });
     return 0;

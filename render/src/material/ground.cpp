@@ -149,25 +149,33 @@ WetGround::WetGround(const GroundMaterial& ground, const GroundPlan& plan, const
   if (plan_.liquid && mask) liquid_.emplace(*mask, ground.tilt_s, ground.tilt_t, plan_.liquid_rim);
 }
 
-Rgb WetGround::shade(const Vector3d& q, const Vector3d& d, const Differential* dq, const Differential* dd) const {
+Rgb WetGround::texture_at(const Vector3d& q, const Vector3d& V, double w, const Differential* dq) const {
   const GroundMaterial& g = material_;
-  const Vector3d V = -d.normalized();
-  const LiquidFilm::At wet = liquid_ ? liquid_->at(q) : LiquidFilm::At{};
-  const double w = wet.w;
-  const Vector3d& n = wet.n;
+  if (!g.textured) return Rgb(1, 1, 1);
   // t*diff: the texture shifted by the film (Eq. 7.5).
   double s = q.x() / g.tile, t = q.y() / g.tile;
   if (plan_.liquid_offset && w > 0) {
     s -= g.d * V.x() * w;
     t -= g.d * V.y() * w;
   }
-  Rgb tdiff(1, 1, 1);
-  if (g.textured) {
-    // The footprint in periods: that of q over the tile (x, y components).
-    const Differential2 dst =
-        dq ? Differential2{(dq->dx / g.tile).head<2>(), (dq->dy / g.tile).head<2>()} : Differential2{};
-    tdiff = tdiff_.lookup(Eigen::Vector2d(s, t), dq ? &dst : nullptr);
-  }
+  // The footprint in periods: that of q over the tile (x, y components).
+  const Differential2 dst =
+      dq ? Differential2{(dq->dx / g.tile).head<2>(), (dq->dy / g.tile).head<2>()} : Differential2{};
+  return tdiff_.lookup(Eigen::Vector2d(s, t), dq ? &dst : nullptr);
+}
+
+WetGround::FogSurface WetGround::fog_surface(const Vector3d& q, const Vector3d& d, const Differential* dq) const {
+  const LiquidFilm::At wet = liquid_ ? liquid_->at(q) : LiquidFilm::At{};
+  return FogSurface{texture_at(q, -d.normalized(), wet.w, dq), wet.n};
+}
+
+Rgb WetGround::shade(const Vector3d& q, const Vector3d& d, const Differential* dq, const Differential* dd) const {
+  const GroundMaterial& g = material_;
+  const Vector3d V = -d.normalized();
+  const LiquidFilm::At wet = liquid_ ? liquid_->at(q) : LiquidFilm::At{};
+  const double w = wet.w;
+  const Vector3d& n = wet.n;
+  const Rgb tdiff = texture_at(q, V, w, dq);
   // Eq. 7.17: ((ca + Σ Izr·cd·max(0, N*·L))·t*diff + Σ Izr·cs·max(0, Rs·V)^n)^(1 + a·w) + cr·tenv(R*e)·w
   // (plain Phong, Eq. 2.13, where w = 0).
   const Vector3d ns = g.rs_uses_n_star ? n : Vector3d(0, 0, 1);

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <type_traits>
 
 namespace meltlab::render {
 
@@ -19,32 +20,77 @@ namespace {
 
 /// Per-tile counters, summed after the frame.
 struct TileCounts {
-  std::int64_t rays = 0, samples = 0, classified = 0, skipped = 0, terminated = 0, visited = 0;
+  std::int64_t rays = 0, samples = 0, classified = 0, skipped = 0, terminated = 0, visited = 0, cell_tests = 0;
 };
 
 /// A TF evaluated as TransferFunction::alpha_at and ::evaluate do, bit for bit, without their
-/// out-of-line calls: α first, the colour only for visible samples (the constant kind's colour
-/// divided by 255 once here, as evaluate divides it per call: the same quotient).
+/// out-of-line calls: α first, the colour only for visible samples. The constant kind is looked up
+/// by "piece": 0 where no range contains the value, i + 1 for the first range i that does (a scan
+/// over all ranges; GCC compiles the select to branches, which measured faster than a bitwise
+/// branch-free form: 1096 vs 1283 ms on the phantom), and its α and colour (divided by
+/// 255 once here, as evaluate divides it per call: the same quotient) read from tables.
 class InlineTf {
  public:
   explicit InlineTf(const TransferFunction& tf) : linear_(tf.kind() == TfKind::kPiecewiseLinear) {
     if (linear_) {
       curves_ = tf.curves();
+      shared_x_ = true;
+      for (const auto& c : curves_) {
+        if (c.points.empty() || c.points.size() != curves_[0].points.size()) {
+          shared_x_ = false;
+          break;
+        }
+        for (std::size_t i = 0; i < c.points.size(); ++i)
+          shared_x_ = shared_x_ && c.points[i].x() == curves_[0].points[i].x();
+      }
     } else {
-      ranges_ = tf.ranges();
-      for (const auto& r : ranges_) rgb01_.push_back(r.rgb / 255.0);
+      alpha_.push_back(0.0);
+      rgb01_.push_back(Eigen::Vector3d::Zero());
+      for (const auto& r : tf.ranges()) {
+        lo_.push_back(r.lo), hi_.push_back(r.hi);
+        lo_closed_.push_back(r.lo_closed), hi_closed_.push_back(r.hi_closed);
+        alpha_.push_back(r.alpha);
+        rgb01_.push_back(r.rgb / 255.0);
+      }
     }
   }
-  /// α(v); `piece` remembers the constant kind's range for rgb().
-  double alpha(double v, int& piece) const {
-    if (linear_) return curve_at(curves_[3], v);
-    for (std::size_t i = 0; i < ranges_.size(); ++i)
-      if (ranges_[i].contains(v)) return piece = int(i), ranges_[i].alpha;
-    return piece = -1, 0.0;
+  bool linear() const { return linear_; }
+  /// Pieces of the constant kind, "none" included.
+  int pieces() const { return int(alpha_.size()); }
+  /// The constant kind's piece of v (0: none): TfRange::contains of each range, the first wins.
+  int piece(double v) const {
+    int p = 0;
+    for (int i = int(lo_.size()) - 1; i >= 0; --i) {
+      const std::size_t u = std::size_t(i);
+      const bool in = (v > lo_[u] || (lo_closed_[u] && v == lo_[u])) && (v < hi_[u] || (hi_closed_[u] && v == hi_[u]));
+      p = in ? i + 1 : p;
+    }
+    return p;
   }
-  Eigen::Vector3d rgb(double v, int piece) const {
-    if (linear_) return {curve_at(curves_[0], v), curve_at(curves_[1], v), curve_at(curves_[2], v)};
-    return piece < 0 ? Eigen::Vector3d::Zero() : rgb01_[std::size_t(piece)];
+  double piece_alpha(int p) const { return alpha_[std::size_t(p)]; }
+  const Eigen::Vector3d& piece_rgb(int p) const { return rgb01_[std::size_t(p)]; }
+  /// Where a value falls among control points that the four curves share (the `points` rows of
+  /// a scene): i = -1 before the first, -2 at or after the last, else between i - 1 and i at t.
+  struct Segment {
+    int i = -1;
+    double t = 0;
+  };
+  /// α(v) of the linear kind; `seg` remembers where v fell when the curves share their points.
+  double alpha(double v, Segment& seg) const {
+    if (!shared_x_) return curve_at(curves_[3], v);
+    const auto& pts = curves_[3].points;
+    if (!(v > pts.front().x())) return seg.i = -1, pts.front().y();
+    if (v >= pts.back().x()) return seg.i = -2, pts.back().y();
+    std::size_t i = 1;
+    while (!(v < pts[i].x())) ++i;
+    seg.i = int(i), seg.t = (v - pts[i - 1].x()) / (pts[i].x() - pts[i - 1].x());
+    return at(curves_[3], seg);
+  }
+  /// The colour of the linear kind (the segment from alpha(): the same t, so the same bits as
+  /// curve_at per channel).
+  Eigen::Vector3d rgb(double v, const Segment& seg) const {
+    if (shared_x_) return {at(curves_[0], seg), at(curves_[1], seg), at(curves_[2], seg)};
+    return {curve_at(curves_[0], v), curve_at(curves_[1], v), curve_at(curves_[2], v)};
   }
 
  private:
@@ -61,9 +107,19 @@ class InlineTf {
     const double t = (x - a.x()) / (b.x() - a.x());
     return a.y() + t * (b.y() - a.y());
   }
+  static double at(const TfCurve& c, const Segment& seg) {
+    const auto& pts = c.points;
+    if (seg.i == -1) return pts.front().y();
+    if (seg.i == -2) return pts.back().y();
+    const Eigen::Vector2d& b = pts[std::size_t(seg.i)];
+    const Eigen::Vector2d& a = pts[std::size_t(seg.i) - 1];
+    return a.y() + seg.t * (b.y() - a.y());
+  }
   bool linear_;
+  bool shared_x_ = false;  // the four curves have the same control x (one segment search per sample)
   std::array<TfCurve, 4> curves_;
-  std::vector<TfRange> ranges_;
+  std::vector<double> lo_, hi_, alpha_;
+  std::vector<char> lo_closed_, hi_closed_;
   std::vector<Eigen::Vector3d> rgb01_;
 };
 
@@ -146,27 +202,35 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
           }
       });
     });
-    // Chebyshev distance to the nearest live cell: breadth-first search from every live cell over
-    // the 26 neighbours (exact for the chessboard metric), capped at 255.
-    dist_.assign(live_.size(), 255);
-    std::vector<int> queue;
-    for (std::size_t i = 0; i < live_.size(); ++i)
-      if (live_[i]) dist_[i] = 0, queue.push_back(int(i));
+    // Chebyshev distance to the nearest cell of a set: breadth-first search from every cell of it
+    // over the 26 neighbours (exact for the chessboard metric), capped at 255.
     const int cx = cells_[0], cy = cells_[1], cz = cells_[2];
-    for (std::size_t head = 0; head < queue.size(); ++head) {
-      const int c = queue[head];
-      const int d = dist_[std::size_t(c)] + 1;
-      if (d > 255) continue;
-      const int ci = c % cx, cj = (c / cx) % cy, ck = c / (cx * cy);
-      for (int dk = -1; dk <= 1; ++dk)
-        for (int dj = -1; dj <= 1; ++dj)
-          for (int di = -1; di <= 1; ++di) {
-            const int i = ci + di, j = cj + dj, k = ck + dk;
-            if (i < 0 || j < 0 || k < 0 || i >= cx || j >= cy || k >= cz) continue;
-            const std::size_t n = std::size_t(i) + std::size_t(cx) * (std::size_t(j) + std::size_t(cy) * k);
-            if (dist_[n] > d) dist_[n] = std::uint8_t(d), queue.push_back(int(n));
-          }
-    }
+    auto chebyshev = [&](bool to_live) {
+      std::vector<std::uint8_t> dist(live_.size(), 255);
+      std::vector<int> queue;
+      for (std::size_t i = 0; i < live_.size(); ++i)
+        if ((live_[i] != 0) == to_live) dist[i] = 0, queue.push_back(int(i));
+      for (std::size_t head = 0; head < queue.size(); ++head) {
+        const int c = queue[head];
+        const int d = dist[std::size_t(c)] + 1;
+        if (d > 255) continue;
+        const int ci = c % cx, cj = (c / cx) % cy, ck = c / (cx * cy);
+        for (int dk = -1; dk <= 1; ++dk)
+          for (int dj = -1; dj <= 1; ++dj)
+            for (int di = -1; di <= 1; ++di) {
+              const int i = ci + di, j = cj + dj, k = ck + dk;
+              if (i < 0 || j < 0 || k < 0 || i >= cx || j >= cy || k >= cz) continue;
+              const std::size_t n = std::size_t(i) + std::size_t(cx) * (std::size_t(j) + std::size_t(cy) * k);
+              if (dist[n] > d) dist[n] = std::uint8_t(d), queue.push_back(int(n));
+            }
+      }
+      return dist;
+    };
+    dist_ = chebyshev(true);
+    // For live cells, the radius of the cube of cells around them that are all live: the distance
+    // to the nearest empty cell minus one (254 where none is within the cap).
+    live_reach_ = chebyshev(false);
+    for (auto& r : live_reach_) r = std::uint8_t(r == 0 ? 0 : r - 1);
   }
 }
 
@@ -193,6 +257,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
   const int cell_shift = cell_shift_;
   const std::size_t cells_x = std::size_t(cells_[0]), cells_y = std::size_t(cells_[1]);
   const std::uint8_t* const dist_cells = dist_.data();  // the distance map answers "live" too (0)
+  const std::uint8_t* const live_reach = live_reach_.data();
   const std::array<int, 3> dims = volume_.dims();
   const double inv_range = 1.0 / (hi_ - lo_);
   const Eigen::Vector3d origin = volume_.origin(), inv_spacing = volume_.spacing().cwiseInverse();
@@ -211,9 +276,31 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
   const int tiles_x = (W + T - 1) / T, tiles_y = (H + T - 1) / T;
   std::vector<TileCounts> counts(std::size_t(tiles_x) * tiles_y);
   const auto t0 = std::chrono::steady_clock::now();
+  const SlicingMode mode = s_.mode;
+  const BlendOperator blend_op = s_.blend;
+  const BlinnPhong light = s_.light;
+  const MaskVolume& mask = s_.mask;
+  const Eigen::Vector3d background = s_.background;
+  const bool opacity_correction = s_.opacity_correction;
+  const bool exact_positions = s_.exact_positions;
+  const bool live_runs = s_.live_runs;
+  int max_pieces = 1;
+  for (const auto& tf : tfs) max_pieces = std::max(max_pieces, tf.pieces());
   visit_samples(volume_, [&](const auto samples) {
-    auto do_tile = [&](int tx, int ty) {
-      TileCounts& cnt = counts[std::size_t(ty) * tiles_x + tx];
+    // One tile, specialised on what changes per frame only (lit, masked, front to back), so that
+    // the sample loop carries no tests of settings.
+    auto do_tile = [&](int tx, int ty, auto lit_c, auto masked_c, auto ftb_c) {
+      constexpr bool kLit = decltype(lit_c)::value, kMasked = decltype(masked_c)::value;
+      constexpr bool kFrontToBack = decltype(ftb_c)::value;
+      // Unlit Blend composites invisible samples too (α = 0 leaves C and A bit for bit as they are:
+      // 0 · c + 1 · C = C, 0 + 1 · A = A), so the loop has no branch on the noisy classification.
+      const bool blend_all = !kLit && mode == SlicingMode::kBlend;
+      TileCounts cnt;
+      // Corrected α of each constant-kind piece, computed once per ray when first met (stamp: the
+      // ray that computed it); std::pow with the same arguments as per sample: the same bits.
+      std::vector<double> ac_piece(std::size_t(4 * max_pieces), 0.0);
+      std::vector<std::int64_t> ac_stamp(std::size_t(4 * max_pieces), -1);
+      std::int64_t ray_id = 0;
       for (int y = ty * T; y < std::min(H, (ty + 1) * T); ++y)
         for (int x = tx * T; x < std::min(W, (tx + 1) * T); ++x) {
           const CameraRay ray = rays.generate_ray(x, y);
@@ -221,100 +308,145 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
           SliceAccumulator acc;
           if (!rs.empty()) {
             ++cnt.rays;
-            const double exponent = s_.opacity_correction ? (stack.spacing / rs.cos_psi) / h0 : 1.0;
+            ++ray_id;
+            const double exponent = opacity_correction ? (stack.spacing / rs.cos_psi) / h0 : 1.0;
             const Eigen::Vector3d to_eye = -ray.direction;
             // The move of g (index units) from one visited plane to the next (t_k is linear in k and
             // falls with k: back to front walks towards the eye).
             const Eigen::Vector3d delta =
-                (front_to_back ? 1.0 : -1.0) * (stack.spacing / rs.cos_psi) * ray.direction.cwiseProduct(inv_spacing);
-            // The last α seen and its corrected value: std::pow only when α changes along the ray
-            // (a piecewise-constant TF repeats a handful of values; the same bits either way).
+                (kFrontToBack ? 1.0 : -1.0) * (stack.spacing / rs.cos_psi) * ray.direction.cwiseProduct(inv_spacing);
+            // The linear kind: the last α seen and its corrected value (std::pow only when α changes).
             double last_a = -1, last_ac = 0;
             const int n_samples = rs.k_last - rs.k_first + 1;
+            // The first sample's index coordinates as exact_positions computes them; the others
+            // g_first + step · delta (one rounding per axis, see SlicingSettings::exact_positions).
+            const int k_start = kFrontToBack ? rs.k_last : rs.k_first;
+            const Eigen::Vector3d g_first =
+                (ray.origin + rs.t(stack, k_start) * ray.direction - origin).cwiseProduct(inv_spacing);
+            std::int64_t n_visited = 0, n_skipped = 0, n_classified = 0, n_jumped = 0, n_cell_tests = 0;
+            // The planes from the current sample on while g stays 0.01 index units inside the cube
+            // of cells c ± r (c the current sample's cell, r in cells) along this ray, capped at
+            // `run`: the cube is [e (c - r), e (c + r + 1)) per axis (e the cell edge; a side at the
+            // volume's border reaches to infinity, where clamping keeps the index in the cube). The
+            // 0.01 absorbs the float rounding of g (~1e-12 for |g| < 4096) and of the reciprocal of
+            // dg. On an axis where g moves by more than 1e-6 per plane it moves monotonically, so
+            // only the side ahead bounds the run; on an (almost) still axis, t_k's round-off could
+            // move g either way across a side it sits on: no run unless 0.01 inside both sides.
+            const Eigen::Vector3d inv_delta = delta.cwiseInverse();
+            auto cube_run = [&](const int cc[3], int r, const Eigen::Vector3d& gs, double run) {
+              for (int a = 0; a < 3; ++a) {
+                const double d = delta[a];
+                const bool open_hi = cc[a] + r >= cells_[std::size_t(a)] - 1, open_lo = cc[a] - r <= 0;
+                const double hi = double((cc[a] + r + 1) << cell_shift), lo = double((cc[a] - r) << cell_shift);
+                if (d > 1e-6) {
+                  if (!open_hi) run = std::min(run, (hi - 0.01 - gs[a]) * inv_delta[a]);
+                } else if (d < -1e-6) {
+                  if (!open_lo) run = std::min(run, (lo + 0.01 - gs[a]) * inv_delta[a]);
+                } else if ((!open_hi && gs[a] > hi - 0.01) || (!open_lo && gs[a] < lo + 0.01)) {
+                  run = 0;
+                }
+              }
+              return run;
+            };
+            int live_until = 0;  // steps before this one lie in a live run
             for (int step = 0; step < n_samples; ++step) {
-              const int k = front_to_back ? rs.k_last - step : rs.k_first + step;
-              ++cnt.samples;
-              ++cnt.visited;
-              const Eigen::Vector3d p = ray.origin + rs.t(stack, k) * ray.direction;
-              const Eigen::Vector3d g = (p - origin).cwiseProduct(inv_spacing);
+              const int k = kFrontToBack ? rs.k_last - step : rs.k_first + step;
+              ++n_visited;
+              // g: the sample's index coordinates; p (world) where the mask or the light needs it.
+              Eigen::Vector3d g, p;
+              if (exact_positions) {
+                p = ray.origin + rs.t(stack, k) * ray.direction;
+                g = (p - origin).cwiseProduct(inv_spacing);
+              } else {
+                const double sd = double(step);
+                g = Eigen::Vector3d(std::fma(sd, delta.x(), g_first.x()), std::fma(sd, delta.y(), g_first.y()),
+                                    std::fma(sd, delta.z(), g_first.z()));
+                if constexpr (kMasked || kLit) p = ray.origin + rs.t(stack, k) * ray.direction;
+              }
               const float gx = float(g.x()), gy = float(g.y()), gz = float(g.z());
               const float fx = std::floor(gx), fy = std::floor(gy), fz = std::floor(gz);
-              if (skip) {
+              if (skip && step >= live_until) {
+                ++n_cell_tests;
                 const int c0 = std::clamp(int(fx), 0, dims[0] - 1) >> cell_shift;
                 const int c1 = std::clamp(int(fy), 0, dims[1] - 1) >> cell_shift;
                 const int c2 = std::clamp(int(fz), 0, dims[2] - 1) >> cell_shift;
                 const std::size_t cell = std::size_t(c0) + cells_x * (std::size_t(c1) + cells_y * std::size_t(c2));
                 const int dist = dist_cells[cell];  // 0: live
+                const int cc[3] = {c0, c1, c2};
                 if (dist != 0) {
-                  ++cnt.skipped;
+                  ++n_skipped;
                   // Jump the run of empty planes: every cell within D - 1 of this one (max norm) is
-                  // empty, D = dist_ the distance to the nearest live cell; so is every sample whose
-                  // clamped voxel index lies in the box of those cells, [e (c - D + 1), e (c + D) - 1]
-                  // per axis (e the cell edge; a side at the volume's border reaches to infinity,
-                  // where clamping keeps the index in the box). With g moving by delta per plane, the
-                  // planes while g stays 0.01 index units inside that box (for the float rounding of
-                  // g and of t_k) are empty and are counted as skipped without being visited. On an
-                  // axis where g moves by more than 1e-6 per plane it moves monotonically (round-off
-                  // is ~1e-12), so only the side ahead bounds the run.
-                  const int r = dist - 1;
-                  const int cc[3] = {c0, c1, c2};
-                  double run = double(n_samples - 1 - step);
-                  for (int a = 0; a < 3; ++a) {
-                    const double d = delta[a];
-                    const bool open_hi = cc[a] + r >= cells_[std::size_t(a)] - 1, open_lo = cc[a] - r <= 0;
-                    const double hi = double((cc[a] + r + 1) << cell_shift), lo = double((cc[a] - r) << cell_shift);
-                    if (d > 1e-6) {
-                      if (!open_hi) run = std::min(run, (hi - 0.01 - g[a]) / d);
-                    } else if (d < -1e-6) {
-                      if (!open_lo) run = std::min(run, (g[a] - lo - 0.01) / -d);
-                    } else if ((!open_hi && g[a] > hi - 0.01) || (!open_lo && g[a] < lo + 0.01)) {
-                      // (Almost) still on this axis: t_k's round-off could move g either way across
-                      // a box side it sits on; jump only from 0.01 inside both sides.
-                      run = 0;
-                    }
-                  }
+                  // empty, D = dist_ the distance to the nearest live cell; the planes while g stays
+                  // 0.01 index units inside that cube (cube_run) are empty and are counted as
+                  // skipped without being visited.
+                  const double run = cube_run(cc, dist - 1, g, double(n_samples - 1 - step));
                   if (run >= 1) {
                     const int n = int(run);
                     step += n;
-                    cnt.samples += n;
-                    cnt.skipped += n;
+                    n_jumped += n;
                   }
                   continue;
                 }
+                // A live run (the lead's "proximity clouds" in volume_integrator.cpp): every cell
+                // within R of this one is live (R = live_reach_), so the planes while g stays 0.01
+                // inside that cube are in live cells and are sampled without the cell test (the same
+                // samples, classifications and counts as testing each).
+                if (live_runs) {
+                  const double run = cube_run(cc, live_reach[cell], g, double(n_samples - 1 - step));
+                  live_until = step + 1 + (run >= 1 ? int(run) : 0);
+                }
               }
-              const int m = use_mask ? s_.mask.lookup(p) : 1;
-              if (m == 0) continue;
-              ++cnt.classified;
+              int m = 1;
+              if constexpr (kMasked) {
+                m = mask.lookup(p);
+                if (m == 0) continue;
+              }
+              ++n_classified;
               const int i0 = int(fx), j0 = int(fy), k0 = int(fz);
               const float wx = gx - fx, wy = gy - fy, wz = gz - fz;
               const float f = samples.trilinear_cell(i0, j0, k0, wx, wy, wz);
-              const InlineTf& tf = tfs[std::size_t(m - 1)];
+              const std::size_t ti = std::size_t(m - 1);
+              const InlineTf& tf = tfs[ti];
               const double fn = (double(f) - lo_) * inv_range;
-              int piece = -1;
-              const double a = tf.alpha(fn, piece);
-              if (!(a > 0)) continue;
-              double ac = a;
-              if (exponent != 1.0) {
-                if (a != last_a) last_a = a, last_ac = 1.0 - std::pow(1.0 - a, exponent);
-                ac = last_ac;
+              int piece = 0;
+              InlineTf::Segment seg;
+              double a, ac;
+              if (tf.linear()) {
+                a = tf.alpha(fn, seg);
+                if (!(a > 0)) continue;
+                ac = a;
+                if (exponent != 1.0) {
+                  if (a != last_a) last_a = a, last_ac = 1.0 - std::pow(1.0 - a, exponent);
+                  ac = last_ac;
+                }
+              } else {
+                piece = tf.piece(fn);
+                a = tf.piece_alpha(piece);
+                if (!blend_all && !(a > 0)) continue;
+                ac = a;
+                if (exponent != 1.0 && piece != 0) {
+                  const std::size_t slot = ti * std::size_t(max_pieces) + std::size_t(piece);
+                  if (ac_stamp[slot] != ray_id)
+                    ac_stamp[slot] = ray_id, ac_piece[slot] = 1.0 - std::pow(1.0 - a, exponent);
+                  ac = ac_piece[slot];
+                }
               }
-              Eigen::Vector3d c = tf.rgb(fn, piece);
-              if (lit) {
+              Eigen::Vector3d c = tf.linear() ? tf.rgb(fn, seg) : tf.piece_rgb(piece);
+              if constexpr (kLit) {
                 Eigen::Vector3d e;
                 for (int ch = 0; ch < 3; ++ch) e[ch] = gch[std::size_t(ch)].trilinear_cell(i0, j0, k0, wx, wy, wz);
                 const Eigen::Vector3d gd = (2.0 * e - Eigen::Vector3d::Ones()) * grad_scale;
                 const Eigen::Vector3d gw = gd.cwiseProduct(inv_spacing);  // index units -> world direction
-                if (gd.norm() > s_.light.gate && gw.norm() > 0) {
+                if (gd.norm() > light.gate && gw.norm() > 0) {
                   const Eigen::Vector3d nrm = -gw.normalized();
                   const Eigen::Vector3d l = (light_pos - p).normalized();
                   const Eigen::Vector3d h = (l + to_eye).normalized();
                   const double diff = std::max(nrm.dot(l), 0.0);
-                  const double spec = std::pow(std::max(nrm.dot(h), 0.0), s_.light.exponent);
-                  c = c * (s_.light.ambient + s_.light.diffuse * diff) +
-                      Eigen::Vector3d::Constant(s_.light.specular * spec);
+                  const double spec = std::pow(std::max(nrm.dot(h), 0.0), light.exponent);
+                  c = c * (light.ambient + light.diffuse * diff) + Eigen::Vector3d::Constant(light.specular * spec);
                 }
               }
-              if (front_to_back) {
+              if constexpr (kFrontToBack) {
                 const double w = (1 - acc.A) * ac;
                 acc.C += w * c;
                 acc.A += w;
@@ -324,9 +456,9 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                 }
                 continue;
               }
-              switch (s_.mode) {
+              switch (mode) {
                 case SlicingMode::kBlend:
-                  if (s_.blend == BlendOperator::kOver)
+                  if (blend_op == BlendOperator::kOver)
                     acc.blend_over(c, ac);
                   else
                     acc.blend_additive(c, ac);
@@ -339,24 +471,51 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                   break;
               }
             }
+            cnt.samples += n_visited + n_jumped;
+            cnt.visited += n_visited;
+            cnt.skipped += n_skipped + n_jumped;
+            cnt.classified += n_classified;
+            cnt.cell_tests += n_cell_tests;
           }
           Eigen::Vector3d out;
-          if (s_.mode == SlicingMode::kBlend)
-            out = acc.C + (1 - acc.A) * s_.background;
+          if (mode == SlicingMode::kBlend)
+            out = acc.C + (1 - acc.A) * background;
           else
-            out = acc.A > 0 ? acc.C : s_.background;
+            out = acc.A > 0 ? acc.C : background;
           for (int ch = 0; ch < 3; ++ch) frame.raw.at(x, y, ch) = float(out[ch]);
           frame.alpha.at(x, y) = float(acc.A);
         }
+      counts[std::size_t(ty) * tiles_x + tx] = cnt;
     };
-    if (s_.parallel)
-      tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const auto& r) {
-        for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
-          for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) do_tile(tx, ty);
-      });
+    auto run_tiles = [&](auto lit_c, auto masked_c, auto ftb_c) {
+      auto tile = [&](int tx, int ty) { do_tile(tx, ty, lit_c, masked_c, ftb_c); };
+      if (s_.parallel)
+        tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const auto& r) {
+          for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
+            for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) tile(tx, ty);
+        });
+      else
+        for (int ty = 0; ty < tiles_y; ++ty)
+          for (int tx = 0; tx < tiles_x; ++tx) tile(tx, ty);
+    };
+    using T0 = std::false_type;
+    using T1 = std::true_type;
+    auto with_ftb = [&](auto lit_c, auto masked_c) {
+      if (front_to_back)
+        run_tiles(lit_c, masked_c, T1{});
+      else
+        run_tiles(lit_c, masked_c, T0{});
+    };
+    auto with_mask = [&](auto lit_c) {
+      if (use_mask)
+        with_ftb(lit_c, T1{});
+      else
+        with_ftb(lit_c, T0{});
+    };
+    if (lit)
+      with_mask(T1{});
     else
-      for (int ty = 0; ty < tiles_y; ++ty)
-        for (int tx = 0; tx < tiles_x; ++tx) do_tile(tx, ty);
+      with_mask(T0{});
   });
   frame.stats.render_ms = ms_since(t0);
   for (const auto& c : counts) {
@@ -366,6 +525,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
     frame.stats.skipped += c.skipped;
     frame.stats.terminated += c.terminated;
     frame.stats.visited += c.visited;
+    frame.stats.cell_tests += c.cell_tests;
   }
   const auto t1 = std::chrono::steady_clock::now();
   frame.rgb = apply_bloom(frame.raw, s_.post);
@@ -416,6 +576,8 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
   add("slice.quality_class", num(s.quality_class));
   add("slice.spacing", num(slice_spacing(s.quality_class, volume.spacing())));
   add("slice.order", "back to front");
+  add("slice.positions", s.exact_positions ? "exact: o + t_k v per sample"
+                                           : "incremental: g_0 + j dg per ray (float round-off, < 1e-9 voxel)");
   if (const auto* p = std::get_if<Pinhole>(&camera))
     add("camera.fov", fmt::format("{:.6g} deg (vertical)", 2 * std::atan(0.5 * p->height / p->fy) * 180 / M_PI));
   add("cpu.realisation", "per-pixel ray-plane sampling");
@@ -437,8 +599,9 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
   add("post.sigma/radius", fmt::format("{} half-res px, radius ceil(3 sigma)", num(s.post.sigma)));
   add("post.bloom_blend", fmt::format("additive, gain {}", num(s.post.gain)));
   add("post.render_target", "float32");
-  add("skip_empty",
-      s.skip_empty ? fmt::format("{}^3 cells, runs of empty planes jumped, exact (same image)", s.skip_cell) : "off");
+  add("skip_empty", s.skip_empty ? fmt::format("{}^3 cells, runs of empty planes jumped{}, exact (same image)",
+                                               s.skip_cell, s.live_runs ? " and of live planes run" : "")
+                                 : "off");
   add("blend.early_termination",
       s.early_termination > 0
           ? (s.mode == SlicingMode::kBlend && s.blend == BlendOperator::kOver

@@ -3,6 +3,7 @@
 // against the renderer without.
 
 #include <meltlab/core/error.h>
+#include <meltlab/core/image.h>
 #include <meltlab/render/fog/scene_fog.h>
 #include <meltlab/render/integrator/ice_surface.h>
 #include <meltlab/render/render_scene.h>
@@ -12,7 +13,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <filesystem>
 #include <numbers>
+#include <unistd.h>
 
 namespace meltlab::render::fog {
 namespace {
@@ -173,6 +176,61 @@ TEST(SceneFog, RendererWithADarkSpotlightIsThePlainRendererAttenuated) {
       if (pc.sum() < 0.99 * pa.sum()) ++darker;
     }
   EXPECT_GT(darker, 40 * 30 / 2);
+}
+
+TEST(SceneFog, TheFogsSurfaceTermsOnTheGroundTakeTheTexturesColour) {
+  // A ground textured in one colour (1, 0.5, 0.25), no specular (cs 0), a bright white spotlight
+  // in almost clear air (k_t 1e-6: the airlight is ~1e-6 of the direct term). The fog pass adds,
+  // on every lit ground pixel, the spotlight's direct Phong term times the diffuse colour, so the
+  // added light must have the texture's channel ratios; with a white diffuse colour (the pass
+  // before it read the texture) it would be grey. For both texture filters (bilinear and the
+  // mipmap footprints, which the fog pass now traces too).
+  const auto dir = std::filesystem::temp_directory_path() / ("meltlab_fog_tex_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  ImageF tex(8, 8, 3);
+  for (int j = 0; j < 8; ++j)
+    for (int i = 0; i < 8; ++i) tex.at(i, j, 0) = 1.0f, tex.at(i, j, 1) = 0.5f, tex.at(i, j, 2) = 0.25f;
+  const auto tex_file = dir / "orange.exr";
+  write_image(tex_file, tex);
+  for (const char* filter : {"bilinear", "mipmap"}) {
+    const std::string base = std::string("{width: 40, height: 30, texture_filter: ") + filter +
+                             ", camera: {type: pinhole, width: 40, height: 30, eye: [0, -4, 3], target: [0, 0, 0], up: "
+                             "[0, 0, 1], fov_deg: 50}, "
+                             "ground: {z: 0, cs: 0, tile: 1, texture: " +
+                             tex_file.string() + "}}";
+    RenderScene plain = parse_render_scene(YAML::Load(base), (dir / "scene.yaml").string());
+    RenderScene fogged = plain;
+    SceneFog f;
+    f.medium.kt = 1e-6;
+    f.far = 50;
+    Spotlight l;
+    l.position = Vec3(0, 0, 3);
+    l.axis = Vec3(0, 0, -1);
+    l.profile = {ConeStep{40 * kDeg, 1.0}};
+    l.intensity = 5;
+    f.spotlights = {l};
+    f.tables.n = 32;
+    fogged.fog = f;
+    FogScene tiny;
+    tiny.spheres = {AnalyticSphere{Vec3(3, 3, 0.2), 0.1}};  // out of the way: the ground is what is seen
+    const sim::IndexedMesh mesh = scene_mesh(tiny, 200);
+    IceRenderer a(plain), b(fogged);
+    a.set_mesh(mesh);
+    b.set_mesh(mesh);
+    const RgbImage ia = a.render(), ib = b.render();
+    int lit = 0;
+    for (int j = 0; j < 30; ++j)
+      for (int i = 0; i < 40; ++i) {
+        const Rgb added = rgb_at(ib, i, j) - rgb_at(ia, i, j);
+        if (added[0] < 0.05) continue;  // not in the spotlight (or not the ground)
+        ++lit;
+        // Float image storage (kPixelTol per channel) and the ~1e-6 airlight.
+        EXPECT_NEAR(added[1] / added[0], 0.5, 1e-3) << filter << " " << i << " " << j;
+        EXPECT_NEAR(added[2] / added[0], 0.25, 1e-3) << filter << " " << i << " " << j;
+      }
+    EXPECT_GT(lit, 40 * 30 / 10) << filter << ": the spotlight must light the ground, or the test says nothing";
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
 // The slicing renderer's speed paths (render/slicing/slicing_renderer.h) against its plain path:
 // jumping runs of empty planes changes no pixel for any cell size, mode, mask or camera; early ray
 // termination is off by default, ignored where it does not apply, equal to back to front up to
-// float round-off when it cannot stop early, and within its bound when it does.
+// float round-off when it cannot stop early, and within its bound when it does; live runs change
+// no pixel or count; incremental sample positions equal the exact ones up to float round-off; a
+// linear TF's shared control points give the bits of per-channel evaluation.
 
 #include <meltlab/core/error.h>
 #include <meltlab/render/slicing/slicing_renderer.h>
@@ -158,6 +160,127 @@ TEST(SlicingSpeed, FrontToBackEqualsBackToFrontUpToRoundOffAndStopsWithinItsBoun
         EXPECT_GE(stopped.alpha.values()[i], 0.99f - 1e-6f);
       }
   }
+}
+
+/// The mask of the identity tests: the top cut away, a sphere with the second TF.
+MaskVolume test_mask(const Volume& v) {
+  MaskVolume mask({12, 11, 9}, v.domain(), 1);
+  MaskEdit cut;
+  cut.centre = Eigen::Vector3d(0.5, 0.5, 0.9), cut.half_size = Eigen::Vector3d(0.6, 0.6, 0.2), cut.index = 0;
+  mask.apply(cut);
+  MaskEdit hl;
+  hl.shape = MaskShape::kSphere, hl.centre = Eigen::Vector3d(0.4, 0.45, 0.5), hl.half_size.setConstant(0.2);
+  hl.index = 2;
+  mask.apply(hl);
+  return mask;
+}
+
+/// Variant 0 Blend over, 1 additive, 2 MIP, 3 combined, 4 masked lit Blend, 5 front to back (0.99).
+SlicingSettings variant_settings(const Volume& v, int variant) {
+  SlicingSettings s;
+  s.tfs[0] = skin_bone();
+  s.tfs[1] = highlight();
+  s.quality_class = 0.7;
+  s.mode = variant == 2 ? SlicingMode::kMip : variant == 3 ? SlicingMode::kCombined : SlicingMode::kBlend;
+  s.blend = variant == 1 ? BlendOperator::kAdditive : BlendOperator::kOver;
+  if (variant == 4) s.mask = test_mask(v), s.lit_blend = true;
+  if (variant == 5) s.early_termination = 0.99;
+  return s;
+}
+
+TEST(SlicingSpeed, LiveRunsChangeNoPixelOrCountAndSaveCellLookups) {
+  const Volume& v = phantom();
+  for (const Camera& cam : cameras(v.domain()))
+    for (int variant = 0; variant < 6; ++variant)
+      for (int cell : {2, 4, 8}) {
+        SlicingSettings s = variant_settings(v, variant);
+        s.skip_cell = cell;
+        s.live_runs = false;
+        const SlicingRenderer tested_renderer(v, s);
+        const SlicingFrame tested = tested_renderer.render(cam);
+        s.live_runs = true;
+        const SlicingFrame runs =
+            SlicingRenderer(v, s,
+                            tested_renderer.gradients() ? std::optional<GradientVolume>(*tested_renderer.gradients())
+                                                        : std::nullopt)
+                .render(cam);
+        const std::string what = "variant " + std::to_string(variant) + ", cell " + std::to_string(cell);
+        EXPECT_EQ(runs.raw, tested.raw) << what;
+        EXPECT_EQ(runs.alpha, tested.alpha) << what;
+        // A run reaching into an empty cell would fetch (classify) a sample the cell test skips.
+        EXPECT_EQ(runs.stats.samples, tested.stats.samples) << what;
+        EXPECT_EQ(runs.stats.visited, tested.stats.visited) << what;
+        EXPECT_EQ(runs.stats.skipped, tested.stats.skipped) << what;
+        EXPECT_EQ(runs.stats.classified, tested.stats.classified) << what;
+        EXPECT_EQ(runs.stats.terminated, tested.stats.terminated) << what;
+        EXPECT_EQ(tested.stats.cell_tests, tested.stats.visited) << what;
+        // At QC 0.7 several planes cross each live cell, so runs must save lookups in every case.
+        EXPECT_LT(runs.stats.cell_tests, runs.stats.visited) << what;
+      }
+}
+
+TEST(SlicingSpeed, IncrementalPositionsEqualExactOnesUpToFloatRoundOff) {
+  // g_0 + j dg (one rounding per axis) and (o + t_k v - origin) / spacing differ by ~1e-13 voxel
+  // in double (|g| < 64 here); after the cast to float the two are equal or one float ulp apart
+  // (<= 2^-18 ~ 3.8e-6 voxel for |g| < 64), which moves a trilinear value (normalised, neighbours
+  // differ by <= 1) by <= 3.8e-6 and a linear TF (slopes <= 2 here) by <= 7.6e-6 per sample. A
+  // constant TF's range edge could flip a sample, but that needs the value within 3.8e-6 of the
+  // edge as well (none here: the test would show it). kTol: the per-sample bound, 1e-5.
+  constexpr double kTol = 1e-5;
+  const Volume& v = phantom();
+  for (const Camera& cam : cameras(v.domain()))
+    for (int variant = 0; variant < 6; ++variant) {
+      SlicingSettings s = variant_settings(v, variant);
+      s.exact_positions = true;
+      const SlicingRenderer exact_renderer(v, s);
+      const SlicingFrame exact = exact_renderer.render(cam);
+      s.exact_positions = false;
+      const SlicingFrame fast =
+          SlicingRenderer(
+              v, s,
+              exact_renderer.gradients() ? std::optional<GradientVolume>(*exact_renderer.gradients()) : std::nullopt)
+              .render(cam);
+      const std::string what = "variant " + std::to_string(variant);
+      EXPECT_LE(max_abs_diff(fast.raw, exact.raw), kTol) << what;
+      EXPECT_LE(max_abs_diff(fast.alpha, exact.alpha), kTol) << what;
+      EXPECT_EQ(fast.stats.samples, exact.stats.samples) << what;
+      EXPECT_GT(exact.stats.classified, 0) << what;
+    }
+  EXPECT_FALSE(SlicingSettings{}.exact_positions);  // the default is the incremental form
+}
+
+TEST(SlicingSpeed, CurvesSharingControlPointsGiveTheBitsOfPerChannelEvaluation) {
+  // A scene's `points` rows give four curves with the same x: the renderer then finds the segment
+  // once per sample. The same TF with a redundant point (x = 2, the end value) on the red curve
+  // only is evaluated per channel (TfCurve::at's way); on [0, 1] both are the same function with
+  // the same segments and t, so every pixel must agree bit for bit.
+  const double rows[5][5] = {{0.2, 0.9, 0.5, 0.1, 0},
+                             {0.35, 0.8, 0.6, 0.2, 0.3},
+                             {0.5, 0.3, 0.9, 0.4, 0.05},
+                             {0.8, 0.6, 0.6, 0.9, 0.5},
+                             {1, 1, 0.2, 0.5, 0.7}};
+  std::array<TfCurve, 4> shared;
+  for (const auto& r : rows)
+    for (int c = 0; c < 4; ++c) shared[std::size_t(c)].points.emplace_back(r[0], r[c + 1]);
+  std::array<TfCurve, 4> per_channel = shared;
+  per_channel[0].points.emplace_back(2.0, rows[4][1]);
+  const Volume& v = phantom();
+  for (const Camera& cam : cameras(v.domain()))
+    for (int variant : {0, 3}) {  // Blend, combined (lit)
+      SlicingSettings s = variant_settings(v, variant);
+      s.tfs[0] = TransferFunction::piecewise_linear(shared, "shared");
+      const SlicingRenderer a_renderer(v, s);
+      const SlicingFrame a = a_renderer.render(cam);
+      s.tfs[0] = TransferFunction::piecewise_linear(per_channel, "per_channel");
+      const SlicingFrame b =
+          SlicingRenderer(
+              v, s, a_renderer.gradients() ? std::optional<GradientVolume>(*a_renderer.gradients()) : std::nullopt)
+              .render(cam);
+      EXPECT_EQ(a.raw, b.raw) << variant;
+      EXPECT_EQ(a.alpha, b.alpha) << variant;
+      EXPECT_GT(a.stats.classified, 0) << variant;
+      EXPECT_GT(max_abs_diff(a.raw, ImageF(a.raw.width(), a.raw.height(), 3)), 0.05) << variant;  // not blank
+    }
 }
 
 TEST(SlicingSpeed, BadCellSizeOrTerminationThresholdIsRefused) {

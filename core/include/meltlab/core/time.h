@@ -24,6 +24,10 @@ inline double ms_since(std::chrono::steady_clock::time_point t) {
 /// time is steadier than its wall-clock time.
 double process_cpu_ms();
 
+/// CPU time of the calling thread, ms: the cost of work run on one thread, unaffected by other
+/// processes on the machine except through shared caches.
+double thread_cpu_ms();
+
 /// The machine's 1-, 5- and 15-minute load averages ({-1, -1, -1} if unknown): recorded beside
 /// timings taken on shared cores.
 std::array<double, 3> load_averages();

@@ -9,9 +9,11 @@
 // (fsa.surface.view_attenuation = apply; source_omit drops both factors e^{-k_t m}); L_a is the
 // spotlight's airlight over the lit part of [0, m] (fog/airlight.h), L_p its surface terms
 // (eq. 3.24: direct Phong with extinction along the light's path, and the fog's light through
-// G_0 and G_n) with the hit material's Phong coefficients (ice: cd, cs, n_spec; ground: cd, cs,
-// n_spec; diffuse colour white — the ground texture and the liquid do not modulate the fog's
-// terms). One G_n table per distinct Phong exponent (rounded to an integer in [1, 500]). Rays
+// G_0 and G_n) with the hit material's Phong coefficients (ice: cd, cs, n_spec, diffuse colour
+// white; ground: cd, cs, n_spec, with the ground texture's colour t*diff as the diffuse colour —
+// shifted by the liquid film, looked up with the ray's footprint under texture_filter: mipmap — and
+// the film's normal N* where wet). One G_n table per distinct Phong exponent (rounded to an integer
+// in [1, 500]). Rays
 // that hit nothing end at `far` (mesh units): the background is attenuated by e^{-k_t far}.
 // No shadows (the model has none): the spotlight lights the ground through the ice.
 //

@@ -89,7 +89,19 @@ class WetGround {
   /// and of d (nullptr: none).
   Rgb shade(const Eigen::Vector3d& q, const Eigen::Vector3d& d, const Differential* dq, const Differential* dd) const;
 
+  /// What the fog's surface terms (fog/scene_fog.h) see of ground point q viewed along d: the
+  /// diffuse colour t*diff — the texture, shifted by the liquid film exactly as in `shade` — and
+  /// the normal (the film's N* where wet, +z elsewhere). `dq`: q's footprint (nullptr: none).
+  struct FogSurface {
+    Rgb diffuse_colour = Rgb(1, 1, 1);
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  };
+  FogSurface fog_surface(const Eigen::Vector3d& q, const Eigen::Vector3d& d, const Differential* dq) const;
+
  private:
+  /// t*diff at q seen from V (unit, towards the eye) with the film's weight w (Eq. 7.5).
+  Rgb texture_at(const Eigen::Vector3d& q, const Eigen::Vector3d& V, double w, const Differential* dq) const;
+
   const GroundMaterial& material_;
   GroundPlan plan_;
   const std::vector<Light>& lights_;

@@ -94,6 +94,18 @@ struct SlicingSettings {
   /// and stops a ray once A >= the value (the rest could add at most (1 - A) to any channel of C).
   /// Ignored (logged as such) in the other modes and for the additive operator.
   double early_termination = 0;
+  /// Sample positions. false (default): per ray, the first plane's index coordinates g_0 from
+  /// t_k as below, the others g_0 + j Δg (Δg the move per plane; one fused multiply-add per axis,
+  /// no division), which differ from the exact ones by float round-off, |Δg| < 1e-9 voxel (see
+  /// slicing_speed_test). true: each sample at o + t_k v with t_k from its plane's depth (one
+  /// division per sample; the arithmetic before issue 17's second speed round, bit for bit).
+  bool exact_positions = false;
+  /// Live runs (with skip_empty): from a sample in a live cell, the planes while the ray stays
+  /// 0.01 voxel inside the cube of cells around it that are all live (the Chebyshev distance to the
+  /// nearest empty cell minus one) are sampled without looking up their cells: the same samples,
+  /// counts and image as testing each. false: every sample's cell is looked up (for tests and
+  /// measurements).
+  bool live_runs = true;
 };
 
 /// Whether a mode needs the gradient volume.
@@ -106,6 +118,7 @@ struct SlicingStats {
   std::int64_t skipped = 0;     ///< samples in empty cells (not fetched)
   std::int64_t terminated = 0;  ///< rays stopped by early termination (their remaining samples not counted)
   std::int64_t visited = 0;     ///< samples whose position was computed (the others jumped in empty runs)
+  std::int64_t cell_tests = 0;  ///< visited samples whose empty-space cell was looked up (the others in live runs)
   int slices = 0;               ///< planes in the stack
   double slice_spacing = 0;     ///< Δd
   double render_ms = 0;         ///< sampling and compositing
@@ -167,6 +180,9 @@ class SlicingRenderer {
   std::vector<std::uint8_t> live_;     ///< 1 where a TF in use may be visible
   /// Chebyshev distance (in cells, capped at 255) from each cell to the nearest live cell (0: live).
   std::vector<std::uint8_t> dist_;
+  /// For a live cell, the radius (in cells) of the cube around it whose cells are all live: the
+  /// Chebyshev distance to the nearest empty cell minus one (0 for empty cells).
+  std::vector<std::uint8_t> live_reach_;
 };
 
 /// One frame (builds a SlicingRenderer).
