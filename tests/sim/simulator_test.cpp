@@ -76,7 +76,10 @@ TEST(Simulator, SerialEqualsParallelBitwise) {
 // one part are summed and moved inside it, the others ("halo" vertices) gather their sums
 // from stored triangle terms afterwards. Any partition must give the mesh of the one-part
 // sweep bitwise, serial or on threads, across collapses, repairs, remnant checks and a
-// compaction (each of which changes triangle lists and so the schedule).
+// compaction (each of which changes triangle lists and so the schedule). A simulator that
+// switches between one part and three every cycle checks the hand-over of the sum records
+// (a one-part sweep clears them all first and leaves them filled; a sweep in parts expects
+// them cleared and clears each group's records as it moves).
 template <class Real>
 void check_partitions_equal(const IndexedMesh& mesh, const MeltParams& p, int cycles, const std::string& name) {
   MeltSimulator<Real> one(TriMesh<Real>::from_indexed(mesh), p, make_constant_kl(1.0), Execution::kSerial);
@@ -84,9 +87,13 @@ void check_partitions_equal(const IndexedMesh& mesh, const MeltParams& p, int cy
   struct Split {
     std::size_t parts;
     Execution exec;
+    bool alternate = false;  // odd cycles one part, even cycles `parts`
   };
-  const Split splits[] = {
-      {2, Execution::kSerial}, {3, Execution::kSerial}, {7, Execution::kParallel}, {64, Execution::kParallel}};
+  const Split splits[] = {{2, Execution::kSerial},
+                          {3, Execution::kSerial},
+                          {7, Execution::kParallel},
+                          {64, Execution::kParallel},
+                          {3, Execution::kSerial, true}};
   std::vector<MeltSimulator<Real>> others;
   for (const Split& s : splits) {
     others.emplace_back(TriMesh<Real>::from_indexed(mesh), p, make_constant_kl(1.0), s.exec);
@@ -99,11 +106,15 @@ void check_partitions_equal(const IndexedMesh& mesh, const MeltParams& p, int cy
     merges += r.merged_vertices;
     repairs += r.repair_vertex_splits + r.repair_edge_collapses + r.repair_glued_pairs;
     compacted = compacted || r.compacted;
-    for (auto& o : others) o.step();
+    for (std::size_t i = 0; i < others.size(); ++i) {
+      if (splits[i].alternate) others[i].set_sweep_parts(c % 2 == 1 ? 1 : splits[i].parts);
+      others[i].step();
+    }
     if (c % 10 == 0 || c == cycles) {
       for (std::size_t i = 0; i < others.size(); ++i)
         expect_bitwise_equal(one.mesh(), others[i].mesh(),
-                             name + ", " + std::to_string(splits[i].parts) + " parts, cycle " + std::to_string(c));
+                             name + ", " + std::to_string(splits[i].parts) + " parts" +
+                                 (splits[i].alternate ? " alternating with 1" : "") + ", cycle " + std::to_string(c));
       if (::testing::Test::HasFailure()) return;
     }
   }

@@ -73,6 +73,19 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
   double* const edge_key = ws.edge_key.data();  // locals: the stores below cannot alias them
   const std::uint8_t* const alive = m.triangle_alive.data();
   const double shrink_bound = ws.shrink_bound;
+  // Corners are read from the packed copy of the positions (the same numbers as the columns;
+  // one cache line per corner instead of three, and the copy the next deformation gathers
+  // from stays in the cache). It is made current here if a repair or compaction cleared it.
+  std::vector<Real>& packed_positions = ws.packed_positions<Real>();
+  if (!ws.packed_valid || packed_positions.size() != 3 * nv + 1) {
+    pack_positions(m, packed_positions);
+    ws.packed_valid = true;
+  }
+  const Real* const packed = packed_positions.data();
+  auto corner = [packed](Index v) {
+    const Real* p = packed + 3 * static_cast<std::size_t>(v);
+    return Vec3<Real>(p[0], p[1], p[2]);
+  };
   auto mark_range = [&, edge_key, alive, skip_above, shrink_bound](std::size_t begin, std::size_t end) {
     bool local_mark = false;
     for (std::size_t t = begin; t < end; ++t) {
@@ -83,9 +96,7 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
       }
       if (edge_key[t] > skip_above || !alive[t]) continue;
       const Triangle& tri = m.triangle[t];
-      const Vec3<Real> pa = m.position[static_cast<std::size_t>(tri[0])];
-      const Vec3<Real> pb = m.position[static_cast<std::size_t>(tri[1])];
-      const Vec3<Real> pc = m.position[static_cast<std::size_t>(tri[2])];
+      const Vec3<Real> pa = corner(tri[0]), pb = corner(tri[1]), pc = corner(tri[2]);
       const Vec3<Real> ab = pb - pa, bc = pc - pb, ca = pa - pc;
       const Real l2[3] = {ab.x() * ab.x() + ab.y() * ab.y() + ab.z() * ab.z(),
                           bc.x() * bc.x() + bc.y() * bc.y() + bc.z() * bc.z(),

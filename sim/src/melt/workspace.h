@@ -56,15 +56,18 @@ struct MeltWorkspace {
   // vertex of a parallel sweep, indexed by triangle slot (only those slots are written).
   std::vector<TriangleTerms<float>> terms_f;
   std::vector<TriangleTerms<double>> terms_d;
-  // Deform: per-vertex sums, all zero between cycles (each group clears its records when it moves).
+  // Deform: per-vertex sums. A one-part sweep clears them first; a sweep in parts relies on
+  // them being zero (`sums_zero`: its groups clear their records when they move).
   std::vector<VertexSums<float>> sums_f;
   std::vector<VertexSums<double>> sums_d;
-  // Deform: a copy of the positions as packed triples (pack_positions()), from which the sweep
-  // gathers triangle corners (one load per corner instead of three from the columns). The
-  // vertex moves write it beside the columns (a vertex moves after its last triangle, so no
-  // gather needs the old value afterwards); the collapse pass writes the roots it moves; any
-  // other change of positions (repair, compaction) clears `packed_valid`, and the next sweep
-  // copies all positions again.
+  bool sums_zero = false;
+  // Deform and collapse: a copy of the positions as packed triples (pack_positions()), from
+  // which the sweep gathers triangle corners and the short-edge test reads them (one load per
+  // corner instead of three from the columns). The vertex moves read the old positions from
+  // it and write the new ones to it and to the columns (a vertex moves after its last
+  // triangle, so no gather needs the old value afterwards); the collapse pass writes the roots
+  // it moves; any other change of positions (repair, compaction) clears `packed_valid`, and
+  // the next pass that reads it copies all positions again.
   std::vector<float> packed_f;
   std::vector<double> packed_d;
   bool packed_valid = false;
