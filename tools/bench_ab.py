@@ -7,9 +7,13 @@ prints per benchmark: the median time of each build over all repetitions, the me
 per-round ratios new/old (a slow spell of the host falls on both builds of a round), and the
 median of the simulator's per-pass counters (deform_ms, collapse_ms) where present.
 Benchmarks only one build has (e.g. a new mesh) are listed with that build's median.
+--time cpu compares the process CPU time instead of wall time: under load the wall time of
+a serial benchmark includes the time the scheduler gave the core to other processes, its
+CPU time does not (it still includes the cost of caches shared with them). For a parallel
+benchmark the CPU time is the work of all threads, not how long the cycle took.
 
   tools/bench_ab.py OLD_BENCH NEW_BENCH [--rounds 4] [--repetitions 3] [--json OUT]
-                    [--taskset CPUS] -- [benchmark args, e.g. --benchmark_filter=...]
+                    [--taskset CPUS] [--time real|cpu] -- [benchmark args, e.g. --benchmark_filter=...]
 """
 import argparse
 import json
@@ -20,7 +24,7 @@ import tempfile
 from pathlib import Path
 
 
-def run(binary, args, taskset):
+def run(binary, args, taskset, time_key):
     with tempfile.NamedTemporaryFile(suffix=".json") as out:
         cmd = ([] if not taskset else ["taskset", "-c", taskset]) + [
             binary, *args, "--benchmark_enable_random_interleaving=true",
@@ -31,7 +35,7 @@ def run(binary, args, taskset):
     for b in doc["benchmarks"]:
         if b.get("run_type") == "aggregate":
             continue
-        ms = b["real_time"] * {"ms": 1.0, "us": 1e-3, "ns": 1e-6, "s": 1e3}[b.get("time_unit", "ns")]
+        ms = b[time_key] * {"ms": 1.0, "us": 1e-3, "ns": 1e-6, "s": 1e3}[b.get("time_unit", "ns")]
         r = rows.setdefault(b["run_name"], {"ms": [], "deform_ms": [], "collapse_ms": [], "triangles": []})
         r["ms"].append(ms)
         for k in ("deform_ms", "collapse_ms", "triangles"):
@@ -52,6 +56,7 @@ def main():
     ap.add_argument("--repetitions", type=int, default=3)
     ap.add_argument("--taskset", default="")
     ap.add_argument("--json")
+    ap.add_argument("--time", choices=("real", "cpu"), default="real")
     argv = sys.argv[1:]
     cut = argv.index("--") if "--" in argv else len(argv)
     a = ap.parse_args(argv[:cut])
@@ -62,7 +67,7 @@ def main():
         order = [("old", a.old), ("new", a.new)] if i % 2 == 0 else [("new", a.new), ("old", a.old)]
         got = {}
         for tag, binary in order:
-            got[tag] = run(binary, extra, a.taskset)
+            got[tag] = run(binary, extra, a.taskset, f"{a.time}_time")
             print(f"round {i + 1}/{a.rounds}: {tag} done", file=sys.stderr)
         rounds.append(got)
     names = []
@@ -87,7 +92,7 @@ def main():
         print(f"{n:<58}{row['old_ms']:>9.3f}{row['new_ms']:>9.3f}{row['ratio']:>9.3f}"
               f"{counters['deform_ms']:>8.3f}{counters['collapse_ms']:>9.3f}{counters['triangles']:>9.0f}")
     if a.json:
-        Path(a.json).write_text(json.dumps({"rounds": a.rounds, "repetitions": a.repetitions,
+        Path(a.json).write_text(json.dumps({"rounds": a.rounds, "repetitions": a.repetitions, "time": a.time,
                                             "args": a.bench_args, "rows": table}, indent=1))
     return 0
 
