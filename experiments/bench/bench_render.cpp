@@ -203,7 +203,7 @@ void BM_BvhUpdate(benchmark::State& state) {
     if (rebuild) {
       m.triangle_alive[0] = static_cast<std::uint8_t>(flip ^= 1);
     } else {
-      for (auto& p : m.position) p.z() += 1e-6;
+      for (auto& z : m.position.z()) z += 1e-6;
     }
     benchmark::DoNotOptimize(bvh.update(m));
   }

@@ -115,7 +115,7 @@ TriMesh<Real> reference_deform(TriMesh<Real> m, const MeltParams& p, const KlFie
     const V ab = P[1] - P[0], ac = P[2] - P[0];
     const V n(ab.y() * ac.z() - ab.z() * ac.y(), ab.z() * ac.x() - ab.x() * ac.z(), ab.x() * ac.y() - ab.y() * ac.x());
     const V unit_n = n * reference_inverse_length(dot3(n, n));
-    m.face_normal[t] = unit_n;
+    m.face_normal.set(t, unit_n);
     for (std::size_t k = 0; k < 3; ++k) {
       const V e = P[(k + 1) % 3] - P[k];
       const auto v = static_cast<std::size_t>(m.triangle[t][k]);
@@ -127,8 +127,8 @@ TriMesh<Real> reference_deform(TriMesh<Real> m, const MeltParams& p, const KlFie
   const Real kE = static_cast<Real>(p.kE), kN = static_cast<Real>(p.kN);
   for (std::size_t v = 0; v < nv; ++v) {
     if (!m.vertex_alive[v] || count[v] == 0) {
-      m.normal[v].setZero();
-      m.displacement[v].setZero();
+      m.normal.set(v, V::Zero());
+      m.displacement.set(v, V::Zero());
       m.triangle_count[v] = count[v];
       continue;
     }
@@ -149,16 +149,16 @@ TriMesh<Real> reference_deform(TriMesh<Real> m, const MeltParams& p, const KlFie
         move = (kE * ME) * s;
         break;
     }
-    m.normal[v] = N;
-    m.displacement[v] = move;
-    m.position[v] += move;
+    m.normal.set(v, N);
+    m.displacement.set(v, move);
+    m.position.set(v, m.position[v] + move);
     m.triangle_count[v] = count[v];
   }
   return m;
 }
 
 template <class Real>
-void expect_bitwise_equal(const std::vector<Vec3<Real>>& got, const std::vector<Vec3<Real>>& want, const char* what,
+void expect_bitwise_equal(const Vec3Columns<Real>& got, const Vec3Columns<Real>& want, const char* what,
                           const std::string& where) {
   ASSERT_EQ(got.size(), want.size());
   for (std::size_t i = 0; i < got.size(); ++i)

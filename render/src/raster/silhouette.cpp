@@ -525,8 +525,8 @@ void SilhouetteRenderer::render(const sim::TriMesh<Real>& mesh, cv::Mat& out) {
   if (mesh.triangle_alive.size() != mesh.triangle.size())
     throw InputError(fmt::format("silhouette: mesh has {} triangles but {} triangle flags", mesh.triangle.size(),
                                  mesh.triangle_alive.size()));
-  impl_->render(mesh.position.data(), mesh.position.size(), mesh.triangle.data(), mesh.triangle_alive.data(),
-                mesh.triangle.size(), out);
+  const std::vector<sim::Vec3<Real>> P = mesh.position.to_vectors();  // the mesh stores x, y, z columns
+  impl_->render(P.data(), P.size(), mesh.triangle.data(), mesh.triangle_alive.data(), mesh.triangle.size(), out);
 }
 
 void SilhouetteRenderer::render(const sim::IndexedMesh& mesh, cv::Mat& out) {

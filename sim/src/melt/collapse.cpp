@@ -73,6 +73,19 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
   double* const edge_key = ws.edge_key.data();  // locals: the stores below cannot alias them
   const std::uint8_t* const alive = m.triangle_alive.data();
   const double shrink_bound = ws.shrink_bound;
+  // Corners are read from the packed copy of the positions (the same numbers as the columns;
+  // one cache line per corner instead of three, and the copy the next deformation gathers
+  // from stays in the cache). It is made current here if a repair or compaction cleared it.
+  std::vector<Real>& packed_positions = ws.packed_positions<Real>();
+  if (!ws.packed_valid || packed_positions.size() != 3 * nv + 1) {
+    pack_positions(m, packed_positions);
+    ws.packed_valid = true;
+  }
+  const Real* const packed = packed_positions.data();
+  auto corner = [packed](Index v) {
+    const Real* p = packed + 3 * static_cast<std::size_t>(v);
+    return Vec3<Real>(p[0], p[1], p[2]);
+  };
   auto mark_range = [&, edge_key, alive, skip_above, shrink_bound](std::size_t begin, std::size_t end) {
     bool local_mark = false;
     for (std::size_t t = begin; t < end; ++t) {
@@ -83,9 +96,7 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
       }
       if (edge_key[t] > skip_above || !alive[t]) continue;
       const Triangle& tri = m.triangle[t];
-      const Vec3<Real>& pa = m.position[static_cast<std::size_t>(tri[0])];
-      const Vec3<Real>& pb = m.position[static_cast<std::size_t>(tri[1])];
-      const Vec3<Real>& pc = m.position[static_cast<std::size_t>(tri[2])];
+      const Vec3<Real> pa = corner(tri[0]), pb = corner(tri[1]), pc = corner(tri[2]);
       const Vec3<Real> ab = pb - pa, bc = pc - pb, ca = pa - pc;
       const Real l2[3] = {ab.x() * ab.x() + ab.y() * ab.y() + ab.z() * ab.z(),
                           bc.x() * bc.x() + bc.y() * bc.y() + bc.z() * bc.z(),
@@ -144,15 +155,22 @@ void merge_positions(TriMesh<Real>& m, MergeMode merge, MeltWorkspace& ws) {
     }
     ++ws.cluster_size[r];
     if (merge == MergeMode::kSequentialPairwise)
-      m.position[r] = (m.position[ks] + m.position[r]) / Real(2);
+      m.position.set(r, (m.position[ks] + m.position[r]) / Real(2));
     else
-      m.position[r] += m.position[ks];
+      m.position.set(r, m.position[r] + m.position[ks]);
     m.vertex_alive[ks] = 0;
   }
+  std::vector<Real>& packed = ws.packed_positions<Real>();
+  const bool keep_packed = ws.packed_valid && packed.size() == 3 * m.vertex_slots() + 1;
   for (Index r : ws.touched_roots) {
-    auto& size = ws.cluster_size[static_cast<std::size_t>(r)];
-    if (merge == MergeMode::kClusterMean) m.position[static_cast<std::size_t>(r)] /= static_cast<Real>(size);
+    const auto rs = static_cast<std::size_t>(r);
+    auto& size = ws.cluster_size[rs];
+    if (merge == MergeMode::kClusterMean) m.position.set(rs, m.position[rs] / static_cast<Real>(size));
     size = 0;
+    if (keep_packed) {
+      const Vec3<Real> p = m.position[rs];
+      packed[3 * rs] = p.x(), packed[3 * rs + 1] = p.y(), packed[3 * rs + 2] = p.z();
+    }
   }
 }
 

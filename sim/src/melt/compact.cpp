@@ -13,6 +13,10 @@ void keep(std::vector<T>& a, const std::vector<std::uint8_t>& alive) {
   a.resize(w);
   a.shrink_to_fit();
 }
+template <class Real>
+void keep(Vec3Columns<Real>& a, const std::vector<std::uint8_t>& alive) {
+  for (int axis = 0; axis < 3; ++axis) keep(a.column(axis), alive);
+}
 }  // namespace
 
 template <class Real>
@@ -47,6 +51,8 @@ void compact_workspace(TriMesh<Real>& m, MeltWorkspace& ws) {
   if (ws.edge_key.size() == talive.size()) keep(ws.edge_key, talive);
   ws.clear_dirty();
   ws.adj.invalidate();
+  ws.schedule.invalidate();
+  ws.packed_valid = false;
   ws.dirty.assign(m.vertex_slots(), 0);
   ws.root.assign(m.vertex_slots(), 0);
   ws.cluster_size.assign(m.vertex_slots(), 0);

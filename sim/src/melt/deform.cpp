@@ -3,18 +3,30 @@
 // Every triangle contributes its unit face normal (Eq. 2.9) and, at each corner, the unit
 // edge vector to the next corner; every vertex sums them, normalises N (Eq. 2.10), takes
 // the mean M_E (Eq. 3.5) and moves by kg·kl(P)·M (Eq. 3.6, 3.8).
-// Serial: one sweep over the triangles scatters into the corners' sum records (sequential
-// reads of the triangle array, one SIMD addition per corner). Parallel: triangles compute
-// their terms, then each vertex gathers from its triangle list. Lists are kept in ascending
-// triangle order, so every vertex adds the same numbers in the same order in both modes:
-// bitwise-identical meshes (with -ffp-contract=off, see cmake/flags.cmake). A vertex's
-// triangle count is the length of its list. The vertex moves then run eight vertices at a
-// time in SIMD lanes (lanes.h), each lane with the scalar formulas' operations in their order.
+//
+// Blocks of triangles in ascending order gather their corners from a packed (x, y, z, 0)
+// copy of the positions (workspace.h), compute their terms and add each corner's terms to
+// the corner's sum record (one SIMD addition); groups of eight vertex slots move eight
+// vertices at a time in SIMD lanes (lanes.h), each lane with the scalar formulas'
+// operations in their order, read the old positions from the packed copy and write the new
+// ones to it and to the columns. A one-part (serial) sweep clears all sum records first,
+// adds all triangles and then moves every group in ascending order. A sweep in parts
+// (deform_schedule.h), whose groups clear their records as they move,
+// runs parts of the blocks side by side, and a group moves right after the block that
+// completes its sums; vertices whose triangles lie in more than one part gather their sums
+// afterwards from their triangles' stored terms, in the same ascending triangle order as
+// the serial sweep adds them. Every vertex therefore adds the same numbers in the same
+// order whatever the execution: bitwise-identical meshes (with -ffp-contract=off, see
+// cmake/flags.cmake). A vertex's triangle count is the length of its list.
 
+#include "deform_schedule.h"
 #include "triangle_kernels.h"
 #include "workspace.h"
 
 #include <meltlab/core/error.h>
+
+#include <tbb/global_control.h>
+#include <tbb/partitioner.h>
 
 #include <algorithm>
 #include <cstring>
@@ -24,69 +36,6 @@
 namespace meltlab::sim {
 
 namespace {
-
-// Serial: blocks of triangles compute their terms, then scatter into the corners' sum
-// records in ascending triangle order.
-template <class Real>
-void accumulate_serial(TriMesh<Real>& m, std::vector<VertexSums<Real>>& sums) {
-  const std::size_t nt = m.triangle_slots();
-  sums.assign(m.vertex_slots(), VertexSums<Real>{});
-  TriangleBlockTerms<Real> b;
-  for (std::size_t first = 0; first < nt; first += kTriangleBlock) {
-    const std::size_t count = std::min(kTriangleBlock, nt - first);
-    triangle_block_terms(m, first, count, b);
-    for (std::size_t i = 0; i < count; ++i) {
-      const std::size_t t = first + i;
-      if (!m.triangle_alive[t]) continue;
-      m.face_normal[t] = Vec3<Real>(b.nx[i], b.ny[i], b.nz[i]);
-      const Triangle& tri = m.triangle[t];
-      for (std::size_t k = 0; k < 3; ++k)
-        sums[static_cast<std::size_t>(tri[k])].lane +=
-            Lanes<Real>{b.nx[i], b.ny[i], b.nz[i], b.ex[k][i], b.ey[k][i], b.ez[k][i], 0, 0};
-    }
-  }
-}
-
-// Parallel: blocks of triangles store their terms, then every vertex gathers its triangles
-// from its (ascending) list — the same additions in the same order as above.
-template <class Real>
-void accumulate_parallel(TriMesh<Real>& m, Execution exec, const VertexTriangles& adj,
-                         std::vector<TriangleTerms<Real>>& terms, std::vector<VertexSums<Real>>& sums) {
-  const std::size_t nt = m.triangle_slots();
-  terms.resize(nt);
-  sums.resize(m.vertex_slots());
-  const std::size_t blocks = (nt + kTriangleBlock - 1) / kTriangleBlock;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, kParallelGrain / kTriangleBlock),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      TriangleBlockTerms<Real> b;
-                      for (std::size_t blk = r.begin(); blk < r.end(); ++blk) {
-                        const std::size_t first = blk * kTriangleBlock;
-                        const std::size_t count = std::min(kTriangleBlock, nt - first);
-                        triangle_block_terms(m, first, count, b);
-                        for (std::size_t i = 0; i < count; ++i) {
-                          TriangleTerms<Real>& out = terms[first + i];
-                          out.normal = Vec3<Real>(b.nx[i], b.ny[i], b.nz[i]);
-                          for (std::size_t k = 0; k < 3; ++k)
-                            out.edge[k] = Vec3<Real>(b.ex[k][i], b.ey[k][i], b.ez[k][i]);
-                          if (m.triangle_alive[first + i]) m.face_normal[first + i] = out.normal;
-                        }
-                      }
-                    });
-  for_range(exec, m.vertex_slots(), [&](std::size_t begin, std::size_t end) {
-    for (std::size_t v = begin; v < end; ++v) {
-      Vec3<Real> N = Vec3<Real>::Zero();
-      Vec3<Real> M = Vec3<Real>::Zero();
-      if (m.vertex_alive[v]) {
-        for (Index t : adj.of(static_cast<Index>(v))) {
-          const auto ts = static_cast<std::size_t>(t);
-          N += terms[ts].normal;
-          M += terms[ts].edge[corner_of(m.triangle[ts], static_cast<Index>(v))];
-        }
-      }
-      sums[v].lane = Lanes<Real>{N.x(), N.y(), N.z(), M.x(), M.y(), M.z(), 0, 0};
-    }
-  });
-}
 
 // The constants of the vertex moves.
 template <class Real>
@@ -98,13 +47,15 @@ struct MoveConstants {
 // Lanes of eight vertex slots: the inputs and outputs of move_group().
 template <class Real>
 struct VertexGroup {
-  const VertexSums<Real>* sums;  // 8 records
-  const Index* count;            // triangles per vertex
+  VertexSums<Real>* sums;  // 8 records, read (and cleared for the next cycle if `clear_sums`)
+  bool clear_sums;
+  const Index* count;  // triangles per vertex
   const std::uint8_t* alive;
-  Real* position;         // 8 packed xyz triples (in and out)
-  Real* normal;           // out: 8 triples
-  Real* displacement;     // out: 8 triples
+  Real *px, *py, *pz;     // out: positions, 8 per column
+  Real *nx, *ny, *nz;     // out: normals
+  Real *mx, *my, *mz;     // out: displacements
   Index* triangle_count;  // out
+  Real* packed;           // positions as 8 packed triples (in and out)
 };
 
 // Moves eight vertices (Eq. 2.10, 3.5, 3.6, 3.8) with lane arithmetic: every lane runs the
@@ -120,6 +71,8 @@ inline void move_group(const MoveConstants<Real>& c, const VertexGroup<Real>& g,
   using Mask = LaneMask<Real>;
   L rec[kLanes], col[kLanes];
   for (std::size_t i = 0; i < kLanes; ++i) rec[i] = g.sums[i].lane;
+  if (g.clear_sums)
+    for (std::size_t i = 0; i < kLanes; ++i) g.sums[i].lane = L{};
   transpose8<Real>(rec, col);
   typename LaneTypes<Index>::Value count8;  // 8 triangle counts, converted to Real below
   std::memcpy(&count8, g.count, sizeof(count8));
@@ -156,11 +109,13 @@ inline void move_group(const MoveConstants<Real>& c, const VertexGroup<Real>& g,
   const L zero{};
   mx = has ? mx : zero, my = has ? my : zero, mz = has ? mz : zero;
   L px, py, pz;
-  deinterleave3<Real>(g.position, px, py, pz);
+  deinterleave3<Real>(g.packed, px, py, pz);
   px = has ? px + mx : px, py = has ? py + my : py, pz = has ? pz + mz : pz;  // Eq. 3.8
-  interleave3<Real>(g.position, px, py, pz);
-  interleave3<Real>(g.normal, has ? Nx : zero, has ? Ny : zero, has ? Nz : zero);
-  interleave3<Real>(g.displacement, mx, my, mz);
+  store_lanes<Real>(g.px, px), store_lanes<Real>(g.py, py), store_lanes<Real>(g.pz, pz);
+  interleave3<Real>(g.packed, px, py, pz);
+  store_lanes<Real>(g.nx, has ? Nx : zero), store_lanes<Real>(g.ny, has ? Ny : zero);
+  store_lanes<Real>(g.nz, has ? Nz : zero);
+  store_lanes<Real>(g.mx, mx), store_lanes<Real>(g.my, my), store_lanes<Real>(g.mz, mz);
   for (std::size_t i = 0; i < kLanes; ++i) g.triangle_count[i] = g.alive[i] ? g.count[i] : 0;
   max_move = lane_max<Real>(max_move,
                             lane_max<Real>(lane_max<Real>(lane_abs<Real>(mx), lane_abs<Real>(my)), lane_abs<Real>(mz)));
@@ -168,88 +123,217 @@ inline void move_group(const MoveConstants<Real>& c, const VertexGroup<Real>& g,
   max_coord = lane_max<Real>(max_coord, has ? coord : zero);
 }
 
-// Moves every vertex from its sums, eight slots at a time (the last few of a range through
-// padded copies, so every vertex runs the same code); returns a bound on how far any vertex
-// moved: the largest |move| plus the rounding of P + move (half an ulp of the largest
-// coordinate per component). `scale_at` is kg·kl: one number for a constant kl, else a
-// function of the vertex slot, called for the vertices that move.
+// What the sweep of one cycle shares between its parts.
+template <class Real, class ScaleAt>
+struct Sweep {
+  TriMesh<Real>& m;
+  MoveConstants<Real> c;
+  VertexSums<Real>* sums;
+  bool clear_sums;      // the moves clear the records they read (a sweep in parts)
+  const Index* counts;  // triangles per vertex (the list lengths)
+  const VertexTriangles& adj;
+  const DeformSchedule& plan;
+  Real* packed;                       // positions as packed triples: gathered, then written by the moves
+  TriangleTerms<Real>* stored_terms;  // terms of the triangles of halo vertices
+  const ScaleAt& scale_at;            // kg·kl: a number, or a function of the vertex slot
+};
+
+// Per-thread maxima of |move| and |P| (lanes), for the short-edge skip bound.
+template <class Real>
+struct MoveMaxima {
+  Lanes<Real> move{}, coord{};
+};
+
+// Moves group g (vertex slots [8g, 8g + 8), the last group through padded copies so that
+// every vertex runs the same code).
 template <class Real, DeformMode kMode, class ScaleAt>
-double move_vertices(TriMesh<Real>& m, const MeltParams& p, Execution exec, const VertexTriangles& adj,
-                     const std::vector<VertexSums<Real>>& sums, const ScaleAt& scale_at) {
-  const MoveConstants<Real> c{static_cast<Real>(p.kE), static_cast<Real>(p.kN), p.edge_sum == EdgeSumMode::kMean,
-                              p.tie == TieRule::kLessEqual};
-  const std::span<const Index> counts = adj.counts();
-  std::atomic<double> max_move{0.0}, max_coord{0.0};
-  auto atomic_max = [](std::atomic<double>& a, double x) {
-    double cur = a.load(std::memory_order_relaxed);
-    while (x > cur && !a.compare_exchange_weak(cur, x, std::memory_order_relaxed)) {
+void move_group_at(const Sweep<Real, ScaleAt>& w, std::size_t g, MoveMaxima<Real>& mx) {
+  TriMesh<Real>& m = w.m;
+  auto scale = [&](std::size_t v, const Index* count, const std::uint8_t* alive) {
+    if constexpr (std::is_arithmetic_v<ScaleAt>) {
+      return broadcast<Real>(w.scale_at);
+    } else {
+      Lanes<Real> s{};
+      for (std::size_t i = 0; i < kLanes; ++i)
+        if (alive[i] && count[i] > 0) s[i] = w.scale_at(v + i);
+      return s;
     }
   };
-  for_range(exec, m.vertex_slots(), [&](std::size_t begin, std::size_t end) {
-    Lanes<Real> lane_move{}, lane_coord{};
-    auto scale = [&](std::size_t v, const Index* count, const std::uint8_t* alive) {
-      if constexpr (std::is_arithmetic_v<ScaleAt>) {
-        return broadcast<Real>(scale_at);
-      } else {
-        Lanes<Real> s{};
-        for (std::size_t i = 0; i < kLanes; ++i)
-          if (alive[i] && count[i] > 0) s[i] = scale_at(v + i);
-        return s;
-      }
-    };
-    std::size_t v = begin;
-    for (; v + kLanes <= end; v += kLanes) {
-      const VertexGroup<Real> g{&sums[v],
-                                &counts[v],
-                                &m.vertex_alive[v],
-                                m.position[v].data(),
-                                m.normal[v].data(),
-                                m.displacement[v].data(),
-                                &m.triangle_count[v]};
-      move_group<Real, kMode>(c, g, scale(v, g.count, g.alive), lane_move, lane_coord);
+  Real* const P[3] = {m.position.x().data(), m.position.y().data(), m.position.z().data()};
+  Real* const N[3] = {m.normal.x().data(), m.normal.y().data(), m.normal.z().data()};
+  Real* const D[3] = {m.displacement.x().data(), m.displacement.y().data(), m.displacement.z().data()};
+  const std::size_t v = g * kLanes;
+  const std::size_t n = std::min(kLanes, m.vertex_slots() - v);
+  if (n == kLanes) {
+    const VertexGroup<Real> grp{
+        &w.sums[v],      w.clear_sums, &w.counts[v], &m.vertex_alive[v], P[0] + v, P[1] + v, P[2] + v,
+        N[0] + v,        N[1] + v,     N[2] + v,     D[0] + v,           D[1] + v, D[2] + v, &m.triangle_count[v],
+        w.packed + 3 * v};
+    move_group<Real, kMode>(w.c, grp, scale(v, grp.count, grp.alive), mx.move, mx.coord);
+    return;
+  }
+  VertexSums<Real> pad_sums[kLanes] = {};
+  Index pad_count[kLanes] = {}, pad_tcount[kLanes] = {};
+  std::uint8_t pad_alive[kLanes] = {};
+  Real pad_p[3][kLanes], pad_n[3][kLanes], pad_d[3][kLanes];
+  Real pad_packed[3 * kLanes] = {};
+  std::copy_n(&w.sums[v], n, pad_sums);
+  if (w.clear_sums) std::fill_n(&w.sums[v], n, VertexSums<Real>{});
+  std::copy_n(&w.counts[v], n, pad_count);
+  std::copy_n(&m.vertex_alive[v], n, pad_alive);
+  std::copy_n(w.packed + 3 * v, 3 * n, pad_packed);
+  move_group<Real, kMode>(w.c,
+                          {pad_sums, false, pad_count, pad_alive, pad_p[0], pad_p[1], pad_p[2], pad_n[0], pad_n[1],
+                           pad_n[2], pad_d[0], pad_d[1], pad_d[2], pad_tcount, pad_packed},
+                          scale(v, pad_count, pad_alive), mx.move, mx.coord);
+  for (int a = 0; a < 3; ++a) {
+    std::copy_n(pad_p[a], n, P[a] + v);
+    std::copy_n(pad_n[a], n, N[a] + v);
+    std::copy_n(pad_d[a], n, D[a] + v);
+  }
+  std::copy_n(pad_tcount, n, &m.triangle_count[v]);
+  std::copy_n(pad_packed, 3 * n, w.packed + 3 * v);
+}
+
+// Block b of the sweep: its triangles' terms, face normals, stored terms for halo vertices,
+// and the additions into the sums of the corners that are not halo vertices (kHalo: the
+// sweep has halo vertices at all).
+template <bool kHalo, class Real, class ScaleAt>
+void sweep_block(const Sweep<Real, ScaleAt>& w, std::size_t b, TriangleBlockTerms<Real>& terms) {
+  TriMesh<Real>& m = w.m;
+  const std::size_t first = b * kTriangleBlock;
+  const std::size_t count = std::min(kTriangleBlock, m.triangle_slots() - first);
+  triangle_block_terms(m, w.packed, first, count, terms);
+  Real* const FN[3] = {m.face_normal.x().data(), m.face_normal.y().data(), m.face_normal.z().data()};
+  const std::uint8_t* const alive = m.triangle_alive.data();
+  for (std::size_t i = 0; i < count; ++i) {  // dead slots keep their face normal
+    FN[0][first + i] = alive[first + i] ? terms.nx[i] : FN[0][first + i];
+    FN[1][first + i] = alive[first + i] ? terms.ny[i] : FN[1][first + i];
+    FN[2][first + i] = alive[first + i] ? terms.nz[i] : FN[2][first + i];
+  }
+  const bool store = kHalo && w.plan.block_stores_terms(b);
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::size_t t = first + i;
+    if (!alive[t]) continue;
+    if (store && w.plan.stores_terms(t)) {
+      TriangleTerms<Real>& out = w.stored_terms[t];
+      out.normal = Vec3<Real>(terms.nx[i], terms.ny[i], terms.nz[i]);
+      for (std::size_t k = 0; k < 3; ++k) out.edge[k] = Vec3<Real>(terms.ex[k][i], terms.ey[k][i], terms.ez[k][i]);
     }
-    if (v < end) {  // the last n < 8 slots, through padded copies (padding lanes are dead)
-      const std::size_t n = end - v;
-      VertexSums<Real> pad_sums[kLanes] = {};
-      Index pad_count[kLanes] = {}, pad_tcount[kLanes] = {};
-      std::uint8_t pad_alive[kLanes] = {};
-      Real pad_pos[3 * kLanes] = {}, pad_normal[3 * kLanes], pad_disp[3 * kLanes];
-      std::copy_n(&sums[v], n, pad_sums);
-      std::copy_n(&counts[v], n, pad_count);
-      std::copy_n(&m.vertex_alive[v], n, pad_alive);
-      std::copy_n(m.position[v].data(), 3 * n, pad_pos);
-      move_group<Real, kMode>(c, {pad_sums, pad_count, pad_alive, pad_pos, pad_normal, pad_disp, pad_tcount},
-                              scale(v, pad_count, pad_alive), lane_move, lane_coord);
-      std::copy_n(pad_pos, 3 * n, m.position[v].data());
-      std::copy_n(pad_normal, 3 * n, m.normal[v].data());
-      std::copy_n(pad_disp, 3 * n, m.displacement[v].data());
-      std::copy_n(pad_tcount, n, &m.triangle_count[v]);
+    const Triangle& tri = m.triangle[t];
+    for (std::size_t k = 0; k < 3; ++k) {
+      if (kHalo && w.plan.halo_vertex(tri[k])) continue;
+      w.sums[static_cast<std::size_t>(tri[k])].lane +=
+          Lanes<Real>{terms.nx[i], terms.ny[i], terms.nz[i], terms.ex[k][i], terms.ey[k][i], terms.ez[k][i], 0, 0};
     }
+  }
+}
+
+// Part p of the sweep: its blocks in ascending order, each followed by the groups it
+// completes.
+template <bool kHalo, DeformMode kMode, class Real, class ScaleAt>
+void sweep_part(const Sweep<Real, ScaleAt>& w, std::size_t p, MoveMaxima<Real>& mx) {
+  TriangleBlockTerms<Real> terms;
+  for (std::size_t b = w.plan.part_first_block(p); b < w.plan.part_first_block(p + 1); ++b) {
+    sweep_block<kHalo>(w, b, terms);
+    for (std::int32_t g : w.plan.ready_after(b)) move_group_at<Real, kMode>(w, static_cast<std::size_t>(g), mx);
+  }
+}
+
+// A halo group: each vertex gathers its sums from the stored terms of its triangles in
+// ascending order (the additions of the serial sweep), then the group moves.
+template <DeformMode kMode, class Real, class ScaleAt>
+void halo_group(const Sweep<Real, ScaleAt>& w, std::size_t g, MoveMaxima<Real>& mx) {
+  const TriMesh<Real>& m = w.m;
+  const std::size_t end = std::min(m.vertex_slots(), (g + 1) * kLanes);
+  for (std::size_t v = g * kLanes; v < end; ++v) {
+    if (!m.vertex_alive[v]) continue;
+    Vec3<Real> N = Vec3<Real>::Zero(), M = Vec3<Real>::Zero();
+    for (Index t : w.adj.of(static_cast<Index>(v))) {
+      const TriangleTerms<Real>& terms = w.stored_terms[static_cast<std::size_t>(t)];
+      N += terms.normal;
+      M += terms.edge[corner_of(m.triangle[static_cast<std::size_t>(t)], static_cast<Index>(v))];
+    }
+    w.sums[v].lane = Lanes<Real>{N.x(), N.y(), N.z(), M.x(), M.y(), M.z(), 0, 0};
+  }
+  move_group_at<Real, kMode>(w, g, mx);
+}
+
+// The sweep of one cycle; returns a bound on how far any vertex moved: the largest |move|
+// plus the rounding of P + move (half an ulp of the largest coordinate per component).
+template <DeformMode kMode, class Real, class ScaleAt>
+double sweep(const Sweep<Real, ScaleAt>& w, std::size_t parts, Execution exec) {
+  std::atomic<double> max_move{0.0}, max_coord{0.0};
+  auto publish = [&](const MoveMaxima<Real>& mx) {
     Real local_move = 0, local_coord = 0;
     for (std::size_t i = 0; i < kLanes; ++i) {
-      local_move = std::max(local_move, lane_move[i]);
-      local_coord = std::max(local_coord, lane_coord[i]);
+      local_move = std::max(local_move, mx.move[i]);
+      local_coord = std::max(local_coord, mx.coord[i]);
     }
+    auto atomic_max = [](std::atomic<double>& a, double x) {
+      double cur = a.load(std::memory_order_relaxed);
+      while (x > cur && !a.compare_exchange_weak(cur, x, std::memory_order_relaxed)) {
+      }
+    };
     atomic_max(max_move, static_cast<double>(local_move));
     atomic_max(max_coord, static_cast<double>(local_coord));
-  });
+  };
+  const DeformSchedule& plan = w.plan;
+  if (parts == 1) {
+    // One part: every triangle adds into its corners' records, then every group moves, in
+    // ascending order (the vertex arrays stream through the cache once, which measured faster
+    // than moving each group right after its last triangle; the corners were gathered from
+    // the packed copy of the old positions, so the order of the moves does not matter).
+    MoveMaxima<Real> mx;
+    TriangleBlockTerms<Real> terms;
+    const std::size_t blocks = (w.m.triangle_slots() + kTriangleBlock - 1) / kTriangleBlock;
+    for (std::size_t b = 0; b < blocks; ++b) sweep_block<false>(w, b, terms);
+    const std::size_t groups = (w.m.vertex_slots() + kGroup - 1) / kGroup;
+    for (std::size_t g = 0; g < groups; ++g) move_group_at<Real, kMode>(w, g, mx);
+    publish(mx);
+  } else {
+    auto run_parts = [&](const tbb::blocked_range<std::size_t>& r) {
+      MoveMaxima<Real> mx;
+      for (std::size_t p = r.begin(); p < r.end(); ++p) sweep_part<true, kMode>(w, p, mx);
+      publish(mx);
+    };
+    const tbb::blocked_range<std::size_t> all(0, plan.parts(), 1);
+    if (exec == Execution::kSerial)
+      run_parts(all);
+    else
+      tbb::parallel_for(all, run_parts, tbb::simple_partitioner());
+    const auto halo = plan.halo_groups();
+    for_range(exec, halo.size(), [&](std::size_t begin, std::size_t end) {
+      MoveMaxima<Real> mx;
+      for (std::size_t i = begin; i < end; ++i) halo_group<kMode>(w, static_cast<std::size_t>(halo[i]), mx);
+      publish(mx);
+    });
+  }
   // |move| <= sqrt(3) * max component; rounding of each component <= eps * |coordinate|.
   constexpr double kSqrt3 = 1.7320508075688772;
   return kSqrt3 * (max_move.load() + static_cast<double>(std::numeric_limits<Real>::epsilon()) * max_coord.load());
 }
 
 template <class Real, class ScaleAt>
-double move_vertices(TriMesh<Real>& m, const MeltParams& p, Execution exec, const VertexTriangles& adj,
-                     const std::vector<VertexSums<Real>>& sums, const ScaleAt& scale_at) {
-  switch (p.deform) {
+double sweep(const Sweep<Real, ScaleAt>& w, DeformMode mode, std::size_t parts, Execution exec) {
+  switch (mode) {
     case DeformMode::kCombined:
-      return move_vertices<Real, DeformMode::kCombined>(m, p, exec, adj, sums, scale_at);
+      return sweep<DeformMode::kCombined>(w, parts, exec);
     case DeformMode::kNormalOnly:
-      return move_vertices<Real, DeformMode::kNormalOnly>(m, p, exec, adj, sums, scale_at);
+      return sweep<DeformMode::kNormalOnly>(w, parts, exec);
     case DeformMode::kEdgeOnly:
-      return move_vertices<Real, DeformMode::kEdgeOnly>(m, p, exec, adj, sums, scale_at);
+      return sweep<DeformMode::kEdgeOnly>(w, parts, exec);
   }
   throw std::logic_error("deform: unknown DeformMode");
+}
+
+// Parts of a parallel sweep: one per thread TBB may use (1 for a serial sweep or a mesh too
+// small to split), unless the workspace asks for a number.
+std::size_t sweep_parts(Execution exec, std::size_t triangles, std::size_t requested) {
+  if (requested > 0) return requested;
+  if (exec == Execution::kSerial || triangles < 2 * kParallelGrain) return 1;
+  const std::size_t threads = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+  return std::max<std::size_t>(1, std::min(threads, triangles / kParallelGrain));
 }
 
 }  // namespace
@@ -257,19 +341,45 @@ double move_vertices(TriMesh<Real>& m, const MeltParams& p, Execution exec, cons
 template <class Real>
 void deform_pass(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execution exec, MeltWorkspace& ws) {
   prepare_workspace(ws, m);
-  std::vector<VertexSums<Real>>& sums = ws.vertex_sums<Real>();
-  if (exec == Execution::kSerial || m.triangle_slots() < 2 * kParallelGrain)
-    accumulate_serial(m, sums);
+  // One part needs no schedule (see sweep()); it is rebuilt when parts are asked for again.
+  const std::size_t parts = sweep_parts(exec, m.triangle_slots(), ws.deform_parts);
+  if (parts == 1)
+    ws.schedule.invalidate();
   else
-    accumulate_parallel(m, exec, ws.adj, ws.triangle_terms<Real>(), sums);
+    ws.schedule.update(m, ws.adj, parts);
+  // The sums start at zero. One part clears them all first (as one memset, which measured
+  // faster on the 75k bunny in double than clearing each group's records in its move: the
+  // records are written without being read); a sweep in parts clears each group's records
+  // when it moves (the records are then already zero at the next parallel cycle).
+  std::vector<VertexSums<Real>>& sums = ws.vertex_sums<Real>();
+  const bool clear_in_moves = parts > 1;
+  if (!clear_in_moves || !ws.sums_zero)
+    sums.assign(m.vertex_slots(), VertexSums<Real>{});
+  else
+    sums.resize(m.vertex_slots());  // new slots are zero
+  ws.sums_zero = clear_in_moves;
+  std::vector<TriangleTerms<Real>>& stored = ws.triangle_terms<Real>();
+  if (parts > 1 && !ws.schedule.halo_groups().empty() && stored.size() < m.triangle_slots())
+    stored.resize(m.triangle_slots());
+  const MoveConstants<Real> c{static_cast<Real>(p.kE), static_cast<Real>(p.kN), p.edge_sum == EdgeSumMode::kMean,
+                              p.tie == TieRule::kLessEqual};
+  const Index* counts = ws.adj.counts().data();
+  std::vector<Real>& packed = ws.packed_positions<Real>();
+  if (!ws.packed_valid || packed.size() != 3 * m.vertex_slots() + 1) pack_positions(m, packed);
+  ws.packed_valid = true;  // the moves keep it up to date
   // A constant kl costs nothing per vertex: s = kg·kl is folded into one number.
   if (kl.is_constant()) {
     const auto s = static_cast<Real>(p.kg * kl.value(Vec3<double>::Zero()));
-    ws.cycle_move_bound = move_vertices(m, p, exec, ws.adj, sums, s);
+    const Sweep<Real, Real> w{m,      c,           sums.data(),   clear_in_moves, counts,
+                              ws.adj, ws.schedule, packed.data(), stored.data(),  s};
+    ws.cycle_move_bound = sweep(w, p.deform, parts, exec);
   } else {
-    ws.cycle_move_bound = move_vertices(m, p, exec, ws.adj, sums, [&](std::size_t v) {
+    auto scale_at = [&](std::size_t v) {
       return static_cast<Real>(p.kg * kl.value(m.position[v].template cast<double>()));
-    });
+    };
+    const Sweep<Real, decltype(scale_at)> w{m,      c,           sums.data(),   clear_in_moves, counts,
+                                            ws.adj, ws.schedule, packed.data(), stored.data(),  scale_at};
+    ws.cycle_move_bound = sweep(w, p.deform, parts, exec);
   }
 }
 

@@ -55,6 +55,7 @@ std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws) {
     }
   }
   if (removed == 0) return 0;
+  ws.schedule.invalidate();
   for (std::size_t t = 0; t < nt; ++t)
     if (m.triangle_alive[t] && doomed[static_cast<std::size_t>(find_root(parent, m.triangle[t][0]))])
       m.triangle_alive[t] = 0;

@@ -186,7 +186,7 @@ class Repairer {
       const Vec3<Real> p = m_.position[vs];
       const Vec3<Real> n = m_.normal[vs];
       const Index u = m_.add_vertex(p);
-      m_.normal[static_cast<std::size_t>(u)] = n;
+      m_.normal.set(static_cast<std::size_t>(u), n);
       m_.triangle_count[static_cast<std::size_t>(u)] = static_cast<Index>(cycles[c].size());
       for (Index t : cycles[c]) {
         Triangle& tri = m_.triangle[static_cast<std::size_t>(t)];
@@ -205,7 +205,7 @@ class Repairer {
     const Index keep = std::min(v, x), gone = std::max(v, x);
     const auto ks = static_cast<std::size_t>(keep), gs = static_cast<std::size_t>(gone);
     const std::vector<Index> tg = live_triangles_of(gone);
-    m_.position[ks] = (m_.position[ks] + m_.position[gs]) / Real(2);
+    m_.position.set(ks, (m_.position[ks] + m_.position[gs]) / Real(2));
     m_.vertex_alive[gs] = 0;
     m_.reindex[gs] = keep;
     std::vector<Index> moved;
@@ -271,6 +271,8 @@ void repair_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report) {
     repairer.run(bad);
     prepare_workspace(ws, m);
     invalidate_edge_keys(ws);  // rare: vertices moved and triangles changed
+    ws.schedule.invalidate();
+    ws.packed_valid = false;
   }
   for (Index v : ws.dirty_list)
     if (m.vertex_alive[static_cast<std::size_t>(v)])

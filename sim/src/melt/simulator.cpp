@@ -62,6 +62,11 @@ void MeltSimulator<Real>::set_params(const MeltParams& p) {
 }
 
 template <class Real>
+void MeltSimulator<Real>::set_sweep_parts(std::size_t parts) {
+  ws_->deform_parts = parts;
+}
+
+template <class Real>
 bool MeltSimulator<Real>::empty() const {
   return std::find(mesh_.triangle_alive.begin(), mesh_.triangle_alive.end(), 1) == mesh_.triangle_alive.end();
 }
@@ -90,6 +95,7 @@ CycleReport MeltSimulator<Real>::step() {
     if (params_.repair) repair_pass(mesh_, ws, r);
     r.repair_ms = ms_since(t);
   }
+  ws.schedule.touch(ws.dirty_list);  // their triangle lists changed
   ws.clear_dirty();
   if (params_.remnant_check_every > 0 && (cycle_ + 1) % params_.remnant_check_every == 0) {
     r.inverted_parts_removed = remove_inverted_parts_pass(mesh_, ws);

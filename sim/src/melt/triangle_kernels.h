@@ -1,6 +1,7 @@
 #pragma once
 // Private to the melt cycle: the per-triangle arithmetic of Alg. 1, computed a
-// block of triangles at a time. Positions are first gathered into structure-of-arrays
+// block of triangles at a time. Corner positions are first gathered (from a packed copy of
+// the position columns) into structure-of-arrays
 // buffers, then plain loops over them do the arithmetic (the compiler turns these into
 // SIMD instructions: sqrt and division are exactly rounded in SIMD too, and contraction is
 // off, so the result of every element is the same as a scalar evaluation). Serial and
@@ -13,6 +14,7 @@
 #include <limits>
 #include <cstddef>
 #include <cstring>
+#include <vector>
 
 namespace meltlab::sim {
 
@@ -38,31 +40,44 @@ inline Real inverse_length(Real n2) {
   return n2 > Real(0) ? inv : Real(0);
 }
 
-/// Triangles [first, first + count) of `m`. A dead slot reads vertex 0 at all three corners:
-/// a point, whose normal and edges inverse_length() turns into zero terms.
+/// Copies the position columns of `m` into `out` as packed triples (x, y, z of vertex v at
+/// out[3v], out[3v + 1], out[3v + 2]) followed by one padding number, so that every vertex's
+/// triple can be read as four numbers (the next vertex's x, or the padding, as the fourth).
 template <class Real>
-inline void triangle_block_terms(const TriMesh<Real>& m, std::size_t first, std::size_t count,
+inline void pack_positions(const TriMesh<Real>& m, std::vector<Real>& out) {
+  const std::size_t n = m.vertex_slots();
+  out.resize(3 * n + 1);
+  const Real* X = m.position.x().data();
+  const Real* Y = m.position.y().data();
+  const Real* Z = m.position.z().data();
+  Real* o = out.data();
+  for (std::size_t v = 0; v < n; ++v) {
+    o[3 * v] = X[v];
+    o[3 * v + 1] = Y[v];
+    o[3 * v + 2] = Z[v];
+  }
+  o[3 * n] = Real(0);
+}
+
+/// Triangles [first, first + count) of `m`, with corner positions read from `packed` (the
+/// positions of `m` as pack_positions() lays them out). A dead slot reads vertex 0 at all
+/// three corners: a point, whose normal and edges inverse_length() turns into zero terms.
+template <class Real>
+inline void triangle_block_terms(const TriMesh<Real>& m, const Real* packed, std::size_t first, std::size_t count,
                                  TriangleBlockTerms<Real>& out) {
-  // Corner positions as four-number records (x, y, z, pad): one 16/32-byte copy per corner
-  // that reads the next vertex's x as padding — every vertex but the last has a next one.
+  // Corners copied as four-number records (one 16/32-byte load each: the packed triple and
+  // the number after it), then split into x, y, z arrays for the arithmetic below, which
+  // vectorises over them.
   Real p[3][kTriangleBlock][4];
-  const std::size_t nv = m.vertex_slots();
-  static_assert(sizeof(Vec3<Real>) == 3 * sizeof(Real), "positions must be packed xyz triples");
-  const Real* positions = nv > 0 ? m.position[0].data() : nullptr;
   out.count = count;
   for (std::size_t i = 0; i < count; ++i) {
     const std::size_t t = first + i;
     const bool alive = m.triangle_alive[t] != 0;
     for (std::size_t k = 0; k < 3; ++k) {
       const std::size_t v = alive ? static_cast<std::size_t>(m.triangle[t][k]) : 0;
-      if (v + 1 < nv) [[likely]]
-        std::memcpy(p[k][i], positions + 3 * v, 4 * sizeof(Real));
-      else
-        std::memcpy(p[k][i], positions + 3 * v, 3 * sizeof(Real));
+      std::memcpy(p[k][i], packed + 3 * v, 4 * sizeof(Real));
     }
   }
-  // Split into x, y, z arrays for the arithmetic below, which vectorises over them (reading
-  // the records in place there measured slower).
   Real px[3][kTriangleBlock], py[3][kTriangleBlock], pz[3][kTriangleBlock];
   for (std::size_t k = 0; k < 3; ++k)
     for (std::size_t i = 0; i < count; ++i) {

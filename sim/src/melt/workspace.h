@@ -3,7 +3,9 @@
 // per-triangle unit edges) and helpers shared by the passes. Not installed.
 
 #include "adjacency.h"
+#include "deform_schedule.h"
 #include "lanes.h"
+#include "triangle_kernels.h"
 
 #include <meltlab/sim/melt.h>
 
@@ -44,15 +46,31 @@ static_assert(sizeof(VertexSums<float>) == kLanes * sizeof(float));
 static_assert(sizeof(VertexSums<double>) == kLanes * sizeof(double));
 
 struct MeltWorkspace {
-  VertexTriangles adj;  ///< triangles of every vertex, ascending; kept up to date by every pass
+  VertexTriangles adj;      ///< triangles of every vertex, ascending; kept up to date by every pass
+  DeformSchedule schedule;  ///< the order of the deformation sweep (deform_schedule.h)
+  /// Parts of the deformation sweep: 0 = one per thread TBB may use (1 for a serial cycle or
+  /// a small mesh); tests set it to exercise other partitions (any count gives the same mesh).
+  std::size_t deform_parts = 0;
 
-  // Parallel deform: per-triangle terms (unit normal + 3 unit edges), one record per triangle
-  // so a vertex's gather touches one cache line per triangle.
+  // Deform: terms (unit normal + 3 unit edges) of the triangles whose corners include a halo
+  // vertex of a parallel sweep, indexed by triangle slot (only those slots are written).
   std::vector<TriangleTerms<float>> terms_f;
   std::vector<TriangleTerms<double>> terms_d;
-  // Deform: per-vertex sums (serial scatter or parallel gather), read by the vertex moves.
+  // Deform: per-vertex sums. A one-part sweep clears them first; a sweep in parts relies on
+  // them being zero (`sums_zero`: its groups clear their records when they move).
   std::vector<VertexSums<float>> sums_f;
   std::vector<VertexSums<double>> sums_d;
+  bool sums_zero = false;
+  // Deform and collapse: a copy of the positions as packed triples (pack_positions()), from
+  // which the sweep gathers triangle corners and the short-edge test reads them (one load per
+  // corner instead of three from the columns). The vertex moves read the old positions from
+  // it and write the new ones to it and to the columns (a vertex moves after its last
+  // triangle, so no gather needs the old value afterwards); the collapse pass writes the roots
+  // it moves; any other change of positions (repair, compaction) clears `packed_valid`, and
+  // the next pass that reads it copies all positions again.
+  std::vector<float> packed_f;
+  std::vector<double> packed_d;
+  bool packed_valid = false;
 
   // Conservative skip of the short-edge test. An edge shrinks per cycle by at most twice the
   // largest vertex move (plus rounding of the position update). `edge_key[t]` is t's shortest
@@ -79,6 +97,13 @@ struct MeltWorkspace {
       return terms_f;
     else
       return terms_d;
+  }
+  template <class Real>
+  std::vector<Real>& packed_positions() {
+    if constexpr (std::is_same_v<Real, float>)
+      return packed_f;
+    else
+      return packed_d;
   }
   template <class Real>
   std::vector<VertexSums<Real>>& vertex_sums() {

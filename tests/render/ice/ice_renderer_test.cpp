@@ -369,7 +369,7 @@ TEST(MeshBvh, RefitsWhenOnlyPositionsMoveAndRebuildsOtherwise) {
   ASSERT_TRUE(bvh.intersect(Vector3d(0, 0, 5), Vector3d(0, 0, -1), 0, 100, h));
   EXPECT_NEAR(h.t, 4.0, 1e-2);
   EXPECT_GT(h.ng.z(), 0.99);
-  for (auto& p : m.position) p *= 0.5;  // shrink: same triangles
+  for (std::size_t v = 0; v < m.vertex_slots(); ++v) m.position.set(v, m.position[v] * 0.5);  // shrink: same triangles
   EXPECT_EQ(bvh.update(m), BvhUpdate::kRefit);
   ASSERT_TRUE(bvh.intersect(Vector3d(0, 0, 5), Vector3d(0, 0, -1), 0, 100, h));
   EXPECT_NEAR(h.t, 4.5, 1e-2);

@@ -224,7 +224,7 @@ TEST(SelfIntersections, CorruptLiveTriangleThrowsInvariantError) {
   bad_index.triangle[4][2] = 99;
   EXPECT_THROW(self_intersections(bad_index), InvariantError);
   TriMesh<double> nan_corner = TriMesh<double>::from_indexed(test::cube12());
-  nan_corner.position[7].x() = std::numeric_limits<double>::quiet_NaN();
+  nan_corner.position.x()[7] = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(self_intersections(nan_corner), InvariantError);
 }
 

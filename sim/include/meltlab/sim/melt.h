@@ -133,6 +133,10 @@ class MeltSimulator {
   void set_params(const MeltParams& p);
   Execution execution() const { return exec_; }
   void set_execution(Execution e) { exec_ = e; }
+  /// Parts the deformation sweep is split into (0, the default: one per thread TBB may use,
+  /// 1 for a serial cycle or a small mesh). Any count gives bitwise the same mesh; tests set
+  /// it to exercise partitions (halo vertices) independently of the thread count.
+  void set_sweep_parts(std::size_t parts);
   std::int64_t cycle() const { return cycle_; }
   bool empty() const;  ///< true once every triangle has melted away
 

@@ -1,6 +1,9 @@
 #pragma once
 // Indexed triangle mesh in structure-of-arrays form with existence flags (monograph §2.2,
-// §3.5). Arrays keep their length while a melt runs: deleting an element clears its flag
+// §3.5). Every per-element vector quantity (P, N, M, Nf) is itself stored as three arrays of
+// its components (Vec3Columns): the melt kernels load eight consecutive x (or y, z) with one
+// SIMD instruction; other code reads element i as a Vec3 with `position[i]` and writes it
+// with `position.set(i, p)`. Arrays keep their length while a melt runs: deleting an element clears its flag
 // and the slot is skipped from then on, so indices stay stable and every pass of the melt
 // cycle is one sweep over an array (O(n), no compaction, no re-indexing).
 //
@@ -12,6 +15,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -37,22 +41,120 @@ struct IndexedMesh {
   std::vector<Triangle> F;
 };
 
+/// Three-component vectors stored as three arrays (structure of arrays): x[i], y[i], z[i]
+/// are the components of element i. The melt kernels read and write the columns with SIMD
+/// loads and stores; everyone else reads an element through operator[], which returns a
+/// copy as a Vec3, and writes it with set().
+template <class Real>
+class Vec3Columns {
+ public:
+  /// Reads elements as Vec3 values (range-for over a column set).
+  class const_iterator {
+   public:
+    using value_type = Vec3<Real>;
+    using difference_type = std::ptrdiff_t;
+    const_iterator() = default;
+    const_iterator(const Vec3Columns* c, std::size_t i) : c_(c), i_(i) {}
+    const Vec3<Real> operator*() const { return (*c_)[i_]; }
+    const_iterator& operator++() {
+      ++i_;
+      return *this;
+    }
+    const_iterator operator++(int) {
+      const_iterator old = *this;
+      ++i_;
+      return old;
+    }
+    bool operator==(const const_iterator& o) const { return i_ == o.i_; }
+
+   private:
+    const Vec3Columns* c_ = nullptr;
+    std::size_t i_ = 0;
+  };
+
+  Vec3Columns() = default;
+  /// `n` zero vectors.
+  explicit Vec3Columns(std::size_t n) : x_(n, Real(0)), y_(n, Real(0)), z_(n, Real(0)) {}
+
+  std::size_t size() const { return x_.size(); }
+  bool empty() const { return x_.empty(); }
+  /// Element i as a vector (a copy; const, so that `position[i].x() = 1` does not compile
+  /// and silently change nothing: write with set(i, v) or through the columns).
+  const Vec3<Real> operator[](std::size_t i) const { return Vec3<Real>(x_[i], y_[i], z_[i]); }
+  void set(std::size_t i, const Vec3<Real>& v) {
+    x_[i] = v.x();
+    y_[i] = v.y();
+    z_[i] = v.z();
+  }
+  void push_back(const Vec3<Real>& v) {
+    x_.push_back(v.x());
+    y_.push_back(v.y());
+    z_.push_back(v.z());
+  }
+  /// New elements are zero.
+  void resize(std::size_t n) {
+    x_.resize(n, Real(0));
+    y_.resize(n, Real(0));
+    z_.resize(n, Real(0));
+  }
+  void reserve(std::size_t n) {
+    x_.reserve(n);
+    y_.reserve(n);
+    z_.reserve(n);
+  }
+  void shrink_to_fit() {
+    x_.shrink_to_fit();
+    y_.shrink_to_fit();
+    z_.shrink_to_fit();
+  }
+  const_iterator begin() const { return {this, 0}; }
+  const_iterator end() const { return {this, size()}; }
+
+  /// The columns (for kernels): component `axis` (0 = x, 1 = y, 2 = z) of every element.
+  std::vector<Real>& column(int axis) { return axis == 0 ? x_ : (axis == 1 ? y_ : z_); }
+  const std::vector<Real>& column(int axis) const { return axis == 0 ? x_ : (axis == 1 ? y_ : z_); }
+  std::vector<Real>& x() { return x_; }
+  std::vector<Real>& y() { return y_; }
+  std::vector<Real>& z() { return z_; }
+  const std::vector<Real>& x() const { return x_; }
+  const std::vector<Real>& y() const { return y_; }
+  const std::vector<Real>& z() const { return z_; }
+
+  /// Packed copy (x, y, z of each element together), e.g. for a library that wants triples.
+  std::vector<Vec3<Real>> to_vectors() const {
+    std::vector<Vec3<Real>> out(size());
+    for (std::size_t i = 0; i < size(); ++i) out[i] = (*this)[i];
+    return out;
+  }
+  template <class Other>
+  Vec3Columns<Other> cast() const {
+    Vec3Columns<Other> out(size());
+    for (int a = 0; a < 3; ++a)
+      for (std::size_t i = 0; i < size(); ++i) out.column(a)[i] = static_cast<Other>(column(a)[i]);
+    return out;
+  }
+  bool operator==(const Vec3Columns& o) const = default;
+
+ private:
+  std::vector<Real> x_, y_, z_;
+};
+
 template <class Real>
 struct TriMesh {
   using Scalar = Real;
 
   // ---- vertex arrays (monograph Tab. of §3.5: e, P, N, M, t, i) ----
   std::vector<std::uint8_t> vertex_alive;  ///< e: 1 = live, 0 = deleted
-  std::vector<Vec3<Real>> position;        ///< P: object frame, mesh units
-  std::vector<Vec3<Real>> normal;          ///< N: unit outward vertex normal (Eq. 2.10); 0 if undefined
-  std::vector<Vec3<Real>> displacement;    ///< M: the move applied to P in the last cycle, mesh units
+  Vec3Columns<Real> position;              ///< P: object frame, mesh units
+  Vec3Columns<Real> normal;                ///< N: unit outward vertex normal (Eq. 2.10); 0 if undefined
+  Vec3Columns<Real> displacement;          ///< M: the move applied to P in the last cycle, mesh units
   std::vector<Index> triangle_count;       ///< t: live triangles on the vertex (after the last cycle)
   std::vector<Index> reindex;              ///< i: merge target of the last collapse pass (i == self if none)
 
   // ---- triangle arrays (e, a b c, Nf) ----
   std::vector<std::uint8_t> triangle_alive;  ///< e
   std::vector<Triangle> triangle;            ///< (a, b, c), CCW from outside, a = min index
-  std::vector<Vec3<Real>> face_normal;       ///< Nf: unit outward face normal (Eq. 2.9); 0 if degenerate
+  Vec3Columns<Real> face_normal;             ///< Nf: unit outward face normal (Eq. 2.9); 0 if degenerate
 
   std::size_t vertex_slots() const { return position.size(); }
   std::size_t triangle_slots() const { return triangle.size(); }
@@ -88,15 +190,10 @@ TriMesh<Other> TriMesh<Real>::cast() const {
   out.reindex = reindex;
   out.triangle_alive = triangle_alive;
   out.triangle = triangle;
-  auto conv = [](const std::vector<Vec3<Real>>& in) {
-    std::vector<Vec3<Other>> o(in.size());
-    for (std::size_t k = 0; k < in.size(); ++k) o[k] = in[k].template cast<Other>();
-    return o;
-  };
-  out.position = conv(position);
-  out.normal = conv(normal);
-  out.displacement = conv(displacement);
-  out.face_normal = conv(face_normal);
+  out.position = position.template cast<Other>();
+  out.normal = normal.template cast<Other>();
+  out.displacement = displacement.template cast<Other>();
+  out.face_normal = face_normal.template cast<Other>();
   return out;
 }
 

@@ -1,0 +1,105 @@
+#include "deform_schedule.h"
+
+#include <algorithm>
+
+namespace meltlab::sim {
+
+void DeformSchedule::touch(std::span<const Index> vertices) {
+  if (valid_) touched_.insert(touched_.end(), vertices.begin(), vertices.end());
+}
+
+template <class Real>
+void DeformSchedule::update(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t parts) {
+  const std::size_t nt = m.triangle_slots();
+  const std::size_t blocks = (nt + kTriangleBlock - 1) / kTriangleBlock;
+  parts = std::max<std::size_t>(1, std::min(parts, blocks));
+  if (!valid_ || parts != this->parts() || nt != triangles_ || m.vertex_slots() != vertices_) {
+    rebuild(m, adj, parts);
+    return;
+  }
+  if (touched_.empty()) return;
+  // Each touched group once (sorting also keeps the updates in a fixed order).
+  for (Index& v : touched_) v = static_cast<Index>(static_cast<std::size_t>(v) / kGroup);
+  std::sort(touched_.begin(), touched_.end());
+  touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
+  for (Index g : touched_) classify(m, adj, static_cast<std::size_t>(g));
+  touched_.clear();
+  build_buckets();
+}
+
+template <class Real>
+void DeformSchedule::rebuild(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t parts) {
+  triangles_ = m.triangle_slots();
+  vertices_ = m.vertex_slots();
+  blocks_ = (triangles_ + kTriangleBlock - 1) / kTriangleBlock;
+  // Equal numbers of blocks per part (the live triangles are spread evenly enough: the
+  // arrays are compacted once half of them is dead).
+  part_first_block_.resize(parts + 1);
+  block_part_.resize(blocks_);
+  for (std::size_t p = 0; p <= parts; ++p) part_first_block_[p] = p * blocks_ / parts;
+  for (std::size_t p = 0; p < parts; ++p)
+    for (std::size_t b = part_first_block_[p]; b < part_first_block_[p + 1]; ++b)
+      block_part_[b] = static_cast<std::uint32_t>(p);
+  store_terms_.assign(triangles_, 0);
+  block_stores_terms_.assign(blocks_, 0);
+  ready_.assign((vertices_ + kGroup - 1) / kGroup, 0);
+  for (std::size_t g = 0; g < ready_.size(); ++g) classify(m, adj, g);
+  touched_.clear();
+  build_buckets();
+  valid_ = true;
+}
+
+template <class Real>
+void DeformSchedule::classify(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t g) {
+  // Free group (no live vertex with triangles): moves after block 0 (part 0).
+  std::int64_t ready = blocks_ > 0 ? 0 : kHalo;
+  std::int64_t part = -1;
+  bool halo = blocks_ == 0;
+  const std::size_t end = std::min(vertices_, (g + 1) * kGroup);
+  for (std::size_t v = g * kGroup; v < end && !halo; ++v) {
+    if (!m.vertex_alive[v]) continue;
+    const auto list = adj.of(static_cast<Index>(v));
+    if (list.empty()) continue;
+    const auto first = static_cast<std::size_t>(list.front()) / kTriangleBlock;
+    const auto last = static_cast<std::size_t>(list.back()) / kTriangleBlock;
+    const std::int64_t p = block_part_[first];
+    if (block_part_[last] != p || (part >= 0 && part != p)) halo = true;
+    part = p;
+    ready = std::max<std::int64_t>(ready, static_cast<std::int64_t>(last));
+  }
+  if (halo) {
+    ready_[g] = kHalo;
+    for (std::size_t v = g * kGroup; v < end; ++v) {
+      if (!m.vertex_alive[v]) continue;
+      for (Index t : adj.of(static_cast<Index>(v))) {
+        store_terms_[static_cast<std::size_t>(t)] = 1;
+        block_stores_terms_[static_cast<std::size_t>(t) / kTriangleBlock] = 1;
+      }
+    }
+  } else {
+    ready_[g] = static_cast<std::int32_t>(ready);
+  }
+}
+
+void DeformSchedule::build_buckets() {
+  bucket_.assign(blocks_ + 1, 0);
+  halo_.clear();
+  for (std::size_t g = 0; g < ready_.size(); ++g) {
+    if (ready_[g] == kHalo)
+      halo_.push_back(static_cast<std::int32_t>(g));
+    else
+      ++bucket_[static_cast<std::size_t>(ready_[g]) + 1];
+  }
+  for (std::size_t b = 0; b < blocks_; ++b) bucket_[b + 1] += bucket_[b];
+  ready_groups_.resize(static_cast<std::size_t>(bucket_[blocks_]));
+  std::vector<std::int32_t> next(bucket_.begin(), bucket_.end() - 1);
+  for (std::size_t g = 0; g < ready_.size(); ++g)
+    if (ready_[g] != kHalo)
+      ready_groups_[static_cast<std::size_t>(next[static_cast<std::size_t>(ready_[g])]++)] =
+          static_cast<std::int32_t>(g);
+}
+
+template void DeformSchedule::update(const TriMesh<float>&, const VertexTriangles&, std::size_t);
+template void DeformSchedule::update(const TriMesh<double>&, const VertexTriangles&, std::size_t);
+
+}  // namespace meltlab::sim

@@ -1,0 +1,87 @@
+#pragma once
+// Private to the melt cycle: the order in which Alg. 1's sweep visits the mesh.
+//
+// The sweep runs over blocks of kTriangleBlock triangles in ascending order, computes their
+// terms and adds each corner's terms to its vertex's sum record. A vertex's sums are complete
+// once its last triangle (the end of its ascending triangle list) has been added, and from
+// then on no later triangle reads its position, so it can move at once, while its record is
+// still in the cache (the vertex moves run eight slots at a time: a group of eight moves
+// after the block that holds the last triangle of any of them, its "ready" block). The
+// sweep so streams once over the mesh instead of a triangle sweep followed by a vertex
+// sweep over sum records that no longer fit in the cache.
+//
+// Parallel sweeps split the blocks into parts, one contiguous range of blocks each, run
+// side by side. A group whose vertices have all their triangles in one part is "interior"
+// to it: that part adds into its records and moves it, as above. Any other group is a
+// "halo" group: no part adds into its records; the triangles of its vertices store their
+// terms, and after every part has finished, each halo vertex gathers its sums from them in
+// ascending triangle order: the same additions in the same order as the serial sweep, so
+// serial and parallel cycles stay bitwise identical, and no record is written by two
+// threads.
+//
+// The schedule (ready block of every interior group, the halo groups, which triangles must
+// store their terms) depends only on the triangle lists and the partition. It is kept
+// across cycles and updated for the vertices whose lists changed.
+
+#include "adjacency.h"
+#include "triangle_kernels.h"
+
+#include <meltlab/sim/mesh.h>
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace meltlab::sim {
+
+inline constexpr std::size_t kGroup = 8;  ///< vertex slots per group of the moves (one SIMD lane each)
+
+class DeformSchedule {
+ public:
+  static constexpr std::int32_t kHalo = -1;
+
+  /// Makes the schedule match `m`, `adj` and a partition into `parts` parts: rebuilt if
+  /// anything but the lists of `touched` vertices changed since the last call (or after
+  /// invalidate()), else updated for the groups of the touched vertices.
+  template <class Real>
+  void update(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t parts);
+  /// Vertices whose triangle lists changed (collected until the next update()).
+  void touch(std::span<const Index> vertices);
+  /// Forces a rebuild at the next update() (the mesh changed in ways touch() does not cover).
+  void invalidate() { valid_ = false; }
+
+  std::size_t parts() const { return part_first_block_.size() - 1; }
+  std::size_t blocks() const { return blocks_; }
+  std::size_t groups() const { return ready_.size(); }
+  /// Blocks [first, last) of part p.
+  std::size_t part_first_block(std::size_t p) const { return part_first_block_[p]; }
+  /// Groups that move right after block b (interior groups whose ready block is b).
+  std::span<const std::int32_t> ready_after(std::size_t b) const {
+    return {ready_groups_.data() + bucket_[b], static_cast<std::size_t>(bucket_[b + 1] - bucket_[b])};
+  }
+  std::span<const std::int32_t> halo_groups() const { return halo_; }
+  bool halo_vertex(Index v) const { return ready_[static_cast<std::size_t>(v) / kGroup] == kHalo; }
+  bool stores_terms(std::size_t t) const { return store_terms_[t] != 0; }
+  bool block_stores_terms(std::size_t b) const { return block_stores_terms_[b] != 0; }
+
+ private:
+  template <class Real>
+  void rebuild(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t parts);
+  template <class Real>
+  void classify(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t g);
+  void build_buckets();
+
+  bool valid_ = false;
+  std::size_t blocks_ = 0, triangles_ = 0, vertices_ = 0;
+  std::vector<std::size_t> part_first_block_ = {0};
+  std::vector<std::uint32_t> block_part_;
+  std::vector<std::int32_t> ready_;         ///< per group: ready block, or kHalo
+  std::vector<std::int32_t> bucket_;        ///< per block: first entry in ready_groups_
+  std::vector<std::int32_t> ready_groups_;  ///< interior groups by ready block
+  std::vector<std::int32_t> halo_;          ///< halo groups, ascending
+  std::vector<std::uint8_t> store_terms_;   ///< per triangle: a halo vertex needs its terms
+  std::vector<std::uint8_t> block_stores_terms_;
+  std::vector<Index> touched_;
+};
+
+}  // namespace meltlab::sim

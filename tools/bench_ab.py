@@ -1,0 +1,101 @@
+#!/usr/bin/python3
+"""A/B comparison of two builds of a Google Benchmark program on a shared, noisy machine.
+
+Runs OLD and NEW alternately (the order swapped every round) for ROUNDS rounds on the same
+filter, each run with repetitions shuffled (--benchmark_enable_random_interleaving), and
+prints per benchmark: the median time of each build over all repetitions, the median of the
+per-round ratios new/old (a slow spell of the host falls on both builds of a round), and the
+median of the simulator's per-pass counters (deform_ms, collapse_ms) where present.
+Benchmarks only one build has (e.g. a new mesh) are listed with that build's median.
+--time cpu compares the process CPU time instead of wall time: under load the wall time of
+a serial benchmark includes the time the scheduler gave the core to other processes, its
+CPU time does not (it still includes the cost of caches shared with them). For a parallel
+benchmark the CPU time is the work of all threads, not how long the cycle took.
+
+  tools/bench_ab.py OLD_BENCH NEW_BENCH [--rounds 4] [--repetitions 3] [--json OUT]
+                    [--taskset CPUS] [--time real|cpu] -- [benchmark args, e.g. --benchmark_filter=...]
+"""
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+
+def run(binary, args, taskset, time_key):
+    with tempfile.NamedTemporaryFile(suffix=".json") as out:
+        cmd = ([] if not taskset else ["taskset", "-c", taskset]) + [
+            binary, *args, "--benchmark_enable_random_interleaving=true",
+            f"--benchmark_out={out.name}", "--benchmark_out_format=json"]
+        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+        doc = json.loads(Path(out.name).read_text())
+    rows = {}
+    for b in doc["benchmarks"]:
+        if b.get("run_type") == "aggregate":
+            continue
+        ms = b[time_key] * {"ms": 1.0, "us": 1e-3, "ns": 1e-6, "s": 1e3}[b.get("time_unit", "ns")]
+        r = rows.setdefault(b["run_name"], {"ms": [], "deform_ms": [], "collapse_ms": [], "triangles": []})
+        r["ms"].append(ms)
+        for k in ("deform_ms", "collapse_ms", "triangles"):
+            if k in b:
+                r[k].append(b[k])
+    return rows
+
+
+def med(xs):
+    return statistics.median(xs) if xs else float("nan")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("old")
+    ap.add_argument("new")
+    ap.add_argument("--rounds", type=int, default=4)
+    ap.add_argument("--repetitions", type=int, default=3)
+    ap.add_argument("--taskset", default="")
+    ap.add_argument("--json")
+    ap.add_argument("--time", choices=("real", "cpu"), default="real")
+    argv = sys.argv[1:]
+    cut = argv.index("--") if "--" in argv else len(argv)
+    a = ap.parse_args(argv[:cut])
+    a.bench_args = argv[cut + 1:]
+    extra = [f"--benchmark_repetitions={a.repetitions}", *a.bench_args]
+    rounds = []
+    for i in range(a.rounds):
+        order = [("old", a.old), ("new", a.new)] if i % 2 == 0 else [("new", a.new), ("old", a.old)]
+        got = {}
+        for tag, binary in order:
+            got[tag] = run(binary, extra, a.taskset, f"{a.time}_time")
+            print(f"round {i + 1}/{a.rounds}: {tag} done", file=sys.stderr)
+        rounds.append(got)
+    names = []
+    for r in rounds:
+        for tag in ("old", "new"):
+            names += [n for n in r[tag] if n not in names]
+    table = []
+    print(f"{'benchmark':<58}{'old ms':>9}{'new ms':>9}{'new/old':>9}{'deform':>8}{'collapse':>9}{'tri':>9}")
+    for n in names:
+        old = [x for r in rounds for x in r["old"].get(n, {}).get("ms", [])]
+        new = [x for r in rounds for x in r["new"].get(n, {}).get("ms", [])]
+        ratios = [med(r["new"][n]["ms"]) / med(r["old"][n]["ms"]) for r in rounds
+                  if n in r["new"] and n in r["old"]]
+        counters = {k: med([x for r in rounds for x in r["new"].get(n, {}).get(k, [])])
+                    for k in ("deform_ms", "collapse_ms", "triangles")}
+        old_c = {k: med([x for r in rounds for x in r["old"].get(n, {}).get(k, [])])
+                 for k in ("deform_ms", "collapse_ms")}
+        row = {"name": n, "old_ms": med(old), "new_ms": med(new), "ratio": med(ratios),
+               "ratios": ratios, **counters, "old_deform_ms": old_c["deform_ms"],
+               "old_collapse_ms": old_c["collapse_ms"]}
+        table.append(row)
+        print(f"{n:<58}{row['old_ms']:>9.3f}{row['new_ms']:>9.3f}{row['ratio']:>9.3f}"
+              f"{counters['deform_ms']:>8.3f}{counters['collapse_ms']:>9.3f}{counters['triangles']:>9.0f}")
+    if a.json:
+        Path(a.json).write_text(json.dumps({"rounds": a.rounds, "repetitions": a.repetitions, "time": a.time,
+                                            "args": a.bench_args, "rows": table}, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
