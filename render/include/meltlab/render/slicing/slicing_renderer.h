@@ -106,6 +106,14 @@ struct SlicingSettings {
   /// counts and image as testing each. false: every sample's cell is looked up (for tests and
   /// measurements).
   bool live_runs = true;
+  /// Packets (issue 17's third speed round): true (default): eight neighbouring pixels of a tile
+  /// row advance plane by plane together, positions, cells, trilinear fetches (gathers), the
+  /// constant TF's classification and the compositing on eight lanes; a lane that has nothing to
+  /// do at a plane (outside its ray's planes, in an empty run, cut away by the mask, terminated) is
+  /// masked. Every lane takes the samples, counts and arithmetic of its scalar ray (lighting, mask
+  /// lookups and the linear TF per lane, as the scalar path does), so the image is the scalar
+  /// path's bit for bit (slicing_speed_test). false: one ray at a time (the reference).
+  bool simd = true;
 };
 
 /// Whether a mode needs the gradient volume.
@@ -183,6 +191,8 @@ class SlicingRenderer {
   /// For a live cell, the radius (in cells) of the cube around it whose cells are all live: the
   /// Chebyshev distance to the nearest empty cell minus one (0 for empty cells).
   std::vector<std::uint8_t> live_reach_;
+  /// dist_ | live_reach_ << 8 per cell: one 32-bit gather per lane in the packets (SlicingSettings::simd).
+  std::vector<std::int32_t> cell_info_;
 };
 
 /// One frame (builds a SlicingRenderer).
