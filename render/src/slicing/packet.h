@@ -47,6 +47,12 @@ inline unsigned bits(VI m) {
 }
 inline bool any(VI m) { return bits(m) != 0; }
 inline int count(VI m) { return __builtin_popcount(bits(m)); }
+/// The sum of the lanes.
+inline std::int32_t hsum(VI x) {
+  std::int32_t r = 0;
+  for (int l = 0; l < kLanes; ++l) r += x[l];
+  return r;
+}
 /// The smallest lane.
 inline std::int32_t hmin(VI x) {
 #if defined(__AVX2__)

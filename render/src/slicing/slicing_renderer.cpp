@@ -544,6 +544,11 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
           std::array<RaySlices, kLanes> lrs;
           VD G[3] = {}, D[3] = {}, ID[3] = {}, ex = splat(1);
           VI u0 = zero, ns = zero, alive = zero;
+          // Per axis: the lanes whose g rises (the cube's side ahead is its high side), and the
+          // side's 0.01 inset (-0.01 high, +0.01 low); `still`: some lane hardly moves on an axis.
+          VI rises[3] = {zero, zero, zero};
+          VD off[3] = {};
+          bool still = false;
           double last_a[kLanes], last_ac[kLanes];
           for (int l = 0; l < kLanes; ++l) {
             last_a[l] = -1, last_ac[l] = 0;
@@ -563,6 +568,11 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             const Eigen::Vector3d g_first =
                 (ray.origin + rs.t(stack, k_start) * ray.direction - origin).cwiseProduct(inv_spacing);
             for (int a = 0; a < 3; ++a) G[a][l] = g_first[a], D[a][l] = delta[a], ID[a][l] = inv_delta[a];
+            for (int a = 0; a < 3; ++a) {
+              rises[a][l] = delta[a] > 1e-6 ? -1 : 0;
+              off[a][l] = delta[a] > 1e-6 ? -0.01 : 0.01;
+              still = still || !(delta[a] > 1e-6 || delta[a] < -1e-6);
+            }
             u0[l] = kFrontToBack ? -rs.k_last : rs.k_first;
             ns[l] = rs.k_last - rs.k_first + 1;
             alive[l] = -1;
@@ -576,7 +586,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
           std::int64_t n_visited = 0, n_skipped = 0, n_classified = 0, n_jumped = 0, n_cell_tests = 0;
           // The planes from a lane's sample on while g stays 0.01 inside the cube of cells c ± r
           // (the scalar loop's cube_run, lane by lane: the same minima of the same quotients).
-          auto cube_run = [&](const VI(&c)[3], VI r, const VD(&g)[3], VD run) {
+          auto cube_run_any = [&](const VI(&c)[3], VI r, const VD(&g)[3], VD run) {
             for (int a = 0; a < 3; ++a) {
               const VL closed_hi = wide(~((c[a] + r) >= ncell_m1[a])), closed_lo = wide(~((c[a] - r) <= 0));
               const VD hi = __builtin_convertvector((c[a] + r + 1) << cell_shift, VD);
@@ -585,8 +595,20 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
               const VD run_hi = (hi - 0.01 - g[a]) * ID[a], run_lo = (lo + 0.01 - g[a]) * ID[a];
               run = select(up & closed_hi & (run_hi < run), run_hi, run);
               run = select(down & closed_lo & (run_lo < run), run_lo, run);
-              const VL still = ~up & ~down & ((closed_hi & (g[a] > hi - 0.01)) | (closed_lo & (g[a] < lo + 0.01)));
-              run = select(still, splat(0), run);
+              const VL parked = ~up & ~down & ((closed_hi & (g[a] > hi - 0.01)) | (closed_lo & (g[a] < lo + 0.01)));
+              run = select(parked, splat(0), run);
+            }
+            return run;
+          };
+          // The same where every lane moves on every axis: only the side ahead bounds a run, bound
+          // = the side + its inset (hi + -0.01 is hi - 0.01 exactly), the same quotients and minima.
+          auto cube_run = [&](const VI(&c)[3], VI r, const VD(&g)[3], VD run) {
+            if (still) return cube_run_any(c, r, g, run);
+            for (int a = 0; a < 3; ++a) {
+              const VI edge = select(rises[a], c[a] + r + 1, c[a] - r);
+              const VI closed = select(rises[a], (c[a] + r) < ncell_m1[a], (c[a] - r) > 0);
+              const VD run_a = (__builtin_convertvector(edge << cell_shift, VD) + off[a] - g[a]) * ID[a];
+              run = select(wide(closed) & (run_a < run), run_a, run);
             }
             return run;
           };
@@ -619,7 +641,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                 VD run = cube_run(c, select(empty, dist - 1, reach), g, __builtin_convertvector(ns - 1 - step, VD));
                 run = select(wide(test) & (run >= 1), run, splat(0));
                 const VI nrun = __builtin_convertvector(run, VI);
-                for (int l = 0; l < kLanes; ++l) n_jumped += empty[l] ? nrun[l] : 0;
+                n_jumped += hsum(select(empty, nrun, zero));
                 advance = select(empty, one + nrun, advance);
                 if (live_runs) live_until = select(test & ~empty, step + 1 + nrun, live_until);
                 sample = active & ~empty;
@@ -677,9 +699,8 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                   pb = select(in, splat(rgb.z()), pb);
                   pac = select(in, acp[std::size_t(t * max_pieces + i + 1)], pac);
                 }
-                const VL need = wide(sel) & (pac < 0);
-                for (int l = 0; l < kLanes; ++l) {
-                  if (!need[l]) continue;
+                for (unsigned b = bits(sel & narrow(pac < 0)); b != 0; b &= b - 1) {
+                  const int l = __builtin_ctz(b);
                   const std::size_t slot = std::size_t(t * max_pieces + piece[l]);
                   acp[slot][l] = ex[l] != 1.0 ? 1.0 - std::pow(1.0 - pa[l], ex[l]) : pa[l];
                   pac[l] = acp[slot][l];
