@@ -612,19 +612,10 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             }
             return run;
           };
-          // K: the packet's plane. Where some lane went on to the next plane, that is the next K
-          // (no lane wants an earlier one), found by a branch that the CPU predicts, so the next
-          // positions need not wait for this plane's cell tests; else the nearest plane wanted.
-          int K = 0;
-          bool next_plane = false;
           for (;;) {
             const VI want = u0 + next;
-            if (next_plane) {
-              ++K;
-            } else {
-              if (!any(alive)) break;
-              K = hmin(select(alive, want, splati(std::numeric_limits<int>::max())));
-            }
+            if (!any(alive)) break;
+            const int K = hmin(select(alive, want, splati(std::numeric_limits<int>::max())));
             const VI active = alive & (want == K);
             const VI step = splati(K) - u0;
             const VD sd = __builtin_convertvector(step, VD);
@@ -642,7 +633,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                 n_cell_tests += count(test);
                 const VI c[3] = {clampv(ii[0], cell_max[0]) >> cell_shift, clampv(ii[1], cell_max[1]) >> cell_shift,
                                  clampv(ii[2], cell_max[2]) >> cell_shift};
-                const VI cell = c[0] + int(cells_x) * (c[1] + int(cells_y) * c[2]);  // clamped: any lane
+                const VI cell = select(test, c[0] + int(cells_x) * (c[1] + int(cells_y) * c[2]), zero);
                 const VI info = gather_i32(cell_info, cell);
                 const VI dist = info & 255, reach = info >> 8;
                 const VI empty = test & (dist != 0);
@@ -658,7 +649,6 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             }
             next = select(active, step + advance, next);
             alive = alive & (next < ns);
-            next_plane = any(alive & active & (advance == one));
             if (!any(sample)) continue;
             const int k = kFrontToBack ? -K : K;  // the plane (the same for every lane)
             VI m = one;
