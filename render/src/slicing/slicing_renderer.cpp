@@ -547,7 +547,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
           // Per axis: the lanes whose g rises (the cube's side ahead is its high side), and the
           // side's 0.01 inset (-0.01 high, +0.01 low); `still`: some lane hardly moves on an axis.
           VI rises[3] = {zero, zero, zero};
-          VD off[3] = {};
+          VD off[3] = {}, side_max[3] = {}, side_min[3] = {};  // the side ahead closed within (min, max)
           bool still = false;
           double last_a[kLanes], last_ac[kLanes];
           for (int l = 0; l < kLanes; ++l) {
@@ -569,8 +569,12 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                 (ray.origin + rs.t(stack, k_start) * ray.direction - origin).cwiseProduct(inv_spacing);
             for (int a = 0; a < 3; ++a) G[a][l] = g_first[a], D[a][l] = delta[a], ID[a][l] = inv_delta[a];
             for (int a = 0; a < 3; ++a) {
-              rises[a][l] = delta[a] > 1e-6 ? -1 : 0;
-              off[a][l] = delta[a] > 1e-6 ? -0.01 : 0.01;
+              const bool rising = delta[a] > 1e-6;
+              rises[a][l] = rising ? -1 : 0;
+              off[a][l] = rising ? -0.01 : 0.01;
+              const double e_cells = double(cells_[std::size_t(a)] << cell_shift);
+              side_max[a][l] = rising ? e_cells : std::numeric_limits<double>::infinity();
+              side_min[a][l] = rising ? -std::numeric_limits<double>::infinity() : 0.0;
               still = still || !(delta[a] > 1e-6 || delta[a] < -1e-6);
             }
             u0[l] = kFrontToBack ? -rs.k_last : rs.k_first;
@@ -583,7 +587,8 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
           }
           VD Cr = splat(0), Cg = splat(0), Cb = splat(0), A = splat(0);
           VI next = zero, live_until = zero;
-          std::int64_t n_visited = 0, n_skipped = 0, n_classified = 0, n_jumped = 0, n_cell_tests = 0;
+          // Counters per lane (a mask is -1 where true: subtracting it counts), summed after the packet.
+          VI n_visited = zero, n_skipped = zero, n_classified = zero, n_jumped = zero, n_cell_tests = zero;
           // The planes from a lane's sample on while g stays 0.01 inside the cube of cells c ± r
           // (the scalar loop's cube_run, lane by lane: the same minima of the same quotients).
           auto cube_run_any = [&](const VI(&c)[3], VI r, const VD(&g)[3], VD run) {
@@ -605,10 +610,11 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
           auto cube_run = [&](const VI(&c)[3], VI r, const VD(&g)[3], VD run) {
             if (still) return cube_run_any(c, r, g, run);
             for (int a = 0; a < 3; ++a) {
-              const VI edge = select(rises[a], c[a] + r + 1, c[a] - r);
-              const VI closed = select(rises[a], (c[a] + r) < ncell_m1[a], (c[a] - r) > 0);
-              const VD run_a = (__builtin_convertvector(edge << cell_shift, VD) + off[a] - g[a]) * ID[a];
-              run = select(wide(closed) & (run_a < run), run_a, run);
+              // The side ahead in voxels, e (c + r + 1) or e (c - r); closed (not at the volume's
+              // border) where it lies inside (0, e · cells): c + r < cells - 1, c - r > 0.
+              const VD side = __builtin_convertvector((c[a] + select(rises[a], r + 1, -r)) << cell_shift, VD);
+              const VD run_a = (side + off[a] - g[a]) * ID[a];
+              run = select((side < side_max[a]) & (side > side_min[a]) & (run_a < run), run_a, run);
             }
             return run;
           };
@@ -625,23 +631,23 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             const VF fl[3] = {floor(gf[0]), floor(gf[1]), floor(gf[2])};
             const VI ii[3] = {__builtin_convertvector(fl[0], VI), __builtin_convertvector(fl[1], VI),
                               __builtin_convertvector(fl[2], VI)};
-            n_visited += count(active);
+            n_visited -= active;
             VI sample = active, advance = one;
             if (skip) {
               const VI test = active & (step >= live_until);
               if (any(test)) {
-                n_cell_tests += count(test);
+                n_cell_tests -= test;
                 const VI c[3] = {clampv(ii[0], cell_max[0]) >> cell_shift, clampv(ii[1], cell_max[1]) >> cell_shift,
                                  clampv(ii[2], cell_max[2]) >> cell_shift};
                 const VI cell = select(test, c[0] + int(cells_x) * (c[1] + int(cells_y) * c[2]), zero);
                 const VI info = gather_i32(cell_info, cell);
                 const VI dist = info & 255, reach = info >> 8;
                 const VI empty = test & (dist != 0);
-                n_skipped += count(empty);
+                n_skipped -= empty;
                 VD run = cube_run(c, select(empty, dist - 1, reach), g, __builtin_convertvector(ns - 1 - step, VD));
                 run = select(wide(test) & (run >= 1), run, splat(0));
                 const VI nrun = __builtin_convertvector(run, VI);
-                n_jumped += hsum(select(empty, nrun, zero));
+                n_jumped += select(empty, nrun, zero);
                 advance = select(empty, one + nrun, advance);
                 if (live_runs) live_until = select(test & ~empty, step + 1 + nrun, live_until);
                 sample = active & ~empty;
@@ -660,7 +666,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                 if (m[l] == 0) sample[l] = 0;
               }
             }
-            n_classified += count(sample);
+            n_classified -= sample;
             if (!any(sample)) continue;
             // Trilinear fetch (VolumeSamples::trilinear_cell's arithmetic; offset 0 in idle lanes).
             const VF w[3] = {gf[0] - fl[0], gf[1] - fl[1], gf[2] - fl[2]};
@@ -782,11 +788,11 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
               A = select(wins, a, A);
             }
           }
-          cnt.samples += n_visited + n_jumped;
-          cnt.visited += n_visited;
-          cnt.skipped += n_skipped + n_jumped;
-          cnt.classified += n_classified;
-          cnt.cell_tests += n_cell_tests;
+          cnt.samples += hsum(n_visited) + hsum(n_jumped);
+          cnt.visited += hsum(n_visited);
+          cnt.skipped += hsum(n_skipped) + hsum(n_jumped);
+          cnt.classified += hsum(n_classified);
+          cnt.cell_tests += hsum(n_cell_tests);
           for (int l = 0; l < kLanes && x0 + l < std::min(W, (tx + 1) * T); ++l) {
             const Eigen::Vector3d C(Cr[l], Cg[l], Cb[l]);
             const Eigen::Vector3d out = mode == SlicingMode::kBlend ? Eigen::Vector3d(C + (1 - A[l]) * background)
