@@ -586,9 +586,8 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             for (int p = 1; p < max_pieces; ++p) acp[std::size_t(t * max_pieces + p)] = splat(-1);
           }
           VD Cr = splat(0), Cg = splat(0), Cb = splat(0), A = splat(0);
-          VI next = zero, live_until = zero;
           // Counters per lane (a mask is -1 where true: subtracting it counts), summed after the packet.
-          VI n_visited = zero, n_skipped = zero, n_classified = zero, n_jumped = zero, n_cell_tests = zero;
+          VI n_visited = zero, n_fetched = zero, n_classified = zero, n_cell_tests = zero;
           // The planes from a lane's sample on while g stays 0.01 inside the cube of cells c ± r
           // (the scalar loop's cube_run, lane by lane: the same minima of the same quotients).
           auto cube_run_any = [&](const VI(&c)[3], VI r, const VD(&g)[3], VD run) {
@@ -618,12 +617,25 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             }
             return run;
           };
-          for (;;) {
-            const VI want = u0 + next;
-            if (!any(alive)) break;
-            const int K = hmin(select(alive, want, splati(std::numeric_limits<int>::max())));
-            const VI active = alive & (want == K);
-            const VI step = splati(K) - u0;
+          // The packet's planes u (u = k back to front, -k front to back) from the first lane's
+          // first to the last lane's last; lane l takes part in [u0, uend) until it terminates.
+          // Empty-space skipping per packet: at a test every lane in range looks up its cell and
+          // its cube run (the scalar loop's, lane by lane); until the shortest run (or a waiting
+          // lane's first plane) ends, every lane stays in the cube it tested in, so its status
+          // (live: sample, empty: skip) holds without lookups, and where every lane in range is
+          // empty the packet jumps. So each lane fetches exactly its scalar ray's samples (the
+          // live ones; empty-cell samples have α = 0 and change nothing): the same pixels, sample,
+          // fetch, classification and termination counts; only visited and cell_tests differ.
+          const VI uend = u0 + ns;
+          VI n_lane_samples = ns, done = zero, live = alive;
+          int u_first = std::numeric_limits<int>::max(), u_last = std::numeric_limits<int>::min();
+          for (int l = 0; l < kLanes; ++l)
+            if (alive[l]) u_first = std::min(u_first, u0[l]), u_last = std::max(u_last, uend[l] - 1);
+          int test_at = skip ? u_first : std::numeric_limits<int>::max();
+          for (int U = u_first; U <= u_last; ++U) {
+            const int K = U;
+            const VI inr = (u0 <= U) & (uend > U) & ~done;
+            const VI step = splati(U) - u0;
             const VD sd = __builtin_convertvector(step, VD);
             const VD g[3] = {fma(sd, D[0], G[0]), fma(sd, D[1], G[1]), fma(sd, D[2], G[2])};
             const VF gf[3] = {__builtin_convertvector(g[0], VF), __builtin_convertvector(g[1], VF),
@@ -631,30 +643,31 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             const VF fl[3] = {floor(gf[0]), floor(gf[1]), floor(gf[2])};
             const VI ii[3] = {__builtin_convertvector(fl[0], VI), __builtin_convertvector(fl[1], VI),
                               __builtin_convertvector(fl[2], VI)};
-            n_visited -= active;
-            VI sample = active, advance = one;
-            if (skip) {
-              const VI test = active & (step >= live_until);
-              if (any(test)) {
-                n_cell_tests -= test;
-                const VI c[3] = {clampv(ii[0], cell_max[0]) >> cell_shift, clampv(ii[1], cell_max[1]) >> cell_shift,
-                                 clampv(ii[2], cell_max[2]) >> cell_shift};
-                const VI cell = select(test, c[0] + int(cells_x) * (c[1] + int(cells_y) * c[2]), zero);
-                const VI info = gather_i32(cell_info, cell);
-                const VI dist = info & 255, reach = info >> 8;
-                const VI empty = test & (dist != 0);
-                n_skipped -= empty;
-                VD run = cube_run(c, select(empty, dist - 1, reach), g, __builtin_convertvector(ns - 1 - step, VD));
-                run = select(wide(test) & (run >= 1), run, splat(0));
-                const VI nrun = __builtin_convertvector(run, VI);
-                n_jumped += select(empty, nrun, zero);
-                advance = select(empty, one + nrun, advance);
-                if (live_runs) live_until = select(test & ~empty, step + 1 + nrun, live_until);
-                sample = active & ~empty;
+            n_visited -= inr;
+            if (U >= test_at) {
+              n_cell_tests -= inr;
+              const VI c[3] = {clampv(ii[0], cell_max[0]) >> cell_shift, clampv(ii[1], cell_max[1]) >> cell_shift,
+                               clampv(ii[2], cell_max[2]) >> cell_shift};
+              const VI cell = select(inr, c[0] + int(cells_x) * (c[1] + int(cells_y) * c[2]), zero);
+              const VI info = gather_i32(cell_info, cell);
+              const VI dist = info & 255, reach = info >> 8;
+              const VI empty = dist != 0;
+              VD run = cube_run(c, select(empty, dist - 1, reach), g, __builtin_convertvector(ns - 1 - step, VD));
+              run = select(wide(inr & (live_runs ? splati(-1) : empty)) & (run >= 1), run, splat(0));
+              const VI nrun = __builtin_convertvector(run, VI);
+              const VI waiting = alive & ~done & (u0 > U);
+              const int n = std::min(hmin(select(inr, nrun, splati(std::numeric_limits<int>::max()))),
+                                     hmin(select(waiting, u0 - U - 1, splati(std::numeric_limits<int>::max()))));
+              if (n == std::numeric_limits<int>::max()) break;  // no lane in range or to come
+              live = ~empty;
+              test_at = U + 1 + n;
+              if (!any(inr & live)) {
+                U += n;  // every lane in range stays in empty cells for n more planes
+                continue;
               }
             }
-            next = select(active, step + advance, next);
-            alive = alive & (next < ns);
+            VI sample = inr & live;
+            n_fetched -= sample;
             if (!any(sample)) continue;
             const int k = kFrontToBack ? -K : K;  // the plane (the same for every lane)
             VI m = one;
@@ -765,8 +778,12 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
               Cb = select(wv, Cb + wgt * cb, Cb);
               A = select(wv, A + wgt, A);
               const VI term = vis & narrow(A >= stop_alpha);
-              cnt.terminated += count(term);
-              alive = alive & ~term;
+              if (any(term)) {
+                cnt.terminated += count(term);
+                n_lane_samples = select(term, step + 1, n_lane_samples);
+                done |= term;
+                if (!any(alive & ~done)) break;
+              }
               continue;
             }
             if (mode == SlicingMode::kBlend) {
@@ -788,9 +805,9 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
               A = select(wins, a, A);
             }
           }
-          cnt.samples += hsum(n_visited) + hsum(n_jumped);
+          cnt.samples += hsum(n_lane_samples);
           cnt.visited += hsum(n_visited);
-          cnt.skipped += hsum(n_skipped) + hsum(n_jumped);
+          cnt.skipped += hsum(n_lane_samples) - hsum(n_fetched);
           cnt.classified += hsum(n_classified);
           cnt.cell_tests += hsum(n_cell_tests);
           for (int l = 0; l < kLanes && x0 + l < std::min(W, (tx + 1) * T); ++l) {
