@@ -69,6 +69,7 @@ inline std::int32_t hmin(VI x) {
 /// m ? a : b per lane.
 inline VD select(VL m, VD a, VD b) { return m ? a : b; }
 inline VI select(VI m, VI a, VI b) { return m ? a : b; }
+inline VF select(VI m, VF a, VF b) { return m ? a : b; }
 
 /// std::fma per lane (one rounding).
 inline VD fma(VD a, VD b, VD c) {

@@ -547,7 +547,8 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
           // Per axis: the lanes whose g rises (the cube's side ahead is its high side), and the
           // side's 0.01 inset (-0.01 high, +0.01 low); `still`: some lane hardly moves on an axis.
           VI rises[3] = {zero, zero, zero};
-          VD off[3] = {}, side_max[3] = {}, side_min[3] = {};  // the side ahead closed within (min, max)
+          VF off[3] = {}, side_max[3] = {}, side_min[3] = {};  // the side ahead closed within (min, max)
+          VF IDf[3] = {};                                      // 1 / Δg per axis in float
           bool still = false;
           double last_a[kLanes], last_ac[kLanes];
           for (int l = 0; l < kLanes; ++l) {
@@ -567,14 +568,17 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             const int k_start = kFrontToBack ? rs.k_last : rs.k_first;
             const Eigen::Vector3d g_first =
                 (ray.origin + rs.t(stack, k_start) * ray.direction - origin).cwiseProduct(inv_spacing);
-            for (int a = 0; a < 3; ++a) G[a][l] = g_first[a], D[a][l] = delta[a], ID[a][l] = inv_delta[a];
+            for (int a = 0; a < 3; ++a) {
+              G[a][l] = g_first[a], D[a][l] = delta[a], ID[a][l] = inv_delta[a];
+              IDf[a][l] = float(inv_delta[a]);
+            }
             for (int a = 0; a < 3; ++a) {
               const bool rising = delta[a] > 1e-6;
               rises[a][l] = rising ? -1 : 0;
-              off[a][l] = rising ? -0.01 : 0.01;
-              const double e_cells = double(cells_[std::size_t(a)] << cell_shift);
-              side_max[a][l] = rising ? e_cells : std::numeric_limits<double>::infinity();
-              side_min[a][l] = rising ? -std::numeric_limits<double>::infinity() : 0.0;
+              off[a][l] = rising ? -0.01f : 0.01f;
+              const float e_cells = float(cells_[std::size_t(a)] << cell_shift);
+              side_max[a][l] = rising ? e_cells : std::numeric_limits<float>::infinity();
+              side_min[a][l] = rising ? -std::numeric_limits<float>::infinity() : 0.0f;
               still = still || !(delta[a] > 1e-6 || delta[a] < -1e-6);
             }
             u0[l] = kFrontToBack ? -rs.k_last : rs.k_first;
@@ -604,18 +608,26 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             }
             return run;
           };
-          // The same where every lane moves on every axis: only the side ahead bounds a run, bound
-          // = the side + its inset (hi + -0.01 is hi - 0.01 exactly), the same quotients and minima.
-          auto cube_run = [&](const VI(&c)[3], VI r, const VD(&g)[3], VD run) {
-            if (still) return cube_run_any(c, r, g, run);
+          // Whole planes of each lane's run (0 where < 1), capped at `cap`. Where every lane moves on
+          // every axis, only the side ahead bounds a run, and the run is computed in float from the
+          // float position: (side ∓ 0.01 - g) / Δg errs by a few float ulps of g and of the side
+          // (< 1e-3 voxel for coordinates below 8192) plus 1e-7 of the distance (< 1e-3 voxel for
+          // cubes below 8192 voxels), well inside the 0.01 voxel inset, so the lane stays in its
+          // cube for the planes counted. (The packet only needs runs that never overshoot: its
+          // lanes' statuses are tested again when the shortest ends.) Otherwise the scalar run.
+          const bool float_runs = !still && std::max({dims[0], dims[1], dims[2]}) < 8192;
+          auto whole_runs = [&](const VI(&c)[3], VI r, const VD(&g)[3], const VF(&gf)[3], VI cap) {
+            if (!float_runs) {
+              const VD run = cube_run_any(c, r, g, __builtin_convertvector(cap, VD));
+              return __builtin_convertvector(select(run >= 1, run, splat(0)), VI);
+            }
+            VF run = __builtin_convertvector(cap, VF);
             for (int a = 0; a < 3; ++a) {
-              // The side ahead in voxels, e (c + r + 1) or e (c - r); closed (not at the volume's
-              // border) where it lies inside (0, e · cells): c + r < cells - 1, c - r > 0.
-              const VD side = __builtin_convertvector((c[a] + select(rises[a], r + 1, -r)) << cell_shift, VD);
-              const VD run_a = (side + off[a] - g[a]) * ID[a];
+              const VF side = __builtin_convertvector((c[a] + select(rises[a], r + 1, -r)) << cell_shift, VF);
+              const VF run_a = (side + off[a] - gf[a]) * IDf[a];
               run = select((side < side_max[a]) & (side > side_min[a]) & (run_a < run), run_a, run);
             }
-            return run;
+            return select(run >= 1, __builtin_convertvector(run, VI), splati(0));
           };
           // The packet's planes u (u = k back to front, -k front to back) from the first lane's
           // first to the last lane's last; lane l takes part in [u0, uend) until it terminates.
@@ -652,9 +664,8 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
               const VI info = gather_i32(cell_info, cell);
               const VI dist = info & 255, reach = info >> 8;
               const VI empty = dist != 0;
-              VD run = cube_run(c, select(empty, dist - 1, reach), g, __builtin_convertvector(ns - 1 - step, VD));
-              run = select(wide(inr & (live_runs ? splati(-1) : empty)) & (run >= 1), run, splat(0));
-              const VI nrun = __builtin_convertvector(run, VI);
+              const VI nrun = select(inr & (live_runs ? splati(-1) : empty),
+                                     whole_runs(c, select(empty, dist - 1, reach), g, gf, ns - 1 - step), zero);
               const VI waiting = alive & ~done & (u0 > U);
               const int n = std::min(hmin(select(inr, nrun, splati(std::numeric_limits<int>::max()))),
                                      hmin(select(waiting, u0 - U - 1, splati(std::numeric_limits<int>::max()))));
