@@ -101,6 +101,19 @@ inline VF gather(const T* data, VI offset) {
   return r;
 }
 
+/// data[offset] and data[offset + 1] per lane (neighbouring floats; offset + 1 must be valid in
+/// every lane): one 64-bit gather where the target has it.
+inline void gather_pairs(const float* data, VI offset, VF& first, VF& second) {
+#if defined(__AVX512F__)
+  // (The masked forms with a zero source: GCC 12 flags the unmasked ones' undefined source.)
+  const VL p = VL(_mm512_mask_i32gather_epi64(_mm512_setzero_si512(), 0xFF, __m256i(offset), data, 4));
+  first = VF(__builtin_convertvector(p, VI));  // the low halves' bits: data[offset]
+  second = VF(__builtin_convertvector(p >> 32, VI));
+#else
+  for (int l = 0; l < kLanes; ++l) first[l] = data[offset[l]], second[l] = data[offset[l] + 1];
+#endif
+}
+
 /// data[offset] per lane (int32 table).
 inline VI gather_i32(const std::int32_t* data, VI offset) {
 #if defined(__AVX2__)

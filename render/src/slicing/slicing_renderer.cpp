@@ -311,6 +311,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
   const bool offsets_fit =
       st[0] >= 0 && st[1] >= 0 && st[2] >= 0 &&
       (dims[0] - 1) * st[0] + (dims[1] - 1) * st[1] + (dims[2] - 1) * st[2] < (std::int64_t(1) << 31);
+  const bool x_packed = st[0] == 1;  // neighbouring x samples adjacent (the packets' paired fetch)
   const bool use_packets = s_.simd && !exact_positions && offsets_fit;  // packets: incremental positions
   visit_samples(volume_, [&](const auto samples) {
     // Blinn-Phong of a lit sample: colour c at the stencil (i0, j0, k0) with weights w, world point
@@ -700,11 +701,29 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
               o1[a] = select(sample, clampv(ii[a] + 1, cell_max[a]) * str[a], zero);
             }
             const VF one_f = splatf(1.0f);
-            auto v = [&](VI o) { return gather(samples.data, o); };
-            const VF c00 = v(o0[0] + o0[1] + o0[2]) * (one_f - w[0]) + v(o1[0] + o0[1] + o0[2]) * w[0];
-            const VF c10 = v(o0[0] + o1[1] + o0[2]) * (one_f - w[0]) + v(o1[0] + o1[1] + o0[2]) * w[0];
-            const VF c01 = v(o0[0] + o0[1] + o1[2]) * (one_f - w[0]) + v(o1[0] + o0[1] + o1[2]) * w[0];
-            const VF c11 = v(o0[0] + o1[1] + o1[2]) * (one_f - w[0]) + v(o1[0] + o1[1] + o1[2]) * w[0];
+            // The corners v[y][z] at x0 and x1 (offsets y0/y1, z0/z1). Float samples with x fastest
+            // and no lane at the x border: each x0, x1 pair by one 64-bit gather (the same values).
+            VF vx0[2][2], vx1[2][2];
+            bool paired = false;
+            if constexpr (std::is_same_v<std::remove_cv_t<std::remove_pointer_t<decltype(samples.data)>>, float>) {
+              paired = x_packed && !any(sample & ((ii[0] < 0) | (ii[0] >= cell_max[0])));
+              if (paired)
+                for (int yy = 0; yy < 2; ++yy)
+                  for (int zz = 0; zz < 2; ++zz)
+                    gather_pairs(samples.data, o0[0] + (yy ? o1[1] : o0[1]) + (zz ? o1[2] : o0[2]), vx0[yy][zz],
+                                 vx1[yy][zz]);
+            }
+            if (!paired)
+              for (int yy = 0; yy < 2; ++yy)
+                for (int zz = 0; zz < 2; ++zz) {
+                  const VI oyz = (yy ? o1[1] : o0[1]) + (zz ? o1[2] : o0[2]);
+                  vx0[yy][zz] = gather(samples.data, o0[0] + oyz);
+                  vx1[yy][zz] = gather(samples.data, o1[0] + oyz);
+                }
+            const VF c00 = vx0[0][0] * (one_f - w[0]) + vx1[0][0] * w[0];
+            const VF c10 = vx0[1][0] * (one_f - w[0]) + vx1[1][0] * w[0];
+            const VF c01 = vx0[0][1] * (one_f - w[0]) + vx1[0][1] * w[0];
+            const VF c11 = vx0[1][1] * (one_f - w[0]) + vx1[1][1] * w[0];
             const VF f =
                 ((c00 * (one_f - w[1]) + c10 * w[1]) * (one_f - w[2]) + (c01 * (one_f - w[1]) + c11 * w[1]) * w[2]) *
                 samples.scale;
