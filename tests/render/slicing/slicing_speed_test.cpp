@@ -291,7 +291,8 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
   // equal, not close. Variants
   // 0-5 as above, 6: the linear TF unmasked (classified lane by lane), 7: a mask with two constant
   // TFs unlit (the eight-lane range tests under a mask), 8: opacity correction off and additive
-  // with a background; tiles of 16 and 5 pixels (packets cut at the tile's edge) and no skipping.
+  // with a background, 9 and 10: Blend and combined on an 8-bit copy of the volume; tiles of 16
+  // and 5 pixels (packets cut at the tile's edge) and no skipping.
   const Volume& v = phantom();
   TransferFunction bone_only;
   {
@@ -299,13 +300,20 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
     r[0] = {0.5, 0.9, true, false, Eigen::Vector3d(200, 220, 255), 0.3};
     bone_only = TransferFunction(r, "bone_only");
   }
+  // An 8-bit copy (value scale 1/255): the packets' per-lane fetch of non-float samples.
+  Volume bytes = Volume::allocate(v.nx(), v.ny(), v.nz(), SampleType::kUint8);
+  bytes.place_like(v);
+  bytes.set_value_scale(1.0 / 255);
+  for (int k = 0; k < v.nz(); ++k)
+    for (int j = 0; j < v.ny(); ++j)
+      for (int i = 0; i < v.nx(); ++i) bytes.set_value(i, j, k, v.value(i, j, k));
   int compared = 0;
   for (const Camera& cam : cameras(v.domain()))
-    for (int variant = 0; variant < 9; ++variant)
+    for (int variant = 0; variant < 11; ++variant)
       for (int tile : {16, 5})
         for (bool skip : {true, false}) {
           if (!skip && tile == 5) continue;
-          SlicingSettings s = variant_settings(v, variant < 6 ? variant : 0);
+          SlicingSettings s = variant_settings(v, variant < 6 ? variant : variant == 10 ? 3 : 0);
           if (variant == 6) s.tfs[0] = highlight();
           if (variant == 7) s.mask = test_mask(v), s.tfs[1] = bone_only;
           if (variant == 8) {
@@ -315,11 +323,12 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
           s.tile = tile;
           s.skip_empty = skip;
           s.simd = false;
-          const SlicingRenderer scalar_renderer(v, s);
+          const Volume& vol = variant >= 9 ? bytes : v;
+          const SlicingRenderer scalar_renderer(vol, s);
           const SlicingFrame scalar = scalar_renderer.render(cam);
           s.simd = true;
           const SlicingFrame packets =
-              SlicingRenderer(v, s,
+              SlicingRenderer(vol, s,
                               scalar_renderer.gradients() ? std::optional<GradientVolume>(*scalar_renderer.gradients())
                                                           : std::nullopt)
                   .render(cam);
@@ -347,7 +356,7 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
           }
           ++compared;
         }
-  EXPECT_EQ(compared, 3 * 9 * 3);
+  EXPECT_EQ(compared, 3 * 11 * 3);
   EXPECT_TRUE(SlicingSettings{}.simd);
 }
 
