@@ -949,6 +949,9 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
   if (const auto* p = std::get_if<Pinhole>(&camera))
     add("camera.fov", fmt::format("{:.6g} deg (vertical)", 2 * std::atan(0.5 * p->height / p->fy) * 180 / M_PI));
   add("cpu.realisation", "per-pixel ray-plane sampling");
+  add("cpu.packets", s.simd && !s.exact_positions
+                         ? "8 pixels of a tile row on SIMD lanes (the same image as one ray at a time)"
+                         : "off (one ray at a time)");
   add("mode", slicing_mode_name(s.mode));
   add("blend.operator", s.blend == BlendOperator::kOver ? "over" : "additive");
   add("blend.opacity_correction", s.opacity_correction ? "on, dref = h0, along-ray spacing dd / cos psi" : "off");
