@@ -109,10 +109,13 @@ struct SlicingSettings {
   /// Packets (issue 17's third speed round): true (default): eight neighbouring pixels of a tile
   /// row advance plane by plane together, positions, cells, trilinear fetches (gathers), the
   /// constant TF's classification and the compositing on eight lanes; a lane that has nothing to
-  /// do at a plane (outside its ray's planes, in an empty run, cut away by the mask, terminated) is
-  /// masked. Every lane takes the samples, counts and arithmetic of its scalar ray (lighting, mask
-  /// lookups and the linear TF per lane, as the scalar path does), so the image is the scalar
-  /// path's bit for bit (slicing_speed_test). false: one ray at a time (the reference).
+  /// do at a plane (outside its ray's planes, in an empty cell, cut away by the mask, terminated)
+  /// is masked. Empty space is skipped per packet (lookups when the shortest lane run ends, jumps
+  /// where every lane is empty), so each lane fetches exactly its ray's live samples with its ray's
+  /// arithmetic (lighting, mask lookups and the linear TF per lane with the scalar code): the image
+  /// and the samples, skipped, classified and terminated counts are the scalar path's bit for bit
+  /// (slicing_speed_test); visited and cell_tests count the packets' own work. Not with
+  /// exact_positions. false: one ray at a time (the reference).
   bool simd = true;
 };
 
@@ -125,7 +128,8 @@ struct SlicingStats {
   std::int64_t classified = 0;  ///< samples past the mask (TF evaluated)
   std::int64_t skipped = 0;     ///< samples in empty cells (not fetched)
   std::int64_t terminated = 0;  ///< rays stopped by early termination (their remaining samples not counted)
-  std::int64_t visited = 0;     ///< samples whose position was computed (the others jumped in empty runs)
+  std::int64_t visited =
+      0;  ///< samples whose position was computed (the others jumped in empty runs; packets: lane positions)
   std::int64_t cell_tests = 0;  ///< visited samples whose empty-space cell was looked up (the others in live runs)
   int slices = 0;               ///< planes in the stack
   double slice_spacing = 0;     ///< Δd
