@@ -539,8 +539,10 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                          splati(std::int32_t(samples.sz))};
       const VI zero = splati(0), one = splati(1);
       auto clampv = [](VI i, VI hi) { return select(i < 0, splati(0), select(i > hi, hi, i)); };
-      for (int y = ty * T; y < std::min(H, (ty + 1) * T); ++y)
-        for (int x0 = tx * T; x0 < std::min(W, (tx + 1) * T); x0 += kLanes) {
+      // Packets of 4 x 2 pixels (lane l at x0 + l % 4, y0 + l / 4): neighbours closer than in a row.
+      const int x_end = std::min(W, (tx + 1) * T), y_end = std::min(H, (ty + 1) * T);
+      for (int y0 = ty * T; y0 < y_end; y0 += 2)
+        for (int x0 = tx * T; x0 < x_end; x0 += 4) {
           std::array<CameraRay, kLanes> lray;
           std::array<RaySlices, kLanes> lrs;
           VD G[3] = {}, D[3] = {}, ID[3] = {}, ex = splat(1);
@@ -554,8 +556,8 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
           double last_a[kLanes], last_ac[kLanes];
           for (int l = 0; l < kLanes; ++l) {
             last_a[l] = -1, last_ac[l] = 0;
-            const int x = x0 + l;
-            if (x >= std::min(W, (tx + 1) * T)) continue;
+            const int x = x0 + l % 4, y = y0 + l / 4;
+            if (x >= x_end || y >= y_end) continue;
             lray[l] = rays.generate_ray(x, y);
             lrs[l] = ray_slices(stack, box, lray[l].origin, lray[l].direction);
             const RaySlices& rs = lrs[std::size_t(l)];
@@ -840,12 +842,14 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
           cnt.skipped += hsum(n_lane_samples) - hsum(n_fetched);
           cnt.classified += hsum(n_classified);
           cnt.cell_tests += hsum(n_cell_tests);
-          for (int l = 0; l < kLanes && x0 + l < std::min(W, (tx + 1) * T); ++l) {
+          for (int l = 0; l < kLanes; ++l) {
+            const int x = x0 + l % 4, y = y0 + l / 4;
+            if (x >= x_end || y >= y_end) continue;
             const Eigen::Vector3d C(Cr[l], Cg[l], Cb[l]);
             const Eigen::Vector3d out = mode == SlicingMode::kBlend ? Eigen::Vector3d(C + (1 - A[l]) * background)
                                                                     : (A[l] > 0 ? C : background);
-            for (int ch = 0; ch < 3; ++ch) frame.raw.at(x0 + l, y, ch) = float(out[ch]);
-            frame.alpha.at(x0 + l, y) = float(A[l]);
+            for (int ch = 0; ch < 3; ++ch) frame.raw.at(x, y, ch) = float(out[ch]);
+            frame.alpha.at(x, y) = float(A[l]);
           }
         }
       counts[std::size_t(ty) * tiles_x + tx] = cnt;
