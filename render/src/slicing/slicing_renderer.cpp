@@ -518,7 +518,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
         }
       counts[std::size_t(ty) * tiles_x + tx] = cnt;
     };
-    // The SIMD path (SlicingSettings::simd): packets of eight neighbouring pixels of a tile row.
+    // The SIMD path (SlicingSettings::simd): packets of eight neighbouring pixels of a tile (4 x 2).
     // Each lane keeps its ray's scalar state (first position, move per plane, the next step it
     // visits, the end of its live run); the packet visits plane K, the nearest plane that some
     // live lane visits next (planes in the order of the scalar loop: u = k back to front, u = -k
@@ -954,7 +954,7 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
     add("camera.fov", fmt::format("{:.6g} deg (vertical)", 2 * std::atan(0.5 * p->height / p->fy) * 180 / M_PI));
   add("cpu.realisation", "per-pixel ray-plane sampling");
   add("cpu.packets", s.simd && !s.exact_positions
-                         ? "8 pixels of a tile row on SIMD lanes (the same image as one ray at a time)"
+                         ? "4 x 2 pixel blocks on 8 SIMD lanes (the same image as one ray at a time)"
                          : "off (one ray at a time)");
   add("mode", slicing_mode_name(s.mode));
   add("blend.operator", s.blend == BlendOperator::kOver ? "over" : "additive");

@@ -107,7 +107,7 @@ struct SlicingSettings {
   /// measurements).
   bool live_runs = true;
   /// Packets (issue 17's third speed round): true (default): eight neighbouring pixels of a tile
-  /// row advance plane by plane together, positions, cells, trilinear fetches (gathers), the
+  /// (a 4 x 2 block) advance plane by plane together, positions, cells, trilinear fetches (gathers), the
   /// constant TF's classification and the compositing on eight lanes; a lane that has nothing to
   /// do at a plane (outside its ray's planes, in an empty cell, cut away by the mask, terminated)
   /// is masked. Empty space is skipped per packet (lookups when the shortest lane run ends, jumps
