@@ -2,6 +2,11 @@
 
 #include <meltlab/render/slicing/slicing_renderer.h>
 
+#include "packet.h"
+
+// The packets pass 64-byte vectors between inline lambdas of this file only (no ABI crossed).
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 #include <meltlab/core/error.h>
 #include <meltlab/core/time.h>
 
@@ -12,6 +17,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <type_traits>
 
 namespace meltlab::render {
@@ -69,6 +75,12 @@ class InlineTf {
   }
   double piece_alpha(int p) const { return alpha_[std::size_t(p)]; }
   const Eigen::Vector3d& piece_rgb(int p) const { return rgb01_[std::size_t(p)]; }
+  /// The constant kind's ranges (range i is piece i + 1), for the packets' own range tests.
+  int ranges() const { return int(lo_.size()); }
+  double range_lo(int i) const { return lo_[std::size_t(i)]; }
+  double range_hi(int i) const { return hi_[std::size_t(i)]; }
+  bool range_lo_closed(int i) const { return lo_closed_[std::size_t(i)] != 0; }
+  bool range_hi_closed(int i) const { return hi_closed_[std::size_t(i)] != 0; }
   /// Where a value falls among control points that the four curves share (the `points` rows of
   /// a scene): i = -1 before the first, -2 at or after the last, else between i - 1 and i at t.
   struct Segment {
@@ -231,6 +243,9 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
     // to the nearest empty cell minus one (254 where none is within the cap).
     live_reach_ = chebyshev(false);
     for (auto& r : live_reach_) r = std::uint8_t(r == 0 ? 0 : r - 1);
+    cell_info_.resize(live_.size());
+    for (std::size_t i = 0; i < live_.size(); ++i)
+      cell_info_[i] = std::int32_t(dist_[i]) | std::int32_t(live_reach_[i]) << 8;
   }
 }
 
@@ -286,7 +301,36 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
   const bool live_runs = s_.live_runs;
   int max_pieces = 1;
   for (const auto& tf : tfs) max_pieces = std::max(max_pieces, tf.pieces());
+  // The packets' TF on eight lanes: the constant kind's range tests; a linear TF in use is
+  // evaluated lane by lane (InlineTf's scalar code).
+  bool all_constant = true;
+  for (std::size_t t = 0; t < (use_mask ? 4 : 1); ++t) all_constant = all_constant && !tfs[t].linear();
+  const std::int32_t* const cell_info = cell_info_.data();
+  // Packets index the samples with 32-bit element offsets (and read 32-bit cell records).
+  const auto st = volume_.strides();
+  const bool offsets_fit =
+      st[0] >= 0 && st[1] >= 0 && st[2] >= 0 &&
+      (dims[0] - 1) * st[0] + (dims[1] - 1) * st[1] + (dims[2] - 1) * st[2] < (std::int64_t(1) << 31);
+  const bool x_packed = st[0] == 1;  // neighbouring x samples adjacent (the packets' paired fetch)
+  const bool use_packets = s_.simd && !exact_positions && offsets_fit;  // packets: incremental positions
   visit_samples(volume_, [&](const auto samples) {
+    // Blinn-Phong of a lit sample: colour c at the stencil (i0, j0, k0) with weights w, world point
+    // p, unit vector towards the eye.
+    auto shade = [&](Eigen::Vector3d& c, int i0, int j0, int k0, float wx, float wy, float wz, const Eigen::Vector3d& p,
+                     const Eigen::Vector3d& to_eye) {
+      Eigen::Vector3d e;
+      for (int ch = 0; ch < 3; ++ch) e[ch] = gch[std::size_t(ch)].trilinear_cell(i0, j0, k0, wx, wy, wz);
+      const Eigen::Vector3d gd = (2.0 * e - Eigen::Vector3d::Ones()) * grad_scale;
+      const Eigen::Vector3d gw = gd.cwiseProduct(inv_spacing);  // index units -> world direction
+      if (gd.norm() > light.gate && gw.norm() > 0) {
+        const Eigen::Vector3d nrm = -gw.normalized();
+        const Eigen::Vector3d l = (light_pos - p).normalized();
+        const Eigen::Vector3d h = (l + to_eye).normalized();
+        const double diff = std::max(nrm.dot(l), 0.0);
+        const double spec = std::pow(std::max(nrm.dot(h), 0.0), light.exponent);
+        c = c * (light.ambient + light.diffuse * diff) + Eigen::Vector3d::Constant(light.specular * spec);
+      }
+    };
     // One tile, specialised on what changes per frame only (lit, masked, front to back), so that
     // the sample loop carries no tests of settings.
     auto do_tile = [&](int tx, int ty, auto lit_c, auto masked_c, auto ftb_c) {
@@ -432,20 +476,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                 }
               }
               Eigen::Vector3d c = tf.linear() ? tf.rgb(fn, seg) : tf.piece_rgb(piece);
-              if constexpr (kLit) {
-                Eigen::Vector3d e;
-                for (int ch = 0; ch < 3; ++ch) e[ch] = gch[std::size_t(ch)].trilinear_cell(i0, j0, k0, wx, wy, wz);
-                const Eigen::Vector3d gd = (2.0 * e - Eigen::Vector3d::Ones()) * grad_scale;
-                const Eigen::Vector3d gw = gd.cwiseProduct(inv_spacing);  // index units -> world direction
-                if (gd.norm() > light.gate && gw.norm() > 0) {
-                  const Eigen::Vector3d nrm = -gw.normalized();
-                  const Eigen::Vector3d l = (light_pos - p).normalized();
-                  const Eigen::Vector3d h = (l + to_eye).normalized();
-                  const double diff = std::max(nrm.dot(l), 0.0);
-                  const double spec = std::pow(std::max(nrm.dot(h), 0.0), light.exponent);
-                  c = c * (light.ambient + light.diffuse * diff) + Eigen::Vector3d::Constant(light.specular * spec);
-                }
-              }
+              if constexpr (kLit) shade(c, i0, j0, k0, wx, wy, wz, p, to_eye);
               if constexpr (kFrontToBack) {
                 const double w = (1 - acc.A) * ac;
                 acc.C += w * c;
@@ -487,8 +518,349 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
         }
       counts[std::size_t(ty) * tiles_x + tx] = cnt;
     };
+    // The SIMD path (SlicingSettings::simd): packets of eight neighbouring pixels of a tile (4 x 2).
+    // Each lane keeps its ray's scalar state (first position, move per plane, the next step it
+    // visits, the end of its live run); the packet visits plane K, the nearest plane that some
+    // live lane visits next (planes in the order of the scalar loop: u = k back to front, u = -k
+    // front to back), and the lanes whose next plane it is are active there. A lane's sample
+    // position at step j is fma(j, Δg, g_0) as in the scalar loop, so every lane takes the same
+    // samples, jumps, counts and arithmetic as its ray alone.
+    auto do_packet_tile = [&](int tx, int ty, auto lit_c, auto masked_c, auto ftb_c) {
+      using namespace packet;
+      constexpr bool kLit = decltype(lit_c)::value, kMasked = decltype(masked_c)::value;
+      constexpr bool kFrontToBack = decltype(ftb_c)::value;
+      TileCounts cnt;
+      // Corrected α per lane of each constant piece (slot t · max_pieces + piece), computed when a
+      // lane first meets it (-1: not yet), as the scalar loop's per-ray table.
+      std::vector<VD> acp(std::size_t(4 * max_pieces));
+      const VI cell_max[3] = {splati(dims[0] - 1), splati(dims[1] - 1), splati(dims[2] - 1)};
+      const VI ncell_m1[3] = {splati(cells_[0] - 1), splati(cells_[1] - 1), splati(cells_[2] - 1)};
+      const VI str[3] = {splati(std::int32_t(samples.sx)), splati(std::int32_t(samples.sy)),
+                         splati(std::int32_t(samples.sz))};
+      const VI zero = splati(0), one = splati(1);
+      auto clampv = [](VI i, VI hi) { return select(i < 0, splati(0), select(i > hi, hi, i)); };
+      // Packets of 4 x 2 pixels (lane l at x0 + l % 4, y0 + l / 4): neighbours closer than in a row.
+      const int x_end = std::min(W, (tx + 1) * T), y_end = std::min(H, (ty + 1) * T);
+      for (int y0 = ty * T; y0 < y_end; y0 += 2)
+        for (int x0 = tx * T; x0 < x_end; x0 += 4) {
+          std::array<CameraRay, kLanes> lray;
+          std::array<RaySlices, kLanes> lrs;
+          VD G[3] = {}, D[3] = {}, ID[3] = {}, ex = splat(1);
+          VI u0 = zero, ns = zero, alive = zero;
+          // Per axis: the lanes whose g rises (the cube's side ahead is its high side), and the
+          // side's 0.01 inset (-0.01 high, +0.01 low); `still`: some lane hardly moves on an axis.
+          VI rises[3] = {zero, zero, zero};
+          VF off[3] = {}, side_max[3] = {}, side_min[3] = {};  // the side ahead closed within (min, max)
+          VF IDf[3] = {};                                      // 1 / Δg per axis in float
+          bool still = false;
+          double last_a[kLanes], last_ac[kLanes];
+          for (int l = 0; l < kLanes; ++l) {
+            last_a[l] = -1, last_ac[l] = 0;
+            const int x = x0 + l % 4, y = y0 + l / 4;
+            if (x >= x_end || y >= y_end) continue;
+            lray[l] = rays.generate_ray(x, y);
+            lrs[l] = ray_slices(stack, box, lray[l].origin, lray[l].direction);
+            const RaySlices& rs = lrs[std::size_t(l)];
+            if (rs.empty()) continue;
+            ++cnt.rays;
+            const CameraRay& ray = lray[std::size_t(l)];
+            ex[l] = opacity_correction ? (stack.spacing / rs.cos_psi) / h0 : 1.0;
+            const Eigen::Vector3d delta =
+                (kFrontToBack ? 1.0 : -1.0) * (stack.spacing / rs.cos_psi) * ray.direction.cwiseProduct(inv_spacing);
+            const Eigen::Vector3d inv_delta = delta.cwiseInverse();
+            const int k_start = kFrontToBack ? rs.k_last : rs.k_first;
+            const Eigen::Vector3d g_first =
+                (ray.origin + rs.t(stack, k_start) * ray.direction - origin).cwiseProduct(inv_spacing);
+            for (int a = 0; a < 3; ++a) {
+              G[a][l] = g_first[a], D[a][l] = delta[a], ID[a][l] = inv_delta[a];
+              IDf[a][l] = float(inv_delta[a]);
+            }
+            for (int a = 0; a < 3; ++a) {
+              const bool rising = delta[a] > 1e-6;
+              rises[a][l] = rising ? -1 : 0;
+              off[a][l] = rising ? -0.01f : 0.01f;
+              const float e_cells = float(cells_[std::size_t(a)] << cell_shift);
+              side_max[a][l] = rising ? e_cells : std::numeric_limits<float>::infinity();
+              side_min[a][l] = rising ? -std::numeric_limits<float>::infinity() : 0.0f;
+              still = still || !(delta[a] > 1e-6 || delta[a] < -1e-6);
+            }
+            u0[l] = kFrontToBack ? -rs.k_last : rs.k_first;
+            ns[l] = rs.k_last - rs.k_first + 1;
+            alive[l] = -1;
+          }
+          for (int t = 0; t < 4; ++t) {
+            acp[std::size_t(t * max_pieces)] = splat(0);
+            for (int p = 1; p < max_pieces; ++p) acp[std::size_t(t * max_pieces + p)] = splat(-1);
+          }
+          VD Cr = splat(0), Cg = splat(0), Cb = splat(0), A = splat(0);
+          // Counters per lane (a mask is -1 where true: subtracting it counts), summed after the packet.
+          VI n_visited = zero, n_fetched = zero, n_classified = zero, n_cell_tests = zero;
+          // The planes from a lane's sample on while g stays 0.01 inside the cube of cells c ± r
+          // (the scalar loop's cube_run, lane by lane: the same minima of the same quotients).
+          auto cube_run_any = [&](const VI(&c)[3], VI r, const VD(&g)[3], VD run) {
+            for (int a = 0; a < 3; ++a) {
+              const VL closed_hi = wide(~((c[a] + r) >= ncell_m1[a])), closed_lo = wide(~((c[a] - r) <= 0));
+              const VD hi = __builtin_convertvector((c[a] + r + 1) << cell_shift, VD);
+              const VD lo = __builtin_convertvector((c[a] - r) << cell_shift, VD);
+              const VL up = D[a] > 1e-6, down = D[a] < -1e-6;
+              const VD run_hi = (hi - 0.01 - g[a]) * ID[a], run_lo = (lo + 0.01 - g[a]) * ID[a];
+              run = select(up & closed_hi & (run_hi < run), run_hi, run);
+              run = select(down & closed_lo & (run_lo < run), run_lo, run);
+              const VL parked = ~up & ~down & ((closed_hi & (g[a] > hi - 0.01)) | (closed_lo & (g[a] < lo + 0.01)));
+              run = select(parked, splat(0), run);
+            }
+            return run;
+          };
+          // Whole planes of each lane's run (0 where < 1), capped at `cap`. Where every lane moves on
+          // every axis, only the side ahead bounds a run, and the run is computed in float from the
+          // float position: (side ∓ 0.01 - g) / Δg errs by a few float ulps of g and of the side
+          // (< 1e-3 voxel for coordinates below 8192) plus 1e-7 of the distance (< 1e-3 voxel for
+          // cubes below 8192 voxels), well inside the 0.01 voxel inset, so the lane stays in its
+          // cube for the planes counted. (The packet only needs runs that never overshoot: its
+          // lanes' statuses are tested again when the shortest ends.) Otherwise the scalar run.
+          const bool float_runs = !still && std::max({dims[0], dims[1], dims[2]}) < 8192;
+          auto whole_runs = [&](const VI(&c)[3], VI r, const VD(&g)[3], const VF(&gf)[3], VI cap) {
+            if (!float_runs) {
+              const VD run = cube_run_any(c, r, g, __builtin_convertvector(cap, VD));
+              return __builtin_convertvector(select(run >= 1, run, splat(0)), VI);
+            }
+            VF run = __builtin_convertvector(cap, VF);
+            for (int a = 0; a < 3; ++a) {
+              const VF side = __builtin_convertvector((c[a] + select(rises[a], r + 1, -r)) << cell_shift, VF);
+              const VF run_a = (side + off[a] - gf[a]) * IDf[a];
+              run = select((side < side_max[a]) & (side > side_min[a]) & (run_a < run), run_a, run);
+            }
+            return select(run >= 1, __builtin_convertvector(run, VI), splati(0));
+          };
+          // The packet's planes u (u = k back to front, -k front to back) from the first lane's
+          // first to the last lane's last; lane l takes part in [u0, uend) until it terminates.
+          // Empty-space skipping per packet: at a test every lane in range looks up its cell and
+          // its cube run (the scalar loop's, lane by lane); until the shortest run (or a waiting
+          // lane's first plane) ends, every lane stays in the cube it tested in, so its status
+          // (live: sample, empty: skip) holds without lookups, and where every lane in range is
+          // empty the packet jumps. So each lane fetches exactly its scalar ray's samples (the
+          // live ones; empty-cell samples have α = 0 and change nothing): the same pixels, sample,
+          // fetch, classification and termination counts; only visited and cell_tests differ.
+          const VI uend = u0 + ns;
+          VI n_lane_samples = ns, done = zero, live = alive;
+          int u_first = std::numeric_limits<int>::max(), u_last = std::numeric_limits<int>::min();
+          for (int l = 0; l < kLanes; ++l)
+            if (alive[l]) u_first = std::min(u_first, u0[l]), u_last = std::max(u_last, uend[l] - 1);
+          int test_at = skip ? u_first : std::numeric_limits<int>::max();
+          for (int U = u_first; U <= u_last; ++U) {
+            const int K = U;
+            const VI inr = (u0 <= U) & (uend > U) & ~done;
+            const VI step = splati(U) - u0;
+            const VD sd = __builtin_convertvector(step, VD);
+            const VD g[3] = {fma(sd, D[0], G[0]), fma(sd, D[1], G[1]), fma(sd, D[2], G[2])};
+            const VF gf[3] = {__builtin_convertvector(g[0], VF), __builtin_convertvector(g[1], VF),
+                              __builtin_convertvector(g[2], VF)};
+            const VF fl[3] = {floor(gf[0]), floor(gf[1]), floor(gf[2])};
+            const VI ii[3] = {__builtin_convertvector(fl[0], VI), __builtin_convertvector(fl[1], VI),
+                              __builtin_convertvector(fl[2], VI)};
+            n_visited -= inr;
+            if (U >= test_at) {
+              n_cell_tests -= inr;
+              const VI c[3] = {clampv(ii[0], cell_max[0]) >> cell_shift, clampv(ii[1], cell_max[1]) >> cell_shift,
+                               clampv(ii[2], cell_max[2]) >> cell_shift};
+              const VI cell = select(inr, c[0] + int(cells_x) * (c[1] + int(cells_y) * c[2]), zero);
+              const VI info = gather_i32(cell_info, cell);
+              const VI dist = info & 255, reach = info >> 8;
+              const VI empty = dist != 0;
+              const VI nrun = select(inr & (live_runs ? splati(-1) : empty),
+                                     whole_runs(c, select(empty, dist - 1, reach), g, gf, ns - 1 - step), zero);
+              const VI waiting = alive & ~done & (u0 > U);
+              const int n = std::min(hmin(select(inr, nrun, splati(std::numeric_limits<int>::max()))),
+                                     hmin(select(waiting, u0 - U - 1, splati(std::numeric_limits<int>::max()))));
+              if (n == std::numeric_limits<int>::max()) break;  // no lane in range or to come
+              live = ~empty;
+              test_at = U + 1 + n;
+              if (!any(inr & live)) {
+                U += n;  // every lane in range stays in empty cells for n more planes
+                continue;
+              }
+            }
+            VI sample = inr & live;
+            n_fetched -= sample;
+            if (!any(sample)) continue;
+            const int k = kFrontToBack ? -K : K;  // the plane (the same for every lane)
+            VI m = one;
+            if constexpr (kMasked) {
+              for (int l = 0; l < kLanes; ++l) {
+                if (!sample[l]) continue;
+                const auto& ray = lray[std::size_t(l)];
+                m[l] = mask.lookup(ray.origin + lrs[std::size_t(l)].t(stack, k) * ray.direction);
+                if (m[l] == 0) sample[l] = 0;
+              }
+            }
+            n_classified -= sample;
+            if (!any(sample)) continue;
+            // Trilinear fetch (VolumeSamples::trilinear_cell's arithmetic; offset 0 in idle lanes).
+            const VF w[3] = {gf[0] - fl[0], gf[1] - fl[1], gf[2] - fl[2]};
+            VI o0[3], o1[3];
+            for (int a = 0; a < 3; ++a) {
+              o0[a] = select(sample, clampv(ii[a], cell_max[a]) * str[a], zero);
+              o1[a] = select(sample, clampv(ii[a] + 1, cell_max[a]) * str[a], zero);
+            }
+            const VF one_f = splatf(1.0f);
+            // The corners v[y][z] at x0 and x1 (offsets y0/y1, z0/z1). Float samples with x fastest
+            // and no lane at the x border: each x0, x1 pair by one 64-bit gather (the same values).
+            VF vx0[2][2], vx1[2][2];
+            bool paired = false;
+            if constexpr (std::is_same_v<std::remove_cv_t<std::remove_pointer_t<decltype(samples.data)>>, float>) {
+              paired = x_packed && !any(sample & ((ii[0] < 0) | (ii[0] >= cell_max[0])));
+              if (paired)
+                for (int yy = 0; yy < 2; ++yy)
+                  for (int zz = 0; zz < 2; ++zz)
+                    gather_pairs(samples.data, o0[0] + (yy ? o1[1] : o0[1]) + (zz ? o1[2] : o0[2]), vx0[yy][zz],
+                                 vx1[yy][zz]);
+            }
+            if (!paired)
+              for (int yy = 0; yy < 2; ++yy)
+                for (int zz = 0; zz < 2; ++zz) {
+                  const VI oyz = (yy ? o1[1] : o0[1]) + (zz ? o1[2] : o0[2]);
+                  vx0[yy][zz] = gather(samples.data, o0[0] + oyz);
+                  vx1[yy][zz] = gather(samples.data, o1[0] + oyz);
+                }
+            const VF c00 = vx0[0][0] * (one_f - w[0]) + vx1[0][0] * w[0];
+            const VF c10 = vx0[1][0] * (one_f - w[0]) + vx1[1][0] * w[0];
+            const VF c01 = vx0[0][1] * (one_f - w[0]) + vx1[0][1] * w[0];
+            const VF c11 = vx0[1][1] * (one_f - w[0]) + vx1[1][1] * w[0];
+            const VF f =
+                ((c00 * (one_f - w[1]) + c10 * w[1]) * (one_f - w[2]) + (c01 * (one_f - w[1]) + c11 * w[1]) * w[2]) *
+                samples.scale;
+            const VD fn = (__builtin_convertvector(f, VD) - lo_) * inv_range;
+            VD a = splat(0), ac = splat(0), cr = splat(0), cg = splat(0), cb = splat(0);
+            if (all_constant) {
+              for (int t = 0; t < (kMasked ? 4 : 1); ++t) {
+                const VI sel = sample & (m == t + 1);
+                if (!any(sel)) continue;
+                const InlineTf& tf = tfs[std::size_t(t)];
+                VI piece = zero;
+                VD pa = splat(0), pr = splat(0), pg = splat(0), pb = splat(0), pac = acp[std::size_t(t * max_pieces)];
+                for (int i = tf.ranges() - 1; i >= 0; --i) {
+                  const double rl = tf.range_lo(i), rh = tf.range_hi(i);
+                  const VL above = tf.range_lo_closed(i) ? VL(fn >= rl) : VL(fn > rl);
+                  const VL below = tf.range_hi_closed(i) ? VL(fn <= rh) : VL(fn < rh);
+                  const VL in = above & below;
+                  const Eigen::Vector3d& rgb = tf.piece_rgb(i + 1);
+                  piece = select(narrow(in), splati(i + 1), piece);
+                  pa = select(in, splat(tf.piece_alpha(i + 1)), pa);
+                  pr = select(in, splat(rgb.x()), pr), pg = select(in, splat(rgb.y()), pg);
+                  pb = select(in, splat(rgb.z()), pb);
+                  pac = select(in, acp[std::size_t(t * max_pieces + i + 1)], pac);
+                }
+                for (unsigned b = bits(sel & narrow(pac < 0)); b != 0; b &= b - 1) {
+                  const int l = __builtin_ctz(b);
+                  const std::size_t slot = std::size_t(t * max_pieces + piece[l]);
+                  acp[slot][l] = ex[l] != 1.0 ? 1.0 - std::pow(1.0 - pa[l], ex[l]) : pa[l];
+                  pac[l] = acp[slot][l];
+                }
+                const VL ws = wide(sel);
+                a = select(ws, pa, a), ac = select(ws, pac, ac);
+                cr = select(ws, pr, cr), cg = select(ws, pg, cg), cb = select(ws, pb, cb);
+              }
+            } else {
+              for (int l = 0; l < kLanes; ++l) {
+                if (!sample[l]) continue;
+                const std::size_t ti = std::size_t(m[l] - 1);
+                const InlineTf& tf = tfs[ti];
+                double al, acl;
+                Eigen::Vector3d c;
+                if (tf.linear()) {
+                  InlineTf::Segment seg;
+                  al = tf.alpha(fn[l], seg);
+                  if (!(al > 0)) continue;
+                  acl = al;
+                  if (ex[l] != 1.0) {
+                    if (al != last_a[l]) last_a[l] = al, last_ac[l] = 1.0 - std::pow(1.0 - al, ex[l]);
+                    acl = last_ac[l];
+                  }
+                  c = tf.rgb(fn[l], seg);
+                } else {
+                  const int piece = tf.piece(fn[l]);
+                  al = tf.piece_alpha(piece);
+                  acl = al;
+                  if (ex[l] != 1.0 && piece != 0) {
+                    const std::size_t slot = ti * std::size_t(max_pieces) + std::size_t(piece);
+                    if (acp[slot][l] < 0) acp[slot][l] = 1.0 - std::pow(1.0 - al, ex[l]);
+                    acl = acp[slot][l];
+                  }
+                  c = tf.piece_rgb(piece);
+                }
+                a[l] = al, ac[l] = acl, cr[l] = c.x(), cg[l] = c.y(), cb[l] = c.z();
+              }
+            }
+            const VI vis = sample & narrow(a > 0);
+            if (!any(vis)) continue;
+            if constexpr (kLit) {
+              for (int l = 0; l < kLanes; ++l) {
+                if (!vis[l]) continue;
+                const auto& ray = lray[std::size_t(l)];
+                Eigen::Vector3d c(cr[l], cg[l], cb[l]);
+                shade(c, ii[0][l], ii[1][l], ii[2][l], w[0][l], w[1][l], w[2][l],
+                      ray.origin + lrs[std::size_t(l)].t(stack, k) * ray.direction, -ray.direction);
+                cr[l] = c.x(), cg[l] = c.y(), cb[l] = c.z();
+              }
+            }
+            const VL wv = wide(vis);
+            if constexpr (kFrontToBack) {
+              const VD wgt = (1.0 - A) * ac;
+              Cr = select(wv, Cr + wgt * cr, Cr), Cg = select(wv, Cg + wgt * cg, Cg),
+              Cb = select(wv, Cb + wgt * cb, Cb);
+              A = select(wv, A + wgt, A);
+              const VI term = vis & narrow(A >= stop_alpha);
+              if (any(term)) {
+                cnt.terminated += count(term);
+                n_lane_samples = select(term, step + 1, n_lane_samples);
+                done |= term;
+                if (!any(alive & ~done)) break;
+              }
+              continue;
+            }
+            if (mode == SlicingMode::kBlend) {
+              if (blend_op == BlendOperator::kOver) {
+                Cr = select(wv, ac * cr + (1.0 - ac) * Cr, Cr), Cg = select(wv, ac * cg + (1.0 - ac) * Cg, Cg);
+                Cb = select(wv, ac * cb + (1.0 - ac) * Cb, Cb);
+              } else {
+                Cr = select(wv, Cr + ac * cr, Cr), Cg = select(wv, Cg + ac * cg, Cg), Cb = select(wv, Cb + ac * cb, Cb);
+              }
+              A = select(wv, ac + (1.0 - ac) * A, A);
+            } else {
+              const VL wins = wv & (a >= A);
+              if (mode == SlicingMode::kCombined) {
+                const VL rest = wv & ~wins;
+                Cr = select(rest, ac * cr + (1.0 - ac) * Cr, Cr), Cg = select(rest, ac * cg + (1.0 - ac) * Cg, Cg);
+                Cb = select(rest, ac * cb + (1.0 - ac) * Cb, Cb);
+              }
+              Cr = select(wins, cr, Cr), Cg = select(wins, cg, Cg), Cb = select(wins, cb, Cb);
+              A = select(wins, a, A);
+            }
+          }
+          cnt.samples += hsum(n_lane_samples);
+          cnt.visited += hsum(n_visited);
+          cnt.skipped += hsum(n_lane_samples) - hsum(n_fetched);
+          cnt.classified += hsum(n_classified);
+          cnt.cell_tests += hsum(n_cell_tests);
+          for (int l = 0; l < kLanes; ++l) {
+            const int x = x0 + l % 4, y = y0 + l / 4;
+            if (x >= x_end || y >= y_end) continue;
+            const Eigen::Vector3d C(Cr[l], Cg[l], Cb[l]);
+            const Eigen::Vector3d out = mode == SlicingMode::kBlend ? Eigen::Vector3d(C + (1 - A[l]) * background)
+                                                                    : (A[l] > 0 ? C : background);
+            for (int ch = 0; ch < 3; ++ch) frame.raw.at(x, y, ch) = float(out[ch]);
+            frame.alpha.at(x, y) = float(A[l]);
+          }
+        }
+      counts[std::size_t(ty) * tiles_x + tx] = cnt;
+    };
     auto run_tiles = [&](auto lit_c, auto masked_c, auto ftb_c) {
-      auto tile = [&](int tx, int ty) { do_tile(tx, ty, lit_c, masked_c, ftb_c); };
+      auto tile = [&](int tx, int ty) {
+        if (use_packets)
+          do_packet_tile(tx, ty, lit_c, masked_c, ftb_c);
+        else
+          do_tile(tx, ty, lit_c, masked_c, ftb_c);
+      };
       if (s_.parallel)
         tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const auto& r) {
           for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
@@ -581,6 +953,9 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
   if (const auto* p = std::get_if<Pinhole>(&camera))
     add("camera.fov", fmt::format("{:.6g} deg (vertical)", 2 * std::atan(0.5 * p->height / p->fy) * 180 / M_PI));
   add("cpu.realisation", "per-pixel ray-plane sampling");
+  add("cpu.packets", s.simd && !s.exact_positions
+                         ? "4 x 2 pixel blocks on 8 SIMD lanes (the same image as one ray at a time)"
+                         : "off (one ray at a time)");
   add("mode", slicing_mode_name(s.mode));
   add("blend.operator", s.blend == BlendOperator::kOver ? "over" : "additive");
   add("blend.opacity_correction", s.opacity_correction ? "on, dref = h0, along-ray spacing dd / cos psi" : "off");

@@ -139,6 +139,7 @@ SlicingScene parse_slicing_scene(const ConfigSection& c) {
     c.fail_at("skip_cell", "'skip_cell' must be 2, 4, 8 or 16");
   s.early_termination = c.get_in_range<double>("early_termination", 0.0, 0.0, 1.0);
   s.exact_positions = c.get<bool>("exact_positions", false);
+  s.simd = c.get<bool>("simd", true);
   return out;
 }
 

@@ -106,6 +106,17 @@ struct SlicingSettings {
   /// counts and image as testing each. false: every sample's cell is looked up (for tests and
   /// measurements).
   bool live_runs = true;
+  /// Packets (issue 17's third speed round): true (default): eight neighbouring pixels of a tile
+  /// (a 4 x 2 block) advance plane by plane together, positions, cells, trilinear fetches (gathers), the
+  /// constant TF's classification and the compositing on eight lanes; a lane that has nothing to
+  /// do at a plane (outside its ray's planes, in an empty cell, cut away by the mask, terminated)
+  /// is masked. Empty space is skipped per packet (lookups when the shortest lane run ends, jumps
+  /// where every lane is empty), so each lane fetches exactly its ray's live samples with its ray's
+  /// arithmetic (lighting, mask lookups and the linear TF per lane with the scalar code): the image
+  /// and the samples, skipped, classified and terminated counts are the scalar path's bit for bit
+  /// (slicing_speed_test); visited and cell_tests count the packets' own work. Not with
+  /// exact_positions. false: one ray at a time (the reference).
+  bool simd = true;
 };
 
 /// Whether a mode needs the gradient volume.
@@ -117,7 +128,8 @@ struct SlicingStats {
   std::int64_t classified = 0;  ///< samples past the mask (TF evaluated)
   std::int64_t skipped = 0;     ///< samples in empty cells (not fetched)
   std::int64_t terminated = 0;  ///< rays stopped by early termination (their remaining samples not counted)
-  std::int64_t visited = 0;     ///< samples whose position was computed (the others jumped in empty runs)
+  std::int64_t visited =
+      0;  ///< samples whose position was computed (the others jumped in empty runs; packets: lane positions)
   std::int64_t cell_tests = 0;  ///< visited samples whose empty-space cell was looked up (the others in live runs)
   int slices = 0;               ///< planes in the stack
   double slice_spacing = 0;     ///< Δd
@@ -183,6 +195,8 @@ class SlicingRenderer {
   /// For a live cell, the radius (in cells) of the cube around it whose cells are all live: the
   /// Chebyshev distance to the nearest empty cell minus one (0 for empty cells).
   std::vector<std::uint8_t> live_reach_;
+  /// dist_ | live_reach_ << 8 per cell: one 32-bit gather per lane in the packets (SlicingSettings::simd).
+  std::vector<std::int32_t> cell_info_;
 };
 
 /// One frame (builds a SlicingRenderer).

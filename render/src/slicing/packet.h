@@ -1,0 +1,130 @@
+#pragma once
+// Eight-lane packets for the slicing renderer's SIMD path (slicing_renderer.cpp,
+// SlicingSettings::simd): GCC vector extensions, which the compiler lowers to what the target has
+// (one AVX-512 register for eight doubles, two AVX2 registers, or scalar code), and the target's
+// gather and fused multiply-add instructions where it has them (a loop over the lanes otherwise).
+// Every operation rounds as its scalar counterpart in the renderer does (-ffp-contract=off: no
+// fused multiply-add unless written as fma), so a lane computes the bits a scalar ray would.
+
+#include <cstdint>
+
+#if defined(__AVX2__) || defined(__AVX512F__) || defined(__FMA__)
+#include <immintrin.h>
+#endif
+
+#include <cmath>
+#include <type_traits>
+
+// The packets are passed between inline functions of one translation unit only; GCC's note that
+// 64-byte vectors change the ABI without AVX-512 does not apply.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+namespace meltlab::render::packet {
+
+constexpr int kLanes = 8;
+using VD = double __attribute__((vector_size(8 * kLanes)));        ///< eight doubles
+using VL = std::int64_t __attribute__((vector_size(8 * kLanes)));  ///< masks of VD (-1 true, 0 false)
+using VF = float __attribute__((vector_size(4 * kLanes)));         ///< eight floats
+using VI = std::int32_t __attribute__((vector_size(4 * kLanes)));  ///< eight ints, masks of VF
+
+inline VD splat(double x) { return VD{} + x; }
+inline VF splatf(float x) { return VF{} + x; }
+inline VI splati(std::int32_t x) { return VI{} + x; }
+
+/// An int mask (-1/0) widened to the mask of doubles.
+inline VL wide(VI m) { return __builtin_convertvector(m, VL); }
+inline VI narrow(VL m) { return __builtin_convertvector(m, VI); }
+/// Bit l set where lane l of a mask is true.
+inline unsigned bits(VI m) {
+#if defined(__AVX__)
+  return unsigned(_mm256_movemask_ps(__m256(m)));
+#else
+  unsigned r = 0;
+  for (int l = 0; l < kLanes; ++l) r |= (m[l] != 0 ? 1u : 0u) << l;
+  return r;
+#endif
+}
+inline bool any(VI m) { return bits(m) != 0; }
+inline int count(VI m) { return __builtin_popcount(bits(m)); }
+/// The sum of the lanes.
+inline std::int32_t hsum(VI x) {
+  std::int32_t r = 0;
+  for (int l = 0; l < kLanes; ++l) r += x[l];
+  return r;
+}
+/// The smallest lane.
+inline std::int32_t hmin(VI x) {
+#if defined(__AVX2__)
+  __m128i m = _mm_min_epi32(_mm256_castsi256_si128(__m256i(x)), _mm256_extracti128_si256(__m256i(x), 1));
+  m = _mm_min_epi32(m, _mm_shuffle_epi32(m, 0x4E));
+  m = _mm_min_epi32(m, _mm_shuffle_epi32(m, 0xB1));
+  return _mm_cvtsi128_si32(m);
+#else
+  std::int32_t r = x[0];
+  for (int l = 1; l < kLanes; ++l) r = x[l] < r ? x[l] : r;
+  return r;
+#endif
+}
+/// m ? a : b per lane.
+inline VD select(VL m, VD a, VD b) { return m ? a : b; }
+inline VI select(VI m, VI a, VI b) { return m ? a : b; }
+inline VF select(VI m, VF a, VF b) { return m ? a : b; }
+
+/// std::fma per lane (one rounding).
+inline VD fma(VD a, VD b, VD c) {
+#if defined(__AVX512F__)
+  return VD(_mm512_fmadd_pd(__m512d(a), __m512d(b), __m512d(c)));
+#else
+  VD r;
+  for (int l = 0; l < kLanes; ++l) r[l] = std::fma(a[l], b[l], c[l]);
+  return r;
+#endif
+}
+
+/// std::floor per lane for |x| < 2^31 (sample positions): truncate, then one down where that rose.
+inline VF floor(VF x) {
+  const VF t = __builtin_convertvector(__builtin_convertvector(x, VI), VF);
+  return t - (t > x ? splatf(1.0f) : splatf(0.0f));
+}
+
+/// data[offset] per lane as float (offset 0 in lanes that do not need a value: any valid index).
+template <class T>
+inline VF gather(const T* data, VI offset) {
+#if defined(__AVX2__)
+  if constexpr (std::is_same_v<T, float>) {
+    return VF(_mm256_i32gather_ps(reinterpret_cast<const float*>(data), __m256i(offset), 4));
+  }
+#endif
+  VF r;
+  for (int l = 0; l < kLanes; ++l) r[l] = static_cast<float>(data[offset[l]]);
+  return r;
+}
+
+/// data[offset] and data[offset + 1] per lane (neighbouring floats; offset + 1 must be valid in
+/// every lane): one 64-bit gather where the target has it.
+inline void gather_pairs(const float* data, VI offset, VF& first, VF& second) {
+#if defined(__AVX512F__)
+  // (The masked forms with a zero source: GCC 12 flags the unmasked ones' undefined source.)
+  const VL p = VL(_mm512_mask_i32gather_epi64(_mm512_setzero_si512(), 0xFF, __m256i(offset), data, 4));
+  first = VF(__builtin_convertvector(p, VI));  // the low halves' bits: data[offset]
+  second = VF(__builtin_convertvector(p >> 32, VI));
+#else
+  for (int l = 0; l < kLanes; ++l) first[l] = data[offset[l]], second[l] = data[offset[l] + 1];
+#endif
+}
+
+/// data[offset] per lane (int32 table).
+inline VI gather_i32(const std::int32_t* data, VI offset) {
+#if defined(__AVX2__)
+  return VI(_mm256_i32gather_epi32(reinterpret_cast<const int*>(data), __m256i(offset), 4));
+#else
+  VI r;
+  for (int l = 0; l < kLanes; ++l) r[l] = data[offset[l]];
+  return r;
+#endif
+}
+
+}  // namespace meltlab::render::packet
+
+#pragma GCC diagnostic pop
