@@ -8,6 +8,14 @@
 // Arithmetic on lanes is element by element with the same IEEE operations as scalar code
 // (contraction is off), so a lane's result is bitwise the scalar result.
 
+// Lanes of double are 64-byte vectors. Without AVX-512 (a build for another machine, e.g.
+// -DMELTLAB_NATIVE=OFF -march=x86-64-v3) GCC notes that passing them by value changes the ABI,
+// and -Werror turns the note into a build failure. They are passed only between inline functions
+// of one translation unit, never across objects, so the note does not apply. The pragma is not
+// popped: the note fires where the melt's .cpp files instantiate those functions, and only they
+// include this private header.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
