@@ -67,18 +67,7 @@ double Spotlight::intensity_at(double theta) const {
   return 0.0;
 }
 
-double Spotlight::intensity_at(const Vec3& x) const {
-  if (kind == LightKind::kPoint) return 1.0;
-  const Vec3 d = x - position;
-  const double n = d.norm();
-  if (n == 0) return profile.empty() ? 0.0 : profile.front().intensity;
-  const double c = std::clamp(axis.normalized().dot(d) / n, -1.0, 1.0);
-  // The same test as the cones' (D̂·d >= cos θ_k |d|), ring by ring, so that the surface and the
-  // airlight agree on the cone's edge.
-  for (const ConeStep& s : profile)
-    if (c >= std::cos(s.half_angle_rad)) return s.intensity;
-  return 0.0;
-}
+double Spotlight::intensity_at(const Vec3& x) const { return PreparedLight(*this).intensity_at(x); }
 
 PreparedLight::PreparedLight(const Spotlight& l) : light(l), axis(l.axis.normalized()) {
   cos_half.reserve(l.profile.size());
@@ -91,12 +80,14 @@ PreparedLight::PreparedLight(const Spotlight& l) : light(l), axis(l.axis.normali
 
 double PreparedLight::intensity_at(const Vec3& x) const {
   if (light.kind == LightKind::kPoint) return 1.0;
+  // The same test as the cones' (inside_cone: D̂·d >= cos θ_k |d|, the same operations), ring
+  // by ring, so that the surface and the airlight agree on the cone's edge.
   const Vec3 d = x - light.position;
   const double n = d.norm();
   if (n == 0) return light.profile.empty() ? 0.0 : light.profile.front().intensity;
-  const double c = std::clamp(axis.dot(d) / n, -1.0, 1.0);
+  const double along = axis.dot(d);
   for (std::size_t k = 0; k < cos_half.size(); ++k)
-    if (c >= cos_half[k]) return light.profile[k].intensity;
+    if (along >= cos_half[k] * n) return light.profile[k].intensity;
   return 0.0;
 }
 

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -112,32 +113,46 @@ TEST(Airlight, ReducesToSunEtAlsPointLight) {
     }
 }
 
-TEST(PreparedLight, ItsIntensityIsTheSpotlightsOnRingsAndEdges) {
-  // The per-frame constants (unit axis, cos θ_k) must give the spotlight's own ring intensity
-  // bit for bit, on random points and on points placed exactly at each ring's angle (where a
-  // different cosine or axis rounding would pick the neighbouring ring).
+TEST(PreparedLight, ItsIntensityIsTheRingsAndOnTheEdgesTheConesLitTest) {
+  // Away from the rings' edges the intensity is that of the ring the angle from the axis falls
+  // in (the angle overload); on the edges (points placed at each ring's angle ± 1 ulp-ish) it is
+  // lit exactly where the airlight's cone test (inside_cone, with the same unit axis and
+  // cosine) says so, so that the surface and the airlight agree there.
   Spotlight light = test_light();
-  light.axis = Vec3(-0.3, -0.6, -1);  // not unit: both normalise it
+  light.axis = Vec3(-0.3, -0.6, -1);  // not unit: it is normalised once
   light.profile = {ConeStep{10 * kDeg, 3.0}, ConeStep{20 * kDeg, 2.0}, ConeStep{30 * kDeg, 1.0}};
   const PreparedLight prepared(light);
   const Vec3 axis = light.axis.normalized(), side = axis.unitOrthogonal();
-  int checked = 0;
+  int away = 0, edges = 0;
   for (const RayConfig& c : random_ray_configs(2000, 5)) {
-    ASSERT_EQ(prepared.intensity_at(c.origin), light.intensity_at(c.origin));
-    ++checked;
+    const Vec3 d = c.origin - light.position;
+    const double theta = std::acos(std::clamp(axis.dot(d) / d.norm(), -1.0, 1.0));
+    bool near_edge = false;
+    for (const ConeStep& ring : light.profile) near_edge |= std::abs(theta - ring.half_angle_rad) < 1e-9;
+    if (near_edge) continue;
+    ASSERT_EQ(prepared.intensity_at(c.origin), light.intensity_at(theta)) << theta;
+    ASSERT_EQ(light.intensity_at(c.origin), light.intensity_at(theta)) << theta;
+    ++away;
   }
-  for (const ConeStep& ring : light.profile)
-    for (double d : {0.5, 3.0, 40.0})
+  for (std::size_t k = 0; k < light.profile.size(); ++k)
+    for (double dist : {0.5, 3.0, 40.0})
       for (double eps : {-1e-15, 0.0, 1e-15}) {
-        const double a = ring.half_angle_rad + eps;
-        const Vec3 x = light.position + d * (std::cos(a) * axis + std::sin(a) * side);
-        ASSERT_EQ(prepared.intensity_at(x), light.intensity_at(x)) << a;
-        ++checked;
+        const double a = light.profile[k].half_angle_rad + eps;
+        const Vec3 x = light.position + dist * (std::cos(a) * axis + std::sin(a) * side);
+        Cone cone;
+        cone.apex = light.position;
+        cone.axis = axis;
+        cone.cos_half = std::cos(light.profile[k].half_angle_rad);
+        // Lit by ring k or an inner one exactly when inside ring k's cone.
+        ASSERT_EQ(prepared.intensity_at(x) >= light.profile[k].intensity, inside_cone(cone, x)) << k << " " << a;
+        ++edges;
       }
-  EXPECT_EQ(checked, 2027);
+  EXPECT_GT(away, 1900);
+  EXPECT_EQ(edges, 27);
   // The weights are the steps I_k - I_{k+1}.
   ASSERT_EQ(prepared.weight.size(), 3u);
   EXPECT_EQ(prepared.weight[0], 1.0);
+  EXPECT_EQ(prepared.weight[1], 1.0);
   EXPECT_EQ(prepared.weight[2], 1.0);
 }
 

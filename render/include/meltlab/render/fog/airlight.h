@@ -82,7 +82,7 @@ struct PreparedLight {
   std::vector<double> weight;    ///< I_k - I_{k+1} (I past the last ring: 0)
 
   explicit PreparedLight(const Spotlight& l);
-  /// Spotlight::intensity_at(x) from the cached constants.
+  /// The ring intensity at world point x (Spotlight::intensity_at(x) prepares and calls this).
   double intensity_at(const Vec3& x) const;
 };
 std::vector<PreparedLight> prepare_lights(const std::vector<Spotlight>& lights);
