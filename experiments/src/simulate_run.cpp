@@ -217,14 +217,14 @@ struct StatsWriter {
   }
   template <class Real>
   void row(std::int64_t cycle, const sim::TriMesh<Real>& m, const sim::CycleReport& r, double ms) {
-    const sim::TopologyReport topo = sim::check_topology(m, 1);
+    const sim::EulerCounts topo = sim::euler_counts(m);
     const sim::QualityReport q = sim::mesh_quality(m);
     out << fmt::format(
         "{},{},{},{},{},{},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{},{},{:.4g},{:.4g},{:.4g},{:.4g}"
         "\n",
-        cycle, topo.counts.V, topo.counts.F, topo.counts.S, topo.counts.chi, topo.counts.G, q.volume, q.area, q.Qs,
-        q.Qd, q.Qq, q.max_d, ms, r.merged_vertices, r.glued_triangles, r.repair_vertex_splits, r.repair_edge_collapses,
-        r.inverted_parts_removed, r.deform_ms, r.collapse_ms, r.glued_ms, r.repair_ms);
+        cycle, topo.V, topo.F, topo.S, topo.chi, topo.G, q.volume, q.area, q.Qs, q.Qd, q.Qq, q.max_d, ms,
+        r.merged_vertices, r.glued_triangles, r.repair_vertex_splits, r.repair_edge_collapses, r.inverted_parts_removed,
+        r.deform_ms, r.collapse_ms, r.glued_ms, r.repair_ms);
   }
   void finish() {
     out.flush();

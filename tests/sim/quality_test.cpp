@@ -2,10 +2,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
+#include <random>
+#include <vector>
 
 #include "hand_meshes.h"
+#include "vertex_sort.h"
 
 namespace meltlab::sim {
 namespace {
@@ -41,6 +46,59 @@ TEST(Quality, TwistInvariantUnderSimilarityAndInRange) {
   EXPECT_LE(s, 90.0);
   EXPECT_NEAR(triangle_twist_deg(3.0 * a, 3.0 * b, 3.0 * c), s, 1e-9);
   EXPECT_NEAR(triangle_twist_deg(b, c, a), s, 1e-9);
+}
+
+// The twist takes one arccosine, of the largest of the three corner cosines. Against the
+// definition (90° minus the smallest of the three angles, each by its own arccosine):
+// arccos is monotone, so the two agree up to its rounding, < 1e-15 rad; 1e-12° leaves room
+// for the conversion to degrees and the subtraction from 90°.
+TEST(Quality, TwistIsNinetyMinusTheSmallestOfTheThreeCornerAngles) {
+  constexpr double kTwistTol = 1e-12;
+  auto definition = [](const V3& a, const V3& b, const V3& c) {
+    const V3* v[3] = {&a, &b, &c};
+    double min_alpha = 180.0;
+    for (int i = 0; i < 3; ++i) {
+      const V3 median = 0.5 * (*v[(i + 1) % 3] + *v[(i + 2) % 3]) - *v[i];
+      const V3 midline = 0.5 * (*v[(i + 2) % 3] - *v[(i + 1) % 3]);
+      const double cos_alpha = std::clamp(median.dot(midline) / (median.norm() * midline.norm()), -1.0, 1.0);
+      min_alpha = std::min(min_alpha, std::acos(cos_alpha) * 180.0 / std::numbers::pi);
+    }
+    return 90.0 - min_alpha;
+  };
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  auto point = [&] { return V3(u(rng), u(rng), u(rng)); };
+  for (int i = 0; i < 3000; ++i) {
+    const V3 a = point(), b = point();
+    // Every third triangle is a near-sliver (c close to the line ab), where the angles are extreme.
+    const V3 c = i % 3 == 0 ? a + (0.3 + 0.4 * u(rng)) * (b - a) + 1e-7 * point() : point();
+    EXPECT_NEAR(triangle_twist_deg(a, b, c), definition(a, b, c), kTwistTol) << "triangle " << i;
+  }
+}
+
+// The O(n) pairing sort (two stable counting passes) orders records as a stable comparison
+// sort on the key does: same keys, same order of equal keys.
+TEST(Quality, VertexPairSortIsAStableSortOnTheKey) {
+  struct Rec {
+    std::uint64_t key;
+    int id;
+  };
+  std::mt19937_64 rng(11);
+  for (std::size_t n_slots : {std::size_t{1}, std::size_t{5}, std::size_t{300}}) {
+    for (std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{17}, std::size_t{5000}}) {
+      std::uniform_int_distribution<std::uint64_t> vertex(0, n_slots - 1);
+      std::vector<Rec> recs;
+      for (std::size_t i = 0; i < n; ++i) recs.push_back({vertex(rng) << 32 | vertex(rng), static_cast<int>(i)});
+      std::vector<Rec> expected = recs;
+      std::stable_sort(expected.begin(), expected.end(), [](const Rec& a, const Rec& b) { return a.key < b.key; });
+      sort_by_vertex_pair(recs, n_slots);
+      ASSERT_EQ(recs.size(), expected.size());
+      for (std::size_t i = 0; i < n; ++i) {
+        EXPECT_EQ(recs[i].key, expected[i].key) << i;
+        EXPECT_EQ(recs[i].id, expected[i].id) << i;
+      }
+    }
+  }
 }
 
 TEST(Quality, SliverIsNearWorst) {

@@ -48,6 +48,46 @@ TEST(Topology, TwoPartsCountTwoShells) {
   EXPECT_EQ(r.counts.chi, 0);
 }
 
+// euler_counts() (the per-cycle statistics of `meltlab simulate`) skips the vertex-fan and
+// orphan checks but must count exactly as the full check: valid meshes, two shells, an open
+// mesh, two tetrahedra sharing one vertex (a non-manifold vertex), a degenerate face and dead
+// triangles.
+TEST(Topology, EulerCountsAreTheFullChecksCounts) {
+  std::vector<TriMesh<double>> meshes;
+  for (const auto& m : {test::tetrahedron_fig_2_13(), test::octahedron(), test::cube12(), test::icosahedron()})
+    meshes.push_back(TriMesh<double>::from_indexed(m));
+  meshes.push_back(TriMesh<double>::from_indexed(
+      test::disjoint_union(test::cube12(), test::translated(test::icosahedron(), {3, 0, 0}))));
+  auto open = test::octahedron();
+  open.F.pop_back();
+  meshes.push_back(TriMesh<double>::from_indexed(open));
+  auto pinched = test::disjoint_union(test::tetrahedron_fig_2_13(), test::tetrahedron_fig_2_13());
+  for (auto& f : pinched.F)
+    for (auto& v : f)
+      if (v == 4) v = 0;  // the second tetrahedron's first vertex is the first one's
+  meshes.push_back(TriMesh<double>::from_indexed(pinched));
+  auto degenerate = test::cube12();
+  degenerate.F.push_back({0, 0, 1});
+  meshes.push_back(TriMesh<double>::from_indexed(degenerate));
+  TriMesh<double> dead = TriMesh<double>::from_indexed(test::icosahedron());
+  dead.triangle_alive[3] = 0;
+  dead.triangle_alive[7] = 0;
+  meshes.push_back(dead);
+  for (std::size_t i = 0; i < meshes.size(); ++i) {
+    const EulerCounts full = check_topology(meshes[i]).counts, fast = euler_counts(meshes[i]);
+    EXPECT_EQ(fast.V, full.V) << "mesh " << i;
+    EXPECT_EQ(fast.E, full.E) << "mesh " << i;
+    EXPECT_EQ(fast.F, full.F) << "mesh " << i;
+    EXPECT_EQ(fast.H, full.H) << "mesh " << i;
+    EXPECT_EQ(fast.S, full.S) << "mesh " << i;
+    EXPECT_EQ(fast.G, full.G) << "mesh " << i;
+    EXPECT_EQ(fast.chi, full.chi) << "mesh " << i;
+    EXPECT_EQ(fast.genus_valid, full.genus_valid) << "mesh " << i;
+  }
+  EXPECT_EQ(euler_counts(meshes[4]).S, 2);
+  EXPECT_FALSE(check_topology(meshes[6]).manifold) << "the pinched pair is the case the fan check exists for";
+}
+
 TEST(Topology, OpenMeshReportsBoundaryEdge) {
   auto m = test::octahedron();
   m.F.pop_back();

@@ -1,5 +1,7 @@
 #include <meltlab/sim/quality.h>
 
+#include "vertex_sort.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -10,11 +12,14 @@ namespace meltlab::sim {
 namespace {
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
+// cos of the angle between two non-zero vectors, clamped to [-1, 1].
+double cosine(const Vec3<double>& u, const Vec3<double>& v) {
+  return std::clamp(u.dot(v) / (u.norm() * v.norm()), -1.0, 1.0);
+}
+
 double angle_deg(const Vec3<double>& u, const Vec3<double>& v) {
-  const double nu = u.norm(), nv = v.norm();
-  if (nu == 0.0 || nv == 0.0) return 0.0;
-  const double c = std::clamp(u.dot(v) / (nu * nv), -1.0, 1.0);
-  return std::acos(c) * kDegPerRad;
+  if (u.squaredNorm() == 0.0 || v.squaredNorm() == 0.0) return 0.0;
+  return std::acos(cosine(u, v)) * kDegPerRad;
 }
 }  // namespace
 
@@ -23,9 +28,10 @@ double angle_deg(const Vec3<double>& u, const Vec3<double>& v) {
 // opposite side. alpha_i is the angle between them, min over the corners; s = 90° - alpha.
 // Dot(median_i, midline_i) = (|v_k - v_i|² - |v_j - v_i|²)/4, and these sum to zero over the
 // three corners, so min alpha <= 90° and s >= 0 (s = 0 exactly for equilateral triangles).
+// The smallest angle has the largest cosine: one arccosine per triangle instead of three.
 double triangle_twist_deg(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c) {
   const Vec3<double>* v[3] = {&a, &b, &c};
-  double min_alpha = 180.0;
+  double max_cos = -1.0;
   for (int i = 0; i < 3; ++i) {
     const Vec3<double>& vi = *v[i];
     const Vec3<double>& vj = *v[(i + 1) % 3];
@@ -33,9 +39,9 @@ double triangle_twist_deg(const Vec3<double>& a, const Vec3<double>& b, const Ve
     const Vec3<double> median = 0.5 * (vj + vk) - vi;
     const Vec3<double> midline = 0.5 * (vk - vj);
     if (median.squaredNorm() == 0.0 || midline.squaredNorm() == 0.0) return 90.0;  // degenerate
-    min_alpha = std::min(min_alpha, angle_deg(median, midline));
+    max_cos = std::max(max_cos, cosine(median, midline));
   }
-  return 90.0 - min_alpha;
+  return 90.0 - std::acos(max_cos) * kDegPerRad;
 }
 
 double triangle_quality(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c) {
@@ -107,8 +113,8 @@ QualityReport mesh_quality(const TriMesh<Real>& m) {
   }
   r.Qs = sum_s / static_cast<double>(nf);
   r.Qq = sum_q / static_cast<double>(nf);
-  std::sort(half.begin(), half.end(),
-            [](const HalfEdge& a, const HalfEdge& b) { return a.key != b.key ? a.key < b.key : a.tri < b.tri; });
+  // Ascending (key, tri): the half-edges were added in ascending triangle order.
+  sort_by_vertex_pair(half, m.vertex_slots());
   double sum_d = 0, sum_len = 0;
   std::int64_t n_len = 0;
   for (std::size_t i = 0; i < half.size();) {

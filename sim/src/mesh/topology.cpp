@@ -1,5 +1,7 @@
 #include <meltlab/sim/topology.h>
 
+#include "vertex_sort.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -115,8 +117,7 @@ std::int64_t check_edges(const Loops& L, UnionFind& uf, std::vector<std::int64_t
       edges.push_back({(lo << 32) | hi, from < to});
     }
   }
-  std::sort(edges.begin(), edges.end(),
-            [](const DirEdge& a, const DirEdge& b) { return a.key != b.key ? a.key < b.key : a.forward < b.forward; });
+  sort_by_vertex_pair(edges, L.n_slots);  // equal keys adjacent; their order does not matter below
 
   std::int64_t E = 0;
   for (std::size_t i = 0; i < edges.size();) {
@@ -160,7 +161,8 @@ void check_vertex_fans(const Loops& L, TopologyReport& r, std::size_t max_proble
     for (std::size_t j = 0; j < m; ++j)
       corners.push_back({L.verts[s + j], L.verts[s + (j + m - 1) % m], L.verts[s + (j + 1) % m]});
   }
-  std::sort(corners.begin(), corners.end(), [](const Corner& a, const Corner& b) { return a.v < b.v; });
+  std::vector<Corner> scratch;
+  counting_sort_by(corners, scratch, L.n_slots, [](const Corner& c) { return c.v; });
   std::vector<std::pair<Index, Index>> nb;  // (neighbour, corner) within one vertex
   for (std::size_t i = 0; i < corners.size();) {
     std::size_t j = i;
@@ -224,12 +226,14 @@ void euler_counts(const Loops& L, std::int64_t E, Components& parts, std::vector
   if (c.chi != 0) c.genus_valid = false;
 }
 
-TopologyReport analyse(const Loops& L, std::size_t max_problems) {
+// `fans`: check the vertex fans (non-manifold vertices, low valence); the Euler counts do
+// not need them.
+TopologyReport analyse(const Loops& L, std::size_t max_problems, bool fans = true) {
   TopologyReport r;
   Components parts = components_of(L);
   std::vector<std::int64_t> comp_sum(L.n_slots, 0);  // V - E + F - H per component root
   const std::int64_t E = check_edges(L, parts.uf, comp_sum, r, max_problems);
-  check_vertex_fans(L, r, max_problems);
+  if (fans) check_vertex_fans(L, r, max_problems);
   euler_counts(L, E, parts, comp_sum, r.counts);
   r.closed = r.boundary_edges == 0;
   r.oriented = r.misoriented_edges == 0;
@@ -256,14 +260,16 @@ TopologyReport check_topology(const PolygonMesh& m, std::size_t max_problems) {
 
 EulerCounts euler_counts(const PolygonMesh& m) { return check_topology(m, 0).counts; }
 
+namespace {
+
+// The live, non-degenerate triangles of `m` as loops; degenerate ones into `pre`.
 template <class Real>
-TopologyReport check_topology(const TriMesh<Real>& m, std::size_t max_problems) {
+Loops live_loops(const TriMesh<Real>& m, TopologyReport& pre, std::size_t max_problems) {
   Loops L;
   L.n_slots = m.vertex_slots();
   L.verts.reserve(3 * m.triangle_slots());
   L.start.reserve(m.triangle_slots() + 1);
   L.face_of.reserve(m.triangle_slots());
-  TopologyReport pre;
   for (std::size_t t = 0; t < m.triangle_slots(); ++t) {
     if (!m.triangle_alive[t]) continue;
     const Triangle& tri = m.triangle[t];
@@ -276,7 +282,21 @@ TopologyReport check_topology(const TriMesh<Real>& m, std::size_t max_problems) 
     L.add(tri.data(), 3, static_cast<Index>(t));
     ++L.n_faces;
   }
-  TopologyReport r = analyse(L, max_problems);
+  return L;
+}
+
+}  // namespace
+
+template <class Real>
+EulerCounts euler_counts(const TriMesh<Real>& m) {
+  TopologyReport pre;
+  return analyse(live_loops(m, pre, 0), 0, /*fans=*/false).counts;
+}
+
+template <class Real>
+TopologyReport check_topology(const TriMesh<Real>& m, std::size_t max_problems) {
+  TopologyReport pre;
+  TopologyReport r = analyse(live_loops(m, pre, max_problems), max_problems);
   if (!pre.problems.empty()) {
     r.manifold = false;
     r.problems.insert(r.problems.begin(), pre.problems.begin(), pre.problems.end());
@@ -321,6 +341,8 @@ std::pair<std::vector<Index>, Index> vertex_components(const TriMesh<Real>& m) {
   return {std::move(id), count};
 }
 
+template EulerCounts euler_counts(const TriMesh<float>&);
+template EulerCounts euler_counts(const TriMesh<double>&);
 template TopologyReport check_topology(const TriMesh<float>&, std::size_t);
 template TopologyReport check_topology(const TriMesh<double>&, std::size_t);
 template std::pair<std::vector<Index>, Index> vertex_components(const TriMesh<float>&);

@@ -66,6 +66,11 @@ struct TopologyReport {
 /// are not counted. S counts connected components through shared vertices.
 EulerCounts euler_counts(const PolygonMesh& m);
 
+/// Counts of Eq. 2.3 for the live, non-degenerate triangles of a triangle mesh: the same
+/// counts as check_topology(m).counts, without the vertex-fan and orphan checks (O(n)).
+template <class Real>
+EulerCounts euler_counts(const TriMesh<Real>& m);
+
 /// Full check of a polygon mesh (faces may have holes; loops are walked as edges).
 TopologyReport check_topology(const PolygonMesh& m, std::size_t max_problems = 8);
 
