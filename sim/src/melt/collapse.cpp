@@ -52,9 +52,9 @@ std::vector<Index> flatten_merge_targets(const std::vector<Index>& target) {
 namespace {
 
 // Mark: every vertex's merge target (m.reindex, itself if none) from the short edges of the
-// live triangles. Triangles whose edge key shows they cannot have an edge below kr yet are
-// skipped (see MeltWorkspace::edge_key); the others are tested exactly and their key
-// refreshed. Returns whether anything was marked.
+// live triangles. Triangles whose shortest edge before this cycle's moves, less what the moves
+// can shorten it, is still above kr are skipped (see MeltWorkspace::min_edge2); the others are
+// tested exactly. Returns whether anything was marked.
 template <class Real>
 bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace& ws) {
   const std::size_t nv = m.vertex_slots();
@@ -62,17 +62,24 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
   const auto kr2 = static_cast<Real>(kr * kr);
   std::vector<Index>& target = m.reindex;
   for (std::size_t v = 0; v < nv; ++v) target[v] = static_cast<Index>(v);
-  if (ws.edge_key.size() != nt) ws.edge_key.assign(nt, -std::numeric_limits<double>::infinity());
-  ws.shrink_bound += 2.0 * ws.cycle_move_bound;
-  ws.cycle_move_bound = 0.0;
-  // Safety margin: the exact test compares squared lengths in Real (relative error ~4 eps).
-  const double skip_above =
-      (kr + ws.shrink_bound) * (1.0 + 64.0 * static_cast<double>(std::numeric_limits<Real>::epsilon()));
+  // The keys were computed in Real from the positions before the moves (relative error a few
+  // eps of Real, as the exact test's) and rounded down to float; the margin of 64 float eps
+  // covers these and the rounding of the bound. Below the smallest normal float the rounding
+  // is not relative: there (kr and the moves that small) every triangle is tested.
+  const std::vector<float>& min_edge2 = ws.min_edge2;
+  constexpr double kFloatEps = std::numeric_limits<float>::epsilon();
+  constexpr double kFloatMin = std::numeric_limits<float>::min(), kFloatMax = std::numeric_limits<float>::max();
+  const double reach = (kr + 2.0 * ws.cycle_move_bound) * (1.0 + 64.0 * kFloatEps);
+  const bool keys = ws.min_edge2_current && min_edge2.size() == nt && reach * reach >= 4.0 * kFloatMin &&
+                    reach * reach < 0.5 * kFloatMax;
+  ws.min_edge2_current = false;
+  // Rounded up to float, so that key > skip_above implies key > reach² exactly.
+  const float skip_above =
+      keys ? std::nextafter(static_cast<float>(reach * reach), std::numeric_limits<float>::infinity()) : 0.0f;
   const bool parallel = exec == Execution::kParallel;
   std::atomic<bool> any_mark{false};
-  double* const edge_key = ws.edge_key.data();  // locals: the stores below cannot alias them
+  const float* const key = keys ? min_edge2.data() : nullptr;  // locals: the stores below cannot alias them
   const std::uint8_t* const alive = m.triangle_alive.data();
-  const double shrink_bound = ws.shrink_bound;
   // Corners are read from the packed copy of the positions (the same numbers as the columns;
   // one cache line per corner instead of three, and the copy the next deformation gathers
   // from stays in the cache). It is made current here if a repair or compaction cleared it.
@@ -86,22 +93,21 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
     const Real* p = packed + 3 * static_cast<std::size_t>(v);
     return Vec3<Real>(p[0], p[1], p[2]);
   };
-  auto mark_range = [&, edge_key, alive, skip_above, shrink_bound](std::size_t begin, std::size_t end) {
+  auto mark_range = [&, key, alive, skip_above](std::size_t begin, std::size_t end) {
     bool local_mark = false;
     for (std::size_t t = begin; t < end; ++t) {
       // Most triangles are skipped: test eight keys at once (aligned groups inside the range).
-      if (t % kLanes == 0 && t + kLanes <= end && all_greater(load_lanes(edge_key + t), skip_above)) {
+      if (key && t % kLanes == 0 && t + kLanes <= end && all_greater(load_lanes(key + t), skip_above)) {
         t += kLanes - 1;
         continue;
       }
-      if (edge_key[t] > skip_above || !alive[t]) continue;
+      if ((key && key[t] > skip_above) || !alive[t]) continue;
       const Triangle& tri = m.triangle[t];
       const Vec3<Real> pa = corner(tri[0]), pb = corner(tri[1]), pc = corner(tri[2]);
       const Vec3<Real> ab = pb - pa, bc = pc - pb, ca = pa - pc;
       const Real l2[3] = {ab.x() * ab.x() + ab.y() * ab.y() + ab.z() * ab.z(),
                           bc.x() * bc.x() + bc.y() * bc.y() + bc.z() * bc.z(),
                           ca.x() * ca.x() + ca.y() * ca.y() + ca.z() * ca.z()};
-      edge_key[t] = std::sqrt(static_cast<double>(std::min({l2[0], l2[1], l2[2]}))) + shrink_bound;
       Index from, to;
       if (l2[0] < kr2) {
         from = tri[1], to = tri[0];
@@ -203,11 +209,9 @@ void repoint_triangles(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report)
   report.degenerate_triangles += degenerate;
 }
 
-// Update the triangle lists (roots take their members' triangles) and the edge keys: the
-// re-pointed triangles and every triangle of a moved root are tested exactly next cycle.
+// Update the triangle lists (roots take their members' triangles).
 template <class Real>
 void update_triangle_lists(TriMesh<Real>& m, MeltWorkspace& ws) {
-  constexpr double kRetest = -std::numeric_limits<double>::infinity();
   for (Index k : ws.merged) {
     const Index r = ws.root[static_cast<std::size_t>(k)];
     // Append k's triangles to r's list (sorted merge, duplicates removed), then drop k's.
@@ -220,9 +224,6 @@ void update_triangle_lists(TriMesh<Real>& m, MeltWorkspace& ws) {
     ws.adj.assign(k, {});
   }
   for (Index v : ws.dirty_list) refresh_list(ws, m, v);
-  for (Index t : ws.affected) ws.edge_key[static_cast<std::size_t>(t)] = kRetest;
-  for (Index r : ws.touched_roots)
-    for (Index t : ws.adj.of(r)) ws.edge_key[static_cast<std::size_t>(t)] = kRetest;
 }
 
 }  // namespace

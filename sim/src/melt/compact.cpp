@@ -46,9 +46,7 @@ std::vector<Index> compact_mesh(TriMesh<Real>& m) {
 
 template <class Real>
 void compact_workspace(TriMesh<Real>& m, MeltWorkspace& ws) {
-  const std::vector<std::uint8_t> talive = m.triangle_alive;
   compact_mesh(m);
-  if (ws.edge_key.size() == talive.size()) keep(ws.edge_key, talive);
   ws.clear_dirty();
   ws.adj.invalidate();
   ws.schedule.invalidate();

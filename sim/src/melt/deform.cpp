@@ -135,6 +135,7 @@ struct Sweep {
   const DeformSchedule& plan;
   Real* packed;                       // positions as packed triples: gathered, then written by the moves
   TriangleTerms<Real>* stored_terms;  // terms of the triangles of halo vertices
+  float* min_edge2;                   // out: shortest squared edge per triangle slot (+inf: dead)
   const ScaleAt& scale_at;            // kg·kl: a number, or a function of the vertex slot
 };
 
@@ -211,6 +212,7 @@ void sweep_block(const Sweep<Real, ScaleAt>& w, std::size_t b, TriangleBlockTerm
     FN[1][first + i] = alive[first + i] ? terms.ny[i] : FN[1][first + i];
     FN[2][first + i] = alive[first + i] ? terms.nz[i] : FN[2][first + i];
   }
+  std::memcpy(w.min_edge2 + first, terms.min_edge2, count * sizeof(float));
   const bool store = kHalo && w.plan.block_stores_terms(b);
   for (std::size_t i = 0; i < count; ++i) {
     const std::size_t t = first + i;
@@ -367,18 +369,23 @@ void deform_pass(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execu
   std::vector<Real>& packed = ws.packed_positions<Real>();
   if (!ws.packed_valid || packed.size() != 3 * m.vertex_slots() + 1) pack_positions(m, packed);
   ws.packed_valid = true;  // the moves keep it up to date
+  std::vector<float>& min_edge2 = ws.min_edge2;
+  min_edge2.resize(m.triangle_slots());  // every slot is written by the sweep
+  ws.min_edge2_current = true;
   // A constant kl costs nothing per vertex: s = kg·kl is folded into one number.
   if (kl.is_constant()) {
     const auto s = static_cast<Real>(p.kg * kl.value(Vec3<double>::Zero()));
     const Sweep<Real, Real> w{m,      c,           sums.data(),   clear_in_moves, counts,
-                              ws.adj, ws.schedule, packed.data(), stored.data(),  s};
+                              ws.adj, ws.schedule, packed.data(), stored.data(),  min_edge2.data(),
+                              s};
     ws.cycle_move_bound = sweep(w, p.deform, parts, exec);
   } else {
     auto scale_at = [&](std::size_t v) {
       return static_cast<Real>(p.kg * kl.value(m.position[v].template cast<double>()));
     };
-    const Sweep<Real, decltype(scale_at)> w{m,      c,           sums.data(),   clear_in_moves, counts,
-                                            ws.adj, ws.schedule, packed.data(), stored.data(),  scale_at};
+    const Sweep<Real, decltype(scale_at)> w{m,       c,           sums.data(),   clear_in_moves, counts,
+                                            ws.adj,  ws.schedule, packed.data(), stored.data(),  min_edge2.data(),
+                                            scale_at};
     ws.cycle_move_bound = sweep(w, p.deform, parts, exec);
   }
 }

@@ -270,7 +270,6 @@ void repair_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report) {
     Repairer<Real> repairer(m, ws, report);
     repairer.run(bad);
     prepare_workspace(ws, m);
-    invalidate_edge_keys(ws);  // rare: vertices moved and triangles changed
     ws.schedule.invalidate();
     ws.packed_valid = false;
   }

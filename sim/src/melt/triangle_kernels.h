@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 #include <cstddef>
 #include <cstring>
 #include <vector>
@@ -20,13 +21,29 @@ namespace meltlab::sim {
 
 inline constexpr std::size_t kTriangleBlock = 64;
 
-/// Unit face normal and the three unit edge vectors (a->b, b->c, c->a) of a block.
+/// Unit face normal and the three unit edge vectors (a->b, b->c, c->a) of a block, and the
+/// squared length of each triangle's shortest edge as a float no greater than it (for the
+/// short-edge test's skip: exact for float meshes, rounded down for double ones; +inf for a
+/// dead slot).
 template <class Real>
 struct TriangleBlockTerms {
   std::size_t count = 0;
   Real nx[kTriangleBlock], ny[kTriangleBlock], nz[kTriangleBlock];
   Real ex[3][kTriangleBlock], ey[3][kTriangleBlock], ez[3][kTriangleBlock];
+  float min_edge2[kTriangleBlock];
 };
+
+// A float no greater than x >= 0 (x itself for a float). For a double, x (1 - 2^-23) rounded to
+// the nearest float lies below x by at least 2^-24 of it, more than the rounding to float adds
+// (at most 2^-24 relative, for results of normal float size; below that the test that uses the
+// key does not rely on it, see mark_short_edges()).
+template <class Real>
+inline float float_at_most(Real x) {
+  if constexpr (std::is_same_v<Real, float>)
+    return x;
+  else
+    return static_cast<float>(x * (1.0 - 0x1p-23));
+}
 
 // 1/|v| for |v|² = n2, or 0 for a zero vector (`zero_guard`: a degenerate triangle or a
 // vanished edge contributes nothing instead of NaN). Written without a branch on a
@@ -69,10 +86,12 @@ inline void triangle_block_terms(const TriMesh<Real>& m, const Real* packed, std
   // the number after it), then split into x, y, z arrays for the arithmetic below, which
   // vectorises over them.
   Real p[3][kTriangleBlock][4];
+  float dead_key[kTriangleBlock];  // added to the key: 0, or +inf for a dead slot
   out.count = count;
   for (std::size_t i = 0; i < count; ++i) {
     const std::size_t t = first + i;
     const bool alive = m.triangle_alive[t] != 0;
+    dead_key[i] = alive ? 0.0f : std::numeric_limits<float>::infinity();
     for (std::size_t k = 0; k < 3; ++k) {
       const std::size_t v = alive ? static_cast<std::size_t>(m.triangle[t][k]) : 0;
       std::memcpy(p[k][i], packed + 3 * v, 4 * sizeof(Real));
@@ -98,9 +117,13 @@ inline void triangle_block_terms(const TriMesh<Real>& m, const Real* packed, std
     out.nx[i] = nx * inv_n;
     out.ny[i] = ny * inv_n;
     out.nz[i] = nz * inv_n;
-    const Real i0 = inverse_length(abx * abx + aby * aby + abz * abz);
-    const Real i1 = inverse_length(bcx * bcx + bcy * bcy + bcz * bcz);
-    const Real i2 = inverse_length(cax * cax + cay * cay + caz * caz);
+    const Real l0 = abx * abx + aby * aby + abz * abz;
+    const Real l1 = bcx * bcx + bcy * bcy + bcz * bcz;
+    const Real l2 = cax * cax + cay * cay + caz * caz;
+    out.min_edge2[i] = float_at_most(std::min(std::min(l0, l1), l2)) + dead_key[i];
+    const Real i0 = inverse_length(l0);
+    const Real i1 = inverse_length(l1);
+    const Real i2 = inverse_length(l2);
     out.ex[0][i] = abx * i0, out.ey[0][i] = aby * i0, out.ez[0][i] = abz * i0;
     out.ex[1][i] = bcx * i1, out.ey[1][i] = bcy * i1, out.ez[1][i] = bcz * i1;
     out.ex[2][i] = cax * i2, out.ey[2][i] = cay * i2, out.ez[2][i] = caz * i2;

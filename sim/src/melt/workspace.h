@@ -72,13 +72,16 @@ struct MeltWorkspace {
   std::vector<double> packed_d;
   bool packed_valid = false;
 
-  // Conservative skip of the short-edge test. An edge shrinks per cycle by at most twice the
-  // largest vertex move (plus rounding of the position update). `edge_key[t]` is t's shortest
-  // edge at its last exact test plus `shrink_bound` at that time; while edge_key[t] - the
-  // current shrink_bound stays above kr (with a safety margin), t cannot have a short edge
-  // and is not tested. Triangles a merge or the repair changes get -inf (test next cycle).
-  std::vector<double> edge_key;
-  double shrink_bound = 0.0;      ///< sum over cycles of 2 * (largest vertex move + rounding)
+  // Conservative skip of the short-edge test. This cycle's deformation sweep, which computes
+  // every edge's squared length anyway, stores each triangle's shortest one (`min_edge2`, +inf
+  // for a dead slot) from the positions before the moves; an edge shrinks in the moves by at
+  // most twice the largest vertex move (plus rounding), so the short-edge test that follows
+  // skips every triangle whose key is above (kr + 2 cycle_move_bound)² with a safety margin,
+  // and tests the others exactly. `min_edge2_current` says the keys are this cycle's (a
+  // short-edge test without a deformation before it tests every triangle).
+  // The keys are floats in both precisions (rounded down), half the bytes for double meshes.
+  std::vector<float> min_edge2;
+  bool min_edge2_current = false;
   double cycle_move_bound = 0.0;  ///< this cycle's largest vertex move + rounding, mesh units
 
   std::vector<Index> root;    ///< flattened merge target of every vertex
@@ -124,11 +127,6 @@ struct MeltWorkspace {
     dirty_list.clear();
   }
 };
-
-/// Forgets every triangle's edge key: all are tested exactly in the next short-edge sweep.
-inline void invalidate_edge_keys(MeltWorkspace& ws) {
-  std::fill(ws.edge_key.begin(), ws.edge_key.end(), -std::numeric_limits<double>::infinity());
-}
 
 /// Runs body(begin, end) over [0, n) serially or as TBB tasks. The body must not depend on
 /// how the range is split (every element's result is computed by the same code).
