@@ -17,6 +17,7 @@
 #include <random>
 
 #include "lanes.h"
+#include "triangle_kernels.h"
 
 namespace meltlab::sim {
 namespace {
@@ -25,6 +26,25 @@ template <class Real>
 class Lanes8 : public ::testing::Test {};
 using Reals = ::testing::Types<float, double>;
 TYPED_TEST_SUITE(Lanes8, Reals);
+
+// The short-edge test skips a triangle on a float key that must not exceed its shortest
+// squared edge (double meshes round it down): below it by at most 2^-22 relative (two float
+// roundings' worth), the largest float above float's range, exact for floats.
+TEST(ShortEdgeKey, IsAFloatNoGreaterThanTheSquaredLength) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> mantissa(1.0, 2.0);
+  std::uniform_int_distribution<int> exponent(-120, 120);
+  for (int i = 0; i < 100000; ++i) {
+    const double x = std::ldexp(mantissa(rng), exponent(rng));
+    const float k = float_at_most(x);
+    ASSERT_LE(static_cast<double>(k), x) << x;
+    ASSERT_GE(static_cast<double>(k), x * (1.0 - 0x1p-22)) << x;
+  }
+  EXPECT_EQ(float_at_most(1e300), std::numeric_limits<float>::max());
+  EXPECT_EQ(float_at_most(std::numeric_limits<double>::infinity()), std::numeric_limits<float>::max());
+  EXPECT_EQ(float_at_most(0.0), 0.0f);
+  EXPECT_EQ(float_at_most(0.3f), 0.3f);
+}
 
 TYPED_TEST(Lanes8, TransposeMovesElementIJToJI) {
   using Real = TypeParam;

@@ -36,13 +36,14 @@ struct TriangleBlockTerms {
 // A float no greater than x >= 0 (x itself for a float). For a double, x (1 - 2^-23) rounded to
 // the nearest float lies below x by at least 2^-24 of it, more than the rounding to float adds
 // (at most 2^-24 relative, for results of normal float size; below that the test that uses the
-// key does not rely on it, see mark_short_edges()).
+// key does not rely on it, see mark_short_edges()). Above the largest float: the largest float
+// (a conversion out of float's range would be undefined).
 template <class Real>
 inline float float_at_most(Real x) {
   if constexpr (std::is_same_v<Real, float>)
     return x;
   else
-    return static_cast<float>(x * (1.0 - 0x1p-23));
+    return static_cast<float>(std::min(x * (1.0 - 0x1p-23), static_cast<double>(std::numeric_limits<float>::max())));
 }
 
 // 1/|v| for |v|² = n2, or 0 for a zero vector (`zero_guard`: a degenerate triangle or a
