@@ -135,6 +135,95 @@ class InlineTf {
   std::vector<Eigen::Vector3d> rgb01_;
 };
 
+/// The piecewise-linear kind on eight lanes (the packets): TfCurve::at's arithmetic per lane, bit
+/// for bit. A lane's segment i (between control points i - 1 and i) is 1 + the number of interior
+/// control points x_j (j = 1 .. n - 2) with v >= x_j: the point the scalar forward scan stops at,
+/// since the x increase strictly (TransferFunction::piecewise_linear checks). Per segment, a.x,
+/// b.x - a.x, a.y and b.y - a.y are precomputed: the same subtractions as at(), so the same
+/// t = (v - a.x) / (b.x - a.x) and a.y + t (b.y - a.y). Up to eight segments per curve are read
+/// with one permute (__builtin_shuffle), more lane by lane.
+class LaneLinearTf {
+ public:
+  using VD = packet::VD;
+  using VL = packet::VL;
+  explicit LaneLinearTf(const TransferFunction& tf) {
+    const auto& curves = tf.curves();
+    shared_ = true;
+    for (const auto& c : curves) {
+      shared_ = shared_ && !c.points.empty() && c.points.size() == curves[0].points.size();
+      for (std::size_t i = 0; shared_ && i < c.points.size(); ++i) shared_ = c.points[i].x() == curves[0].points[i].x();
+    }
+    for (int c = 0; c < 4; ++c) curves_[std::size_t(c)] = Curve(curves[std::size_t(c)]);
+  }
+  /// Where v falls on curve c (for the shared points: any curve).
+  struct Seg {
+    VL front, back, idx;
+    VD t;
+  };
+  /// α (curve 3) and the colour of v, each lane as InlineTf::alpha and ::rgb compute it.
+  [[gnu::always_inline]] void evaluate(VD v, VD& a, VD& r, VD& g, VD& b) const {
+    if (shared_) {
+      const Seg seg = curves_[3].locate(v);
+      a = curves_[3].at(seg), r = curves_[0].at(seg), g = curves_[1].at(seg), b = curves_[2].at(seg);
+    } else {
+      a = curves_[3].at(curves_[3].locate(v));
+      r = curves_[0].at(curves_[0].locate(v)), g = curves_[1].at(curves_[1].locate(v));
+      b = curves_[2].at(curves_[2].locate(v));
+    }
+  }
+
+ private:
+  class Curve {
+   public:
+    Curve() = default;
+    explicit Curve(const TfCurve& c) : n_(int(c.points.size())) {
+      if (n_ == 0) return;
+      x_front_ = c.points.front().x(), y_front_ = c.points.front().y();
+      x_back_ = c.points.back().x(), y_back_ = c.points.back().y();
+      for (int i = 1; i + 1 < n_; ++i) interior_.push_back(c.points[std::size_t(i)].x());
+      for (int i = 1; i < n_; ++i) {
+        const Eigen::Vector2d& b = c.points[std::size_t(i)];
+        const Eigen::Vector2d& a = c.points[std::size_t(i) - 1];
+        ax_.push_back(a.x()), dx_.push_back(b.x() - a.x()), ay_.push_back(a.y()), dy_.push_back(b.y() - a.y());
+      }
+      small_ = ax_.size() <= std::size_t(packet::kLanes);
+      if (small_)
+        for (std::size_t i = 0; i < ax_.size(); ++i)
+          tax_[i] = ax_[i], tdx_[i] = dx_[i], tay_[i] = ay_[i], tdy_[i] = dy_[i];
+    }
+    [[gnu::always_inline]] Seg locate(VD v) const {
+      Seg s;
+      s.front = ~VL(v > x_front_);  // !(v > x_0), NaN included
+      s.back = VL(v >= x_back_);
+      s.idx = VL{};
+      for (double x : interior_) s.idx -= VL(v >= x);
+      s.t = n_ > 1 ? (v - read(tax_, ax_, s.idx)) / read(tdx_, dx_, s.idx) : packet::splat(0);
+      return s;
+    }
+    [[gnu::always_inline]] VD at(const Seg& s) const {
+      if (n_ == 0) return packet::splat(0);
+      if (n_ == 1) return packet::splat(y_front_);
+      const VD mid = read(tay_, ay_, s.idx) + s.t * read(tdy_, dy_, s.idx);
+      return packet::select(s.front, packet::splat(y_front_), packet::select(s.back, packet::splat(y_back_), mid));
+    }
+
+   private:
+    [[gnu::always_inline]] VD read(const VD& table, const std::vector<double>& values, VL idx) const {
+      if (small_) return __builtin_shuffle(table, idx);
+      VD r;
+      for (int l = 0; l < packet::kLanes; ++l) r[l] = values[std::size_t(idx[l])];
+      return r;
+    }
+    int n_ = 0;
+    double x_front_ = 0, y_front_ = 0, x_back_ = 0, y_back_ = 0;
+    std::vector<double> interior_, ax_, dx_, ay_, dy_;
+    bool small_ = true;
+    VD tax_{}, tdx_{}, tay_{}, tdy_{};
+  };
+  bool shared_ = false;
+  std::array<Curve, 4> curves_;
+};
+
 }  // namespace
 
 std::string slicing_mode_name(SlicingMode m) {
@@ -301,10 +390,10 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
   const bool live_runs = s_.live_runs;
   int max_pieces = 1;
   for (const auto& tf : tfs) max_pieces = std::max(max_pieces, tf.pieces());
-  // The packets' TF on eight lanes: the constant kind's range tests; a linear TF in use is
-  // evaluated lane by lane (InlineTf's scalar code).
-  bool all_constant = true;
-  for (std::size_t t = 0; t < (use_mask ? 4 : 1); ++t) all_constant = all_constant && !tfs[t].linear();
+  // The packets' TF on eight lanes: the constant kind's range tests, the linear kind's segments.
+  std::array<std::optional<LaneLinearTf>, 4> lane_tfs;
+  for (std::size_t t = 0; t < 4; ++t)
+    if (tfs[t].linear()) lane_tfs[t].emplace(s_.tfs[t]);
   const std::int32_t* const cell_info = cell_info_.data();
   // Packets index the samples with 32-bit element offsets (and read 32-bit cell records).
   const auto st = volume_.strides();
@@ -553,9 +642,9 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
           VF off[3] = {}, side_max[3] = {}, side_min[3] = {};  // the side ahead closed within (min, max)
           VF IDf[3] = {};                                      // 1 / Δg per axis in float
           bool still = false;
-          double last_a[kLanes], last_ac[kLanes];
+          // The linear kind: each lane's last visible α and its corrected value (as per ray).
+          VD last_a = splat(-1), last_ac = splat(0);
           for (int l = 0; l < kLanes; ++l) {
-            last_a[l] = -1, last_ac[l] = 0;
             const int x = x0 + l % 4, y = y0 + l / 4;
             if (x >= x_end || y >= y_end) continue;
             lray[l] = rays.generate_ray(x, y);
@@ -731,65 +820,47 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
                 samples.scale;
             const VD fn = (__builtin_convertvector(f, VD) - lo_) * inv_range;
             VD a = splat(0), ac = splat(0), cr = splat(0), cg = splat(0), cb = splat(0);
-            if (all_constant) {
-              for (int t = 0; t < (kMasked ? 4 : 1); ++t) {
-                const VI sel = sample & (m == t + 1);
-                if (!any(sel)) continue;
-                const InlineTf& tf = tfs[std::size_t(t)];
-                VI piece = zero;
-                VD pa = splat(0), pr = splat(0), pg = splat(0), pb = splat(0), pac = acp[std::size_t(t * max_pieces)];
-                for (int i = tf.ranges() - 1; i >= 0; --i) {
-                  const double rl = tf.range_lo(i), rh = tf.range_hi(i);
-                  const VL above = tf.range_lo_closed(i) ? VL(fn >= rl) : VL(fn > rl);
-                  const VL below = tf.range_hi_closed(i) ? VL(fn <= rh) : VL(fn < rh);
-                  const VL in = above & below;
-                  const Eigen::Vector3d& rgb = tf.piece_rgb(i + 1);
-                  piece = select(narrow(in), splati(i + 1), piece);
-                  pa = select(in, splat(tf.piece_alpha(i + 1)), pa);
-                  pr = select(in, splat(rgb.x()), pr), pg = select(in, splat(rgb.y()), pg);
-                  pb = select(in, splat(rgb.z()), pb);
-                  pac = select(in, acp[std::size_t(t * max_pieces + i + 1)], pac);
-                }
-                for (unsigned b = bits(sel & narrow(pac < 0)); b != 0; b &= b - 1) {
+            for (int t = 0; t < (kMasked ? 4 : 1); ++t) {
+              const VI sel = kMasked ? sample & (m == t + 1) : sample;
+              if (!any(sel)) continue;
+              const InlineTf& tf = tfs[std::size_t(t)];
+              const VL ws = wide(sel);
+              if (tf.linear()) {
+                // The linear kind on the lanes (LaneLinearTf: InlineTf's bits); the corrected α by
+                // std::pow per lane where a visible α changed (the scalar loop's last α).
+                VD ta, tr, tg, tb;
+                lane_tfs[std::size_t(t)]->evaluate(fn, ta, tr, tg, tb);
+                const VL corr = ws & (ta > 0) & (ex != 1.0);
+                for (unsigned b = bits(narrow(corr & (ta != last_a))); b != 0; b &= b - 1) {
                   const int l = __builtin_ctz(b);
-                  const std::size_t slot = std::size_t(t * max_pieces + piece[l]);
-                  acp[slot][l] = ex[l] != 1.0 ? 1.0 - std::pow(1.0 - pa[l], ex[l]) : pa[l];
-                  pac[l] = acp[slot][l];
+                  last_a[l] = ta[l], last_ac[l] = 1.0 - std::pow(1.0 - ta[l], ex[l]);
                 }
-                const VL ws = wide(sel);
-                a = select(ws, pa, a), ac = select(ws, pac, ac);
-                cr = select(ws, pr, cr), cg = select(ws, pg, cg), cb = select(ws, pb, cb);
+                a = select(ws, ta, a), ac = select(ws, select(corr, last_ac, ta), ac);
+                cr = select(ws, tr, cr), cg = select(ws, tg, cg), cb = select(ws, tb, cb);
+                continue;
               }
-            } else {
-              for (int l = 0; l < kLanes; ++l) {
-                if (!sample[l]) continue;
-                const std::size_t ti = std::size_t(m[l] - 1);
-                const InlineTf& tf = tfs[ti];
-                double al, acl;
-                Eigen::Vector3d c;
-                if (tf.linear()) {
-                  InlineTf::Segment seg;
-                  al = tf.alpha(fn[l], seg);
-                  if (!(al > 0)) continue;
-                  acl = al;
-                  if (ex[l] != 1.0) {
-                    if (al != last_a[l]) last_a[l] = al, last_ac[l] = 1.0 - std::pow(1.0 - al, ex[l]);
-                    acl = last_ac[l];
-                  }
-                  c = tf.rgb(fn[l], seg);
-                } else {
-                  const int piece = tf.piece(fn[l]);
-                  al = tf.piece_alpha(piece);
-                  acl = al;
-                  if (ex[l] != 1.0 && piece != 0) {
-                    const std::size_t slot = ti * std::size_t(max_pieces) + std::size_t(piece);
-                    if (acp[slot][l] < 0) acp[slot][l] = 1.0 - std::pow(1.0 - al, ex[l]);
-                    acl = acp[slot][l];
-                  }
-                  c = tf.piece_rgb(piece);
-                }
-                a[l] = al, ac[l] = acl, cr[l] = c.x(), cg[l] = c.y(), cb[l] = c.z();
+              VI piece = zero;
+              VD pa = splat(0), pr = splat(0), pg = splat(0), pb = splat(0), pac = acp[std::size_t(t * max_pieces)];
+              for (int i = tf.ranges() - 1; i >= 0; --i) {
+                const double rl = tf.range_lo(i), rh = tf.range_hi(i);
+                const VL above = tf.range_lo_closed(i) ? VL(fn >= rl) : VL(fn > rl);
+                const VL below = tf.range_hi_closed(i) ? VL(fn <= rh) : VL(fn < rh);
+                const VL in = above & below;
+                const Eigen::Vector3d& rgb = tf.piece_rgb(i + 1);
+                piece = select(narrow(in), splati(i + 1), piece);
+                pa = select(in, splat(tf.piece_alpha(i + 1)), pa);
+                pr = select(in, splat(rgb.x()), pr), pg = select(in, splat(rgb.y()), pg);
+                pb = select(in, splat(rgb.z()), pb);
+                pac = select(in, acp[std::size_t(t * max_pieces + i + 1)], pac);
               }
+              for (unsigned b = bits(sel & narrow(pac < 0)); b != 0; b &= b - 1) {
+                const int l = __builtin_ctz(b);
+                const std::size_t slot = std::size_t(t * max_pieces + piece[l]);
+                acp[slot][l] = ex[l] != 1.0 ? 1.0 - std::pow(1.0 - pa[l], ex[l]) : pa[l];
+                pac[l] = acp[slot][l];
+              }
+              a = select(ws, pa, a), ac = select(ws, pac, ac);
+              cr = select(ws, pr, cr), cg = select(ws, pg, cg), cb = select(ws, pb, cb);
             }
             const VI vis = sample & narrow(a > 0);
             if (!any(vis)) continue;
