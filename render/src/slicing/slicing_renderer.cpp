@@ -395,6 +395,11 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
   for (std::size_t t = 0; t < 4; ++t)
     if (tfs[t].linear()) lane_tfs[t].emplace(s_.tfs[t]);
   const std::int32_t* const cell_info = cell_info_.data();
+  // The mask for the packets' lookups.
+  const std::uint8_t* const mask_cells = use_mask ? mask.cells() : nullptr;
+  const std::array<int, 3> mask_dims = use_mask ? mask.dims() : std::array<int, 3>{1, 1, 1};
+  const Eigen::Vector3d mask_lo = use_mask ? mask.box().lo : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d mask_inv_size = use_mask ? mask.inv_size() : Eigen::Vector3d::Ones();
   // Packets index the samples with 32-bit element offsets (and read 32-bit cell records).
   const auto st = volume_.strides();
   const bool offsets_fit =
@@ -644,6 +649,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
           bool still = false;
           // The linear kind: each lane's last visible α and its corrected value (as per ray).
           VD last_a = splat(-1), last_ac = splat(0);
+          VD O[3] = {}, V[3] = {}, TOFF = splat(0), COSPSI = splat(1);  // each lane's ray and RaySlices
           for (int l = 0; l < kLanes; ++l) {
             const int x = x0 + l % 4, y = y0 + l / 4;
             if (x >= x_end || y >= y_end) continue;
@@ -653,6 +659,8 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             if (rs.empty()) continue;
             ++cnt.rays;
             const CameraRay& ray = lray[std::size_t(l)];
+            for (int a = 0; a < 3; ++a) O[a][l] = ray.origin[a], V[a][l] = ray.direction[a];
+            TOFF[l] = rs.t_offset, COSPSI[l] = rs.cos_psi;
             ex[l] = opacity_correction ? (stack.spacing / rs.cos_psi) / h0 : 1.0;
             const Eigen::Vector3d delta =
                 (kFrontToBack ? 1.0 : -1.0) * (stack.spacing / rs.cos_psi) * ray.direction.cwiseProduct(inv_spacing);
@@ -774,13 +782,28 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             if (!any(sample)) continue;
             const int k = kFrontToBack ? -K : K;  // the plane (the same for every lane)
             VI m = one;
+            // The world point o + t_k v of each lane (the scalar loop's p) where the mask or the light
+            // needs it.
+            VD P[3];
+            if constexpr (kMasked || kLit) {
+              const VD tk = (splat(stack.depth(k)) - TOFF) / COSPSI;
+              for (int a = 0; a < 3; ++a) P[a] = O[a] + tk * V[a];
+            }
             if constexpr (kMasked) {
-              for (int l = 0; l < kLanes; ++l) {
-                if (!sample[l]) continue;
-                const auto& ray = lray[std::size_t(l)];
-                m[l] = mask.lookup(ray.origin + lrs[std::size_t(l)].t(stack, k) * ray.direction);
-                if (m[l] == 0) sample[l] = 0;
+              // MaskVolume::lookup on the lanes: cell floor(u n) clamped, u = (p - lo) / size.
+              VI cell = zero;
+              for (int a = 2; a >= 0; --a) {
+                const double n = double(mask_dims[a]);
+                const VD f = floor((P[a] - mask_lo[a]) * mask_inv_size[a] * n);
+                const VD c = select(f < 0.0, splat(0), select(f >= n, splat(n - 1), f));
+                const VI ci = __builtin_convertvector(select(c >= 0.0, c, splat(0)), VI);  // (NaN: cell 0)
+                cell = a == 2 ? ci : ci + mask_dims[a] * cell;
               }
+              cell = select(sample, cell, zero);
+              VI looked;
+              for (int l = 0; l < kLanes; ++l) looked[l] = mask_cells[cell[l]];
+              m = select(sample, looked, one);
+              sample &= m != 0;
             }
             n_classified -= sample;
             if (!any(sample)) continue;
