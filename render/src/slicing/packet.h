@@ -100,6 +100,17 @@ inline VD floor(VD x) {
 #endif
 }
 
+/// std::sqrt per lane (correctly rounded, as the scalar one).
+inline VD sqrt(VD x) {
+#if defined(__AVX512F__)
+  return VD(_mm512_mask_sqrt_pd(__m512d(x), 0xFF, __m512d(x)));  // (masked: see floor)
+#else
+  VD r;
+  for (int l = 0; l < kLanes; ++l) r[l] = std::sqrt(x[l]);
+  return r;
+#endif
+}
+
 /// data[offset] per lane as float (offset 0 in lanes that do not need a value: any valid index).
 template <class T>
 inline VF gather(const T* data, VI offset) {

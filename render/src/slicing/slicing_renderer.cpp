@@ -268,6 +268,16 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
     if (!grad_) grad_ = build_gradient_volume(volume, s_.gradient);
     if (grad_->dims != volume.dims())
       throw InputError("slicing: the gradient volume does not match the data volume's dimensions");
+    // The packets' lighting reads a voxel's three channels by one 32-bit gather (voxel indices fit).
+    const std::int64_t voxels = std::int64_t(grad_->dims[0]) * grad_->dims[1] * grad_->dims[2];
+    if (s_.simd && voxels < (std::int64_t(1) << 31)) {
+      grad_words_.resize(std::size_t(voxels));
+      const std::uint8_t* e = grad_->encoded.data();
+      tbb::parallel_for(std::int64_t(0), voxels, [&](std::int64_t v) {
+        const std::size_t o = 3 * std::size_t(v);
+        grad_words_[std::size_t(v)] = std::int32_t(e[o]) | std::int32_t(e[o + 1]) << 8 | std::int32_t(e[o + 2]) << 16;
+      });
+    }
   } else {
     grad_.reset();
   }
@@ -396,6 +406,9 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
     if (tfs[t].linear()) lane_tfs[t].emplace(s_.tfs[t]);
   const std::int32_t* const cell_info = cell_info_.data();
   // The mask for the packets' lookups.
+  // The gradient for the packets' lighting: the three encoded channels of a voxel in one word.
+  const std::int32_t* const grad_words = grad_words_.empty() ? nullptr : grad_words_.data();
+  const float grad_channel_scale = lit ? grad_->channel(0).scale : 1.0f;
   const std::uint8_t* const mask_cells = use_mask ? mask.cells() : nullptr;
   const std::array<int, 3> mask_dims = use_mask ? mask.dims() : std::array<int, 3>{1, 1, 1};
   const Eigen::Vector3d mask_lo = use_mask ? mask.box().lo : Eigen::Vector3d::Zero();
@@ -632,6 +645,7 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
       const VI str[3] = {splati(std::int32_t(samples.sx)), splati(std::int32_t(samples.sy)),
                          splati(std::int32_t(samples.sz))};
       const VI zero = splati(0), one = splati(1);
+      const VI gstr[3] = {splati(1), splati(dims[0]), splati(dims[0] * dims[1])};  // grad_words_ (voxels)
       auto clampv = [](VI i, VI hi) { return select(i < 0, splati(0), select(i > hi, hi, i)); };
       // Packets of 4 x 2 pixels (lane l at x0 + l % 4, y0 + l / 4): neighbours closer than in a row.
       const int x_end = std::min(W, (tx + 1) * T), y_end = std::min(H, (ty + 1) * T);
@@ -692,6 +706,66 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
           VD Cr = splat(0), Cg = splat(0), Cb = splat(0), A = splat(0);
           // Counters per lane (a mask is -1 where true: subtracting it counts), summed after the packet.
           VI n_visited = zero, n_fetched = zero, n_classified = zero, n_cell_tests = zero;
+          // Blinn-Phong on the lanes (shade()'s arithmetic, Eigen's evaluation order written out:
+          // sums of three squares or products as (x + y) + z, normalized() as v / sqrt(|v|²) where
+          // |v|² > 0): the gradient's three encoded channels of each corner by one 32-bit gather
+          // (grad_words_), filtered as VolumeSamples::trilinear_cell filters each channel; std::pow
+          // of the specular term per lane (0 where its base is 0 and the exponent > 0: pow's exact
+          // +0). Lanes in vis only; p the world points, v the rays' directions.
+          auto shade_lanes = [&](VI vis, const VI(&ii)[3], const VF(&w)[3], const VD(&p)[3], const VD(&v)[3], VD& cr,
+                                 VD& cg, VD& cb) {
+            VI o0[3], o1[3];
+            for (int a = 0; a < 3; ++a) {
+              o0[a] = select(vis, clampv(ii[a], cell_max[a]) * gstr[a], zero);
+              o1[a] = select(vis, clampv(ii[a] + 1, cell_max[a]) * gstr[a], zero);
+            }
+            const VF one_f = splatf(1.0f);
+            VF vx[2][2][2][3];  // [x][y][z][channel]
+            for (int xx = 0; xx < 2; ++xx)
+              for (int yy = 0; yy < 2; ++yy)
+                for (int zz = 0; zz < 2; ++zz) {
+                  const VI word =
+                      gather_i32(grad_words, (xx ? o1[0] : o0[0]) + (yy ? o1[1] : o0[1]) + (zz ? o1[2] : o0[2]));
+                  for (int ch = 0; ch < 3; ++ch)
+                    vx[xx][yy][zz][ch] = __builtin_convertvector((word >> (8 * ch)) & 255, VF);
+                }
+            VD gd[3], gw[3];
+            for (int ch = 0; ch < 3; ++ch) {
+              const VF c00 = vx[0][0][0][ch] * (one_f - w[0]) + vx[1][0][0][ch] * w[0];
+              const VF c10 = vx[0][1][0][ch] * (one_f - w[0]) + vx[1][1][0][ch] * w[0];
+              const VF c01 = vx[0][0][1][ch] * (one_f - w[0]) + vx[1][0][1][ch] * w[0];
+              const VF c11 = vx[0][1][1][ch] * (one_f - w[0]) + vx[1][1][1][ch] * w[0];
+              const VF e =
+                  ((c00 * (one_f - w[1]) + c10 * w[1]) * (one_f - w[2]) + (c01 * (one_f - w[1]) + c11 * w[1]) * w[2]) *
+                  grad_channel_scale;
+              gd[ch] = (2.0 * __builtin_convertvector(e, VD) - 1.0) * grad_scale;
+              gw[ch] = gd[ch] * inv_spacing[ch];
+            }
+            auto sq = [](const VD(&x)[3]) { return (x[0] * x[0] + x[1] * x[1]) + x[2] * x[2]; };
+            auto dot = [](const VD(&x)[3], const VD(&y)[3]) { return (x[0] * y[0] + x[1] * y[1]) + x[2] * y[2]; };
+            const VD gw2 = sq(gw);
+            const VL lit_l = wide(vis) & (sqrt(sq(gd)) > light.gate) & (sqrt(gw2) > 0.0);
+            if (!any(narrow(lit_l))) return;
+            VD nrm[3], ld[3], hd[3];
+            const VD gwn = sqrt(gw2);
+            for (int a = 0; a < 3; ++a) nrm[a] = -(gw[a] / gwn), ld[a] = light_pos[a] - p[a];
+            const VD l2 = sq(ld), ln = sqrt(l2);
+            for (int a = 0; a < 3; ++a) ld[a] = select(l2 > 0.0, ld[a] / ln, ld[a]), hd[a] = ld[a] + -v[a];
+            const VD h2 = sq(hd), hn = sqrt(h2);
+            for (int a = 0; a < 3; ++a) hd[a] = select(h2 > 0.0, hd[a] / hn, hd[a]);
+            const VD nl = dot(nrm, ld), nh = dot(nrm, hd);
+            const VD diff = select(nl < 0.0, splat(0), nl);
+            const VD base = select(nh < 0.0, splat(0), nh);
+            VD spec = splat(0);
+            const VL needs_pow = light.exponent > 0 ? lit_l & (base != 0.0) : lit_l;
+            for (unsigned b = bits(narrow(needs_pow)); b != 0; b &= b - 1) {
+              const int l = __builtin_ctz(b);
+              spec[l] = std::pow(base[l], light.exponent);
+            }
+            const VD k = light.ambient + light.diffuse * diff, sp = light.specular * spec;
+            cr = select(lit_l, cr * k + sp, cr), cg = select(lit_l, cg * k + sp, cg),
+            cb = select(lit_l, cb * k + sp, cb);
+          };
           // The planes from a lane's sample on while g stays 0.01 inside the cube of cells c ± r
           // (the scalar loop's cube_run, lane by lane: the same minima of the same quotients).
           auto cube_run_any = [&](const VI(&c)[3], VI r, const VD(&g)[3], VD run) {
@@ -888,13 +962,17 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
             const VI vis = sample & narrow(a > 0);
             if (!any(vis)) continue;
             if constexpr (kLit) {
-              for (int l = 0; l < kLanes; ++l) {
-                if (!vis[l]) continue;
-                const auto& ray = lray[std::size_t(l)];
-                Eigen::Vector3d c(cr[l], cg[l], cb[l]);
-                shade(c, ii[0][l], ii[1][l], ii[2][l], w[0][l], w[1][l], w[2][l],
-                      ray.origin + lrs[std::size_t(l)].t(stack, k) * ray.direction, -ray.direction);
-                cr[l] = c.x(), cg[l] = c.y(), cb[l] = c.z();
+              if (grad_words != nullptr) {
+                shade_lanes(vis, ii, w, P, V, cr, cg, cb);
+              } else {
+                for (int l = 0; l < kLanes; ++l) {
+                  if (!vis[l]) continue;
+                  const auto& ray = lray[std::size_t(l)];
+                  Eigen::Vector3d c(cr[l], cg[l], cb[l]);
+                  shade(c, ii[0][l], ii[1][l], ii[2][l], w[0][l], w[1][l], w[2][l],
+                        ray.origin + lrs[std::size_t(l)].t(stack, k) * ray.direction, -ray.direction);
+                  cr[l] = c.x(), cg[l] = c.y(), cb[l] = c.z();
+                }
               }
             }
             const VL wv = wide(vis);

@@ -197,6 +197,9 @@ class SlicingRenderer {
   std::vector<std::uint8_t> live_reach_;
   /// dist_ | live_reach_ << 8 per cell: one 32-bit gather per lane in the packets (SlicingSettings::simd).
   std::vector<std::int32_t> cell_info_;
+  /// The gradient's three encoded channels of each voxel (x fastest) as e_x | e_y << 8 | e_z << 16:
+  /// one 32-bit gather per corner in the packets' lighting (simd and a lit mode).
+  std::vector<std::int32_t> grad_words_;
 };
 
 /// One frame (builds a SlicingRenderer).
