@@ -283,6 +283,33 @@ TEST(SlicingSpeed, CurvesSharingControlPointsGiveTheBitsOfPerChannelEvaluation) 
     }
 }
 
+/// A linear TF whose four curves share `n` control points spread over [0.3, 1] (α 0 below, so the
+/// air is empty space; α > 0 at every third point, colours varying): n - 1 segments (more than
+/// eight: the packets read the segment tables lane by lane; up to eight: by one permute).
+TransferFunction shared_points(int n) {
+  std::array<TfCurve, 4> c;
+  for (int i = 0; i < n; ++i) {
+    const double x = 0.3 + 0.7 * double(i) / (n - 1);
+    c[0].points.emplace_back(x, 0.5 + 0.5 * std::sin(3.0 * i));
+    c[1].points.emplace_back(x, double(i % 3) / 2);
+    c[2].points.emplace_back(x, 1.0 - x);
+    c[3].points.emplace_back(x, i % 3 == 1 ? 0.1 + 0.4 * x : 0.0);
+  }
+  return TransferFunction::piecewise_linear(c, "shared_" + std::to_string(n));
+}
+
+/// test_mask with regions of index 3 and 4 added: every index 0-4 is used.
+MaskVolume all_index_mask(const Volume& v) {
+  MaskVolume mask = test_mask(v);
+  MaskEdit e;
+  e.centre = Eigen::Vector3d(0.75, 0.3, 0.4), e.half_size = Eigen::Vector3d(0.2, 0.25, 0.3), e.index = 3;
+  mask.apply(e);
+  e.shape = MaskShape::kEllipsoid, e.centre = Eigen::Vector3d(0.3, 0.75, 0.35);
+  e.half_size = Eigen::Vector3d(0.25, 0.2, 0.3), e.rotate_deg = Eigen::Vector3d(10, 20, 30), e.index = 4;
+  mask.apply(e);
+  return mask;
+}
+
 TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
   // The SIMD path (SlicingSettings::simd) runs each lane through its ray's scalar arithmetic (the
   // same fma positions, float trilinear order, double TF tests and compositing; -ffp-contract=off
@@ -291,8 +318,12 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
   // equal, not close. Variants
   // 0-5 as above, 6: the linear TF unmasked (classified lane by lane), 7: a mask with two constant
   // TFs unlit (the eight-lane range tests under a mask), 8: opacity correction off and additive
-  // with a background, 9 and 10: Blend and combined on an 8-bit copy of the volume; tiles of 16
-  // and 5 pixels (packets cut at the tile's edge) and no skipping.
+  // with a background, 9 and 10: Blend and combined on an 8-bit copy of the volume, 11 and 12: a
+  // mask using every index with TF 1 constant, TF 2 linear with curves of their own points, TF 3
+  // linear with 11 shared segments, TF 4 with 5 (the lanes' TF, mask and light together) in Blend
+  // and combined, 13: MIP with the 11-segment TF and a gate and exponent of its own (unlit lanes
+  // among lit ones), 14: lit Blend with the 5-segment TF; tiles of 16 and 5 pixels (packets cut at
+  // the tile's edge) and no skipping.
   const Volume& v = phantom();
   TransferFunction bone_only;
   {
@@ -309,7 +340,7 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
       for (int i = 0; i < v.nx(); ++i) bytes.set_value(i, j, k, v.value(i, j, k));
   int compared = 0;
   for (const Camera& cam : cameras(v.domain()))
-    for (int variant = 0; variant < 11; ++variant)
+    for (int variant = 0; variant < 15; ++variant)
       for (int tile : {16, 5})
         for (bool skip : {true, false}) {
           if (!skip && tile == 5) continue;
@@ -320,6 +351,16 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
             s.opacity_correction = false, s.blend = BlendOperator::kAdditive;
             s.background = Eigen::Vector3d(0.2, 0.4, 0.9);
           }
+          if (variant == 11 || variant == 12) {
+            s.mask = all_index_mask(v);
+            s.tfs[2] = shared_points(12), s.tfs[3] = shared_points(6);
+            s.mode = variant == 12 ? SlicingMode::kCombined : SlicingMode::kBlend;
+          }
+          if (variant == 13) {
+            s.mode = SlicingMode::kMip, s.tfs[0] = shared_points(12);
+            s.light.gate = 0.3, s.light.exponent = 7.5, s.light.light_camera = Eigen::Vector3d(0.4, -0.4, 0);
+          }
+          if (variant == 14) s.lit_blend = true, s.tfs[0] = shared_points(6);
           s.tile = tile;
           s.skip_empty = skip;
           s.simd = false;
@@ -356,7 +397,9 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
           }
           ++compared;
         }
-  EXPECT_EQ(compared, 3 * 11 * 3);
+  EXPECT_EQ(compared, 3 * 15 * 3);
+  const auto h = all_index_mask(v).histogram();
+  for (int i = 0; i < 5; ++i) EXPECT_GT(h[std::size_t(i)], 0) << "mask index " << i;
   EXPECT_TRUE(SlicingSettings{}.simd);
 }
 
