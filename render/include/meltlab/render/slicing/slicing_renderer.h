@@ -106,13 +106,14 @@ struct SlicingSettings {
   /// counts and image as testing each. false: every sample's cell is looked up (for tests and
   /// measurements).
   bool live_runs = true;
-  /// Packets (issue 17's third speed round): true (default): eight neighbouring pixels of a tile
-  /// (a 4 x 2 block) advance plane by plane together, positions, cells, trilinear fetches (gathers), the
-  /// constant TF's classification and the compositing on eight lanes; a lane that has nothing to
+  /// Packets (issue 17's third and fourth speed rounds): true (default): eight neighbouring pixels of
+  /// a tile (a 4 x 2 block) advance plane by plane together, positions, cells, trilinear fetches
+  /// (gathers), the mask lookup, both TF kinds, the corrected α, the Blinn-Phong lighting (its
+  /// specular power per lane) and the compositing on eight lanes; a lane that has nothing to
   /// do at a plane (outside its ray's planes, in an empty cell, cut away by the mask, terminated)
   /// is masked. Empty space is skipped per packet (lookups when the shortest lane run ends, jumps
   /// where every lane is empty), so each lane fetches exactly its ray's live samples with its ray's
-  /// arithmetic (lighting, mask lookups and the linear TF per lane with the scalar code): the image
+  /// arithmetic (the scalar code's operations in its order): the image
   /// and the samples, skipped, classified and terminated counts are the scalar path's bit for bit
   /// (slicing_speed_test); visited and cell_tests count the packets' own work. Not with
   /// exact_positions. false: one ray at a time (the reference).
