@@ -406,10 +406,10 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
   for (std::size_t t = 0; t < 4; ++t)
     if (tfs[t].linear()) lane_tfs[t].emplace(s_.tfs[t]);
   const std::int32_t* const cell_info = cell_info_.data();
-  // The mask for the packets' lookups.
   // The gradient for the packets' lighting: the three encoded channels of a voxel in one word.
   const std::int32_t* const grad_words = grad_words_.empty() ? nullptr : grad_words_.data();
   const float grad_channel_scale = lit ? grad_->channel(0).scale : 1.0f;
+  // The mask for the packets' lookups.
   const std::uint8_t* const mask_cells = use_mask ? mask.cells() : nullptr;
   const std::array<int, 3> mask_dims = use_mask ? mask.dims() : std::array<int, 3>{1, 1, 1};
   const Eigen::Vector3d mask_lo = use_mask ? mask.box().lo : Eigen::Vector3d::Zero();
