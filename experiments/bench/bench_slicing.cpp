@@ -17,7 +17,8 @@
 // water, muscle and air invisible. Blend at QC 0.5, 1, 2 (args: QC × 100, empty-space cell edge in
 // voxels, early termination × 1000, 0 = off, tile edge, 0 = 16: the default renderer is /4/0/0), the
 // scene's piecewise-linear TF ("head" of slicing_phantom_*.yaml) at QC 1, the combined mode at
-// QC 1 (gradients radius 2, 8 bits, built once outside the timing), the ray caster at equal
+// QC 1 (gradients radius 2, 8 bits, built once outside the timing), Blend with an all-ones mask
+// (100³) at QC 1 for both TFs, the ray caster at equal
 // density (Δs = QC · h0) without and with its empty-space skipping. Counters: samples (plane
 // samples, jumped ones included), visited (positions computed), fetched (not in empty cells),
 // cell_tests (visited samples whose empty-space cell was looked up; the others in live runs). CPU time
@@ -193,6 +194,16 @@ void BM_PhantomBlendLinear(benchmark::State& state) {
   time_phantom(state, s);
 }
 
+// The mask lookup's cost: an all-ones mask at the scenes' resolution (100³, TF 1 everywhere: the
+// image of no mask); args: QC x 100, TF (0: the bench's constant TF, 1: the scene's linear TF)
+void BM_PhantomBlendMasked(benchmark::State& state) {
+  render::SlicingSettings s;
+  s.quality_class = double(state.range(0)) / 100;
+  s.tfs[0] = state.range(1) != 0 ? phantom_linear_tf() : phantom_tf();
+  s.mask = render::MaskVolume({100, 100, 100}, phantom().domain(), 1);
+  time_phantom(state, s);
+}
+
 // args: QC x 100, empty-space cell edge (voxels)
 void BM_PhantomCombined(benchmark::State& state) {
   render::SlicingSettings s;
@@ -234,6 +245,12 @@ BENCHMARK(BM_PhantomBlend)
     ->MeasureProcessCPUTime()
     ->UseRealTime();
 BENCHMARK(BM_PhantomBlendLinear)->Arg(100)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK(BM_PhantomBlendMasked)
+    ->Args({100, 0})
+    ->Args({100, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
 BENCHMARK(BM_PhantomCombined)
     ->Args({100, 8})
     ->Args({100, 4})

@@ -564,6 +564,7 @@ def volume_cases():
         "slicing_bloom_sigma_zero": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  bloom: {enabled: true, sigma: 0}\n",
         "slicing_skip_cell_3": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  skip_cell: 3\n",
         "slicing_early_termination_above_one": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  early_termination: 1.5\n",
+        "slicing_exact_pow_not_bool": "method: slicing\nvolume: {generate: {kind: constant, size: 4}}\n" + cam + "slicing:\n  transfer_functions: [{points: [[0, 1, 1, 1, 0.5]]}]\n  exact_pow: sometimes\n",
     }
     for n, t in scenes.items():
         cases.append(Case(f"volume/{n}", ["volume", "render", "--scene", "{f}", "--out", "{out}"],

@@ -88,6 +88,29 @@ inline VF floor(VF x) {
   return t - (t > x ? splatf(1.0f) : splatf(0.0f));
 }
 
+/// std::floor per lane (doubles).
+inline VD floor(VD x) {
+#if defined(__AVX512F__)
+  // (The masked form with x as the source: GCC 12 flags the unmasked one's undefined source.)
+  return VD(_mm512_mask_roundscale_pd(__m512d(x), 0xFF, __m512d(x), _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC));
+#else
+  VD r;
+  for (int l = 0; l < kLanes; ++l) r[l] = std::floor(x[l]);
+  return r;
+#endif
+}
+
+/// std::sqrt per lane (correctly rounded, as the scalar one).
+inline VD sqrt(VD x) {
+#if defined(__AVX512F__)
+  return VD(_mm512_mask_sqrt_pd(__m512d(x), 0xFF, __m512d(x)));  // (masked: see floor)
+#else
+  VD r;
+  for (int l = 0; l < kLanes; ++l) r[l] = std::sqrt(x[l]);
+  return r;
+#endif
+}
+
 /// data[offset] per lane as float (offset 0 in lanes that do not need a value: any valid index).
 template <class T>
 inline VF gather(const T* data, VI offset) {

@@ -140,6 +140,7 @@ SlicingScene parse_slicing_scene(const ConfigSection& c) {
   s.early_termination = c.get_in_range<double>("early_termination", 0.0, 0.0, 1.0);
   s.exact_positions = c.get<bool>("exact_positions", false);
   s.simd = c.get<bool>("simd", true);
+  s.exact_pow = c.get<bool>("exact_pow", false);
   return out;
 }
 

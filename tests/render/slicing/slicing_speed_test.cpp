@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 namespace meltlab::render {
@@ -283,6 +284,33 @@ TEST(SlicingSpeed, CurvesSharingControlPointsGiveTheBitsOfPerChannelEvaluation) 
     }
 }
 
+/// A linear TF whose four curves share `n` control points spread over [0.3, 1] (α 0 below, so the
+/// air is empty space; α > 0 at every third point, colours varying): n - 1 segments (more than
+/// eight: the packets read the segment tables lane by lane; up to eight: by one permute).
+TransferFunction shared_points(int n) {
+  std::array<TfCurve, 4> c;
+  for (int i = 0; i < n; ++i) {
+    const double x = 0.3 + 0.7 * double(i) / (n - 1);
+    c[0].points.emplace_back(x, 0.5 + 0.5 * std::sin(3.0 * i));
+    c[1].points.emplace_back(x, double(i % 3) / 2);
+    c[2].points.emplace_back(x, 1.0 - x);
+    c[3].points.emplace_back(x, i % 3 == 1 ? 0.1 + 0.4 * x : 0.0);
+  }
+  return TransferFunction::piecewise_linear(c, "shared_" + std::to_string(n));
+}
+
+/// test_mask with regions of index 3 and 4 added: every index 0-4 is used.
+MaskVolume all_index_mask(const Volume& v) {
+  MaskVolume mask = test_mask(v);
+  MaskEdit e;
+  e.centre = Eigen::Vector3d(0.75, 0.3, 0.4), e.half_size = Eigen::Vector3d(0.2, 0.25, 0.3), e.index = 3;
+  mask.apply(e);
+  e.shape = MaskShape::kEllipsoid, e.centre = Eigen::Vector3d(0.3, 0.75, 0.35);
+  e.half_size = Eigen::Vector3d(0.25, 0.2, 0.3), e.rotate_deg = Eigen::Vector3d(10, 20, 30), e.index = 4;
+  mask.apply(e);
+  return mask;
+}
+
 TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
   // The SIMD path (SlicingSettings::simd) runs each lane through its ray's scalar arithmetic (the
   // same fma positions, float trilinear order, double TF tests and compositing; -ffp-contract=off
@@ -291,8 +319,13 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
   // equal, not close. Variants
   // 0-5 as above, 6: the linear TF unmasked (classified lane by lane), 7: a mask with two constant
   // TFs unlit (the eight-lane range tests under a mask), 8: opacity correction off and additive
-  // with a background, 9 and 10: Blend and combined on an 8-bit copy of the volume; tiles of 16
-  // and 5 pixels (packets cut at the tile's edge) and no skipping.
+  // with a background, 9 and 10: Blend and combined on an 8-bit copy of the volume, 11 and 12: a
+  // mask using every index with TF 1 constant, TF 2 linear with curves of their own points, TF 3
+  // linear with 11 shared segments, TF 4 with 5 (the lanes' TF, mask and light together) in Blend
+  // and combined, 13: MIP with the 11-segment TF and a gate and exponent of its own (unlit lanes
+  // among lit ones), 14: lit Blend with the 5-segment TF, 15: variant 12 with std::pow
+  // (exact_pow, lane by lane); tiles of 16 and 5 pixels (packets cut at the tile's edge) and no
+  // skipping.
   const Volume& v = phantom();
   TransferFunction bone_only;
   {
@@ -309,7 +342,7 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
       for (int i = 0; i < v.nx(); ++i) bytes.set_value(i, j, k, v.value(i, j, k));
   int compared = 0;
   for (const Camera& cam : cameras(v.domain()))
-    for (int variant = 0; variant < 11; ++variant)
+    for (int variant = 0; variant < 16; ++variant)
       for (int tile : {16, 5})
         for (bool skip : {true, false}) {
           if (!skip && tile == 5) continue;
@@ -320,6 +353,17 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
             s.opacity_correction = false, s.blend = BlendOperator::kAdditive;
             s.background = Eigen::Vector3d(0.2, 0.4, 0.9);
           }
+          if (variant == 11 || variant == 12 || variant == 15) {
+            s.mask = all_index_mask(v);
+            s.tfs[2] = shared_points(12), s.tfs[3] = shared_points(6);
+            s.mode = variant == 11 ? SlicingMode::kBlend : SlicingMode::kCombined;
+            s.exact_pow = variant == 15;
+          }
+          if (variant == 13) {
+            s.mode = SlicingMode::kMip, s.tfs[0] = shared_points(12);
+            s.light.gate = 0.3, s.light.exponent = 7.5, s.light.light_camera = Eigen::Vector3d(0.4, -0.4, 0);
+          }
+          if (variant == 14) s.lit_blend = true, s.tfs[0] = shared_points(6);
           s.tile = tile;
           s.skip_empty = skip;
           s.simd = false;
@@ -356,8 +400,92 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
           }
           ++compared;
         }
-  EXPECT_EQ(compared, 3 * 11 * 3);
+  EXPECT_EQ(compared, 3 * 16 * 3);
+  const auto h = all_index_mask(v).histogram();
+  for (int i = 0; i < 5; ++i) EXPECT_GT(h[std::size_t(i)], 0) << "mask index " << i;
   EXPECT_TRUE(SlicingSettings{}.simd);
+}
+
+TEST(SlicingSpeed, SlicingPowIsStdPowUpToRoundOff) {
+  // slicing_pow (lane_math.h; the linear TF's corrected α): ln x to a few ulps, then e^t, t = y ln x: the absolute
+  // error of t (a few ulps of |t|) becomes a relative error of e^t, so the bound grows with |t|: |pow - std::pow| <=
+  // (16 + 4 |t|) eps |std::pow| (eps = 2^-53; 16 eps for ln m's series and e^r's polynomial and the scalings, 4 |t| eps
+  // for t's rounding), while the result is normal.
+  constexpr double kEps = 0x1p-53;
+  int checked = 0;
+  double worst = 0;  // in units of the bound
+  for (double y : {0.25, 0.5, 1.0, 1.0001, 1.37, 2.0, 3.7, 7.5, 32.0, 128.0, 1000.0})
+    for (int i = 1; i <= 4000; ++i) {
+      // x from 1e-12 to 1 (log-spaced), and 1 - a for small a (the opacity correction's range)
+      const double x =
+          i <= 2000 ? std::pow(10.0, -12.0 * (2000 - i) / 1999) : 1.0 - std::pow(10.0, -8.0 * (i - 2000) / 2000);
+      const double ref = std::pow(x, y);
+      if (!(ref > 0x1p-1000)) continue;
+      const double t = std::abs(y * std::log(x));
+      const double bound = (16 + 4 * t) * kEps * ref;
+      const double err = std::abs(slicing_pow(x, y) - ref);
+      worst = std::max(worst, err / bound);
+      ASSERT_LE(err, bound) << "x " << x << ", y " << y;
+      ++checked;
+    }
+  EXPECT_GT(checked, 30000);
+  // The opacity correction 1 - (1 - α)^e at the renderer's α (TF values) and exponents (Δ / h0 at
+  // QC 0.5-4 and oblique rays): within 4 eps absolute, i.e. α' keeps about its last bit.
+  for (double e : {0.5, 0.93, 1.0, 1.07, 1.5, 2.0, 4.0})
+    for (int i = 1; i <= 1000; ++i) {
+      const double a = i / 1000.0;
+      ASSERT_LE(std::abs((1.0 - slicing_pow(1.0 - a, e)) - (1.0 - std::pow(1.0 - a, e))), 4 * kEps) << a << " " << e;
+    }
+  // std::pow's special values that the renderer meets: 0^y = 0 (y > 0), x^0 = 1, 1^y = 1; a
+  // subnormal base; results below the normal range (absolute 1e-300).
+  EXPECT_EQ(slicing_pow(0.0, 32.0), 0.0);
+  EXPECT_EQ(slicing_pow(0.0, 0.0), 1.0);
+  EXPECT_EQ(slicing_pow(0.37, 0.0), 1.0);
+  EXPECT_EQ(slicing_pow(1.0, 7.5), 1.0);
+  EXPECT_NEAR(slicing_pow(1e-310, 0.5), std::pow(1e-310, 0.5), 1e-14 * std::pow(1e-310, 0.5));
+  EXPECT_NEAR(slicing_pow(1e-10, 31.0), std::pow(1e-10, 31.0), 1e-300);
+  EXPECT_EQ(slicing_pow(1e-10, 80.0), 0.0);  // 1e-800 underflows
+  // (x slightly above 1, as max(n·h, 0) of two unit vectors may be)
+  EXPECT_NEAR(slicing_pow(1.0 + 2 * kEps * 2, 32.0), std::pow(1.0 + 4 * kEps, 32.0), 1e-15);
+  std::printf("worst error: %.3f of the bound\n", worst);
+}
+
+TEST(SlicingSpeed, ExactPowChangesPixelsByAtMostOneFloatUlp) {
+  // slicing_pow differs from std::pow by < 1e-13 relative at the renderer's arguments (above), so
+  // a pixel's double sum differs by far less than half a float ulp and its float can differ by at
+  // most one ulp (where the double falls next to a rounding boundary): the bound checked per pixel.
+  const Volume& v = phantom();
+  int differing = 0, compared = 0;
+  for (const Camera& cam : cameras(v.domain()))
+    for (int variant = 0; variant < 4; ++variant) {
+      SlicingSettings s = variant_settings(v, 0);
+      s.tfs[0] = shared_points(6);
+      s.mode = variant == 1 ? SlicingMode::kMip : variant == 2 ? SlicingMode::kCombined : SlicingMode::kBlend;
+      s.lit_blend = variant == 3;
+      if (variant == 2) s.mask = all_index_mask(v), s.tfs[2] = shared_points(12);
+      s.exact_pow = true;
+      const SlicingRenderer libm_renderer(v, s);
+      const SlicingFrame libm = libm_renderer.render(cam);
+      s.exact_pow = false;
+      const SlicingFrame lanes =
+          SlicingRenderer(
+              v, s,
+              libm_renderer.gradients() ? std::optional<GradientVolume>(*libm_renderer.gradients()) : std::nullopt)
+              .render(cam);
+      ASSERT_GT(libm.stats.classified, 0);
+      for (const auto* img : {&libm.raw, &libm.alpha}) {
+        const ImageF& other = img == &libm.raw ? lanes.raw : lanes.alpha;
+        for (std::size_t i = 0; i < img->size(); ++i) {
+          const float a = img->values()[i], b = other.values()[i];
+          const float hi = std::max(std::abs(a), std::abs(b));
+          ASSERT_LE(std::abs(a - b), std::nextafter(hi, 2 * hi + 1) - hi) << "variant " << variant << ", value " << i;
+          differing += a != b;
+          ++compared;
+        }
+      }
+    }
+  EXPECT_GT(compared, 0);
+  std::printf("%d of %d values differ (by one float ulp)\n", differing, compared);
 }
 
 TEST(SlicingSpeed, BadCellSizeOrTerminationThresholdIsRefused) {

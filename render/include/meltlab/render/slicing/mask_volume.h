@@ -61,6 +61,10 @@ class MaskVolume {
     }
     return at(c[0], c[1], c[2]);
   }
+  /// The cells (x fastest) and 1 / the box's size per axis: lookup's inputs, for the slicing
+  /// renderer's packets (the same arithmetic on eight lanes).
+  const std::uint8_t* cells() const { return cells_.data(); }
+  const Eigen::Vector3d& inv_size() const { return inv_size_; }
   /// Writes the edit's index into the cells whose centres are inside it (InputError for an index
   /// outside [0, 4] or a non-positive size); returns the number of cells written.
   std::int64_t apply(const MaskEdit& edit);

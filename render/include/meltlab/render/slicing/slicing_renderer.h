@@ -106,17 +106,25 @@ struct SlicingSettings {
   /// counts and image as testing each. false: every sample's cell is looked up (for tests and
   /// measurements).
   bool live_runs = true;
-  /// Packets (issue 17's third speed round): true (default): eight neighbouring pixels of a tile
-  /// (a 4 x 2 block) advance plane by plane together, positions, cells, trilinear fetches (gathers), the
-  /// constant TF's classification and the compositing on eight lanes; a lane that has nothing to
+  /// Packets (issue 17's third and fourth speed rounds): true (default): eight neighbouring pixels of
+  /// a tile (a 4 x 2 block) advance plane by plane together, positions, cells, trilinear fetches
+  /// (gathers), the mask lookup, both TF kinds, the corrected α, the Blinn-Phong lighting (its
+  /// specular power per lane) and the compositing on eight lanes; a lane that has nothing to
   /// do at a plane (outside its ray's planes, in an empty cell, cut away by the mask, terminated)
   /// is masked. Empty space is skipped per packet (lookups when the shortest lane run ends, jumps
   /// where every lane is empty), so each lane fetches exactly its ray's live samples with its ray's
-  /// arithmetic (lighting, mask lookups and the linear TF per lane with the scalar code): the image
+  /// arithmetic (the scalar code's operations in its order): the image
   /// and the samples, skipped, classified and terminated counts are the scalar path's bit for bit
   /// (slicing_speed_test); visited and cell_tests count the packets' own work. Not with
   /// exact_positions. false: one ray at a time (the reference).
   bool simd = true;
+  /// The linear TF's corrected α 1 - (1 - α)^(Δ/h0), a power per sample: false (default):
+  /// slicing_pow (issue 17's fourth speed round: eight lanes at a time in the packets, the same bits
+  /// per lane as per ray; within 1e-14 of std::pow, so pixels differ from std::pow's by at most
+  /// one float ulp, see slicing_speed_test). true: std::pow (the images before that round bit for
+  /// bit; lane by lane in the packets). The constant TF's corrected α (once per ray and piece) and
+  /// the specular term are std::pow either way.
+  bool exact_pow = false;
 };
 
 /// Whether a mode needs the gradient volume.
@@ -197,7 +205,14 @@ class SlicingRenderer {
   std::vector<std::uint8_t> live_reach_;
   /// dist_ | live_reach_ << 8 per cell: one 32-bit gather per lane in the packets (SlicingSettings::simd).
   std::vector<std::int32_t> cell_info_;
+  /// The gradient's three encoded channels of each voxel (x fastest) as e_x | e_y << 8 | e_z << 16:
+  /// one 32-bit gather per corner in the packets' lighting (simd and a lit mode).
+  std::vector<std::int32_t> grad_words_;
 };
+
+/// x^y for x, y >= 0 finite as the renderer computes its per-sample powers (SlicingSettings::exact_pow
+/// false): within 1e-14 of std::pow relative (subnormal results within 1e-300 absolute).
+double slicing_pow(double x, double y);
 
 /// One frame (builds a SlicingRenderer).
 SlicingFrame render_slicing(const Volume& volume, const Camera& camera, const SlicingSettings& settings);
