@@ -19,6 +19,14 @@
 namespace meltlab::render {
 namespace {
 
+/// Renders `cam` with settings `s`, reusing the gradient volume `other` built (if it built one):
+/// the comparisons below change one setting between two renderers of the same volume.
+SlicingFrame render_reusing_gradients(const Volume& v, const SlicingSettings& s, const SlicingRenderer& other,
+                                      const Camera& cam) {
+  return SlicingRenderer(v, s, other.gradients() ? std::optional<GradientVolume>(*other.gradients()) : std::nullopt)
+      .render(cam);
+}
+
 Camera camera_30deg(int w, int h, const Box3& box, const Eigen::Vector3d& dir) {
   const double fy = 0.5 * h / std::tan(15.0 * M_PI / 180.0);
   Eigen::Vector3d up(0, 0, 1);
@@ -96,11 +104,7 @@ TEST(SlicingSpeed, JumpingEmptyRunsChangesNoPixelForAnyCellSizeModeOrMask) {
       for (int cell : {2, 4, 8, 16}) {
         s.skip_empty = true;
         s.skip_cell = cell;
-        const SlicingFrame f =
-            SlicingRenderer(
-                v, s,
-                plain_renderer.gradients() ? std::optional<GradientVolume>(*plain_renderer.gradients()) : std::nullopt)
-                .render(cam);
+        const SlicingFrame f = render_reusing_gradients(v, s, plain_renderer, cam);
         const std::string what = "variant " + std::to_string(variant) + ", cell " + std::to_string(cell);
         EXPECT_EQ(f.raw, plain.raw) << what;
         EXPECT_EQ(f.alpha, plain.alpha) << what;
@@ -200,11 +204,7 @@ TEST(SlicingSpeed, LiveRunsChangeNoPixelOrCountAndSaveCellLookups) {
         const SlicingRenderer tested_renderer(v, s);
         const SlicingFrame tested = tested_renderer.render(cam);
         s.live_runs = true;
-        const SlicingFrame runs =
-            SlicingRenderer(v, s,
-                            tested_renderer.gradients() ? std::optional<GradientVolume>(*tested_renderer.gradients())
-                                                        : std::nullopt)
-                .render(cam);
+        const SlicingFrame runs = render_reusing_gradients(v, s, tested_renderer, cam);
         const std::string what = "variant " + std::to_string(variant) + ", cell " + std::to_string(cell);
         EXPECT_EQ(runs.raw, tested.raw) << what;
         EXPECT_EQ(runs.alpha, tested.alpha) << what;
@@ -236,11 +236,7 @@ TEST(SlicingSpeed, IncrementalPositionsEqualExactOnesUpToFloatRoundOff) {
       const SlicingRenderer exact_renderer(v, s);
       const SlicingFrame exact = exact_renderer.render(cam);
       s.exact_positions = false;
-      const SlicingFrame fast =
-          SlicingRenderer(
-              v, s,
-              exact_renderer.gradients() ? std::optional<GradientVolume>(*exact_renderer.gradients()) : std::nullopt)
-              .render(cam);
+      const SlicingFrame fast = render_reusing_gradients(v, s, exact_renderer, cam);
       const std::string what = "variant " + std::to_string(variant);
       EXPECT_LE(max_abs_diff(fast.raw, exact.raw), kTol) << what;
       EXPECT_LE(max_abs_diff(fast.alpha, exact.alpha), kTol) << what;
@@ -273,10 +269,7 @@ TEST(SlicingSpeed, CurvesSharingControlPointsGiveTheBitsOfPerChannelEvaluation) 
       const SlicingRenderer a_renderer(v, s);
       const SlicingFrame a = a_renderer.render(cam);
       s.tfs[0] = TransferFunction::piecewise_linear(per_channel, "per_channel");
-      const SlicingFrame b =
-          SlicingRenderer(
-              v, s, a_renderer.gradients() ? std::optional<GradientVolume>(*a_renderer.gradients()) : std::nullopt)
-              .render(cam);
+      const SlicingFrame b = render_reusing_gradients(v, s, a_renderer, cam);
       EXPECT_EQ(a.raw, b.raw) << variant;
       EXPECT_EQ(a.alpha, b.alpha) << variant;
       EXPECT_GT(a.stats.classified, 0) << variant;
@@ -371,11 +364,7 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
           const SlicingRenderer scalar_renderer(vol, s);
           const SlicingFrame scalar = scalar_renderer.render(cam);
           s.simd = true;
-          const SlicingFrame packets =
-              SlicingRenderer(vol, s,
-                              scalar_renderer.gradients() ? std::optional<GradientVolume>(*scalar_renderer.gradients())
-                                                          : std::nullopt)
-                  .render(cam);
+          const SlicingFrame packets = render_reusing_gradients(vol, s, scalar_renderer, cam);
           const std::string what = "variant " + std::to_string(variant) + ", tile " + std::to_string(tile) + ", skip " +
                                    std::to_string(skip);
           EXPECT_EQ(packets.raw, scalar.raw) << what << ", max diff " << max_abs_diff(packets.raw, scalar.raw);
@@ -467,11 +456,7 @@ TEST(SlicingSpeed, ExactPowChangesPixelsByAtMostOneFloatUlp) {
       const SlicingRenderer libm_renderer(v, s);
       const SlicingFrame libm = libm_renderer.render(cam);
       s.exact_pow = false;
-      const SlicingFrame lanes =
-          SlicingRenderer(
-              v, s,
-              libm_renderer.gradients() ? std::optional<GradientVolume>(*libm_renderer.gradients()) : std::nullopt)
-              .render(cam);
+      const SlicingFrame lanes = render_reusing_gradients(v, s, libm_renderer, cam);
       ASSERT_GT(libm.stats.classified, 0);
       for (const auto* img : {&libm.raw, &libm.alpha}) {
         const ImageF& other = img == &libm.raw ? lanes.raw : lanes.alpha;
