@@ -128,7 +128,10 @@ PY
   interrupt)
     "$M" simulate --mesh benchmark_c --cycles 1000000 --keep-going --out run >out.txt 2>err.txt &
     pid=$!
-    for _ in $(seq 100); do [ -d run ] && break; sleep 0.1; done
+    # The run is staged in .run.partial-PID until it ends (then renamed to run): wait for the
+    # staging folder, not for run, so that the signal arrives while the melt is running (the
+    # whole run takes about 9 s on a quiet machine).
+    for _ in $(seq 100); do compgen -G '.run.partial-*' >/dev/null && break; sleep 0.1; done
     sleep 1
     kill -INT $pid
     wait $pid; code=$?
