@@ -6,20 +6,23 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 
 namespace meltlab::sim {
 
 namespace {
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
-// cos of the angle between two non-zero vectors, clamped to [-1, 1].
-double cosine(const Vec3<double>& u, const Vec3<double>& v) {
-  return std::clamp(u.dot(v) / (u.norm() * v.norm()), -1.0, 1.0);
+// cos of the angle between u and v, clamped to [-1, 1]; none if either is the zero vector.
+std::optional<double> cosine(const Vec3<double>& u, const Vec3<double>& v) {
+  const double nu = u.norm(), nv = v.norm();
+  if (nu == 0.0 || nv == 0.0) return std::nullopt;
+  return std::clamp(u.dot(v) / (nu * nv), -1.0, 1.0);
 }
 
 double angle_deg(const Vec3<double>& u, const Vec3<double>& v) {
-  if (u.squaredNorm() == 0.0 || v.squaredNorm() == 0.0) return 0.0;
-  return std::acos(cosine(u, v)) * kDegPerRad;
+  const std::optional<double> c = cosine(u, v);
+  return c ? std::acos(*c) * kDegPerRad : 0.0;
 }
 }  // namespace
 
@@ -38,8 +41,9 @@ double triangle_twist_deg(const Vec3<double>& a, const Vec3<double>& b, const Ve
     const Vec3<double>& vk = *v[(i + 2) % 3];
     const Vec3<double> median = 0.5 * (vj + vk) - vi;
     const Vec3<double> midline = 0.5 * (vk - vj);
-    if (median.squaredNorm() == 0.0 || midline.squaredNorm() == 0.0) return 90.0;  // degenerate
-    max_cos = std::max(max_cos, cosine(median, midline));
+    const std::optional<double> cos_alpha = cosine(median, midline);
+    if (!cos_alpha) return 90.0;  // degenerate
+    max_cos = std::max(max_cos, *cos_alpha);
   }
   return 90.0 - std::acos(max_cos) * kDegPerRad;
 }
