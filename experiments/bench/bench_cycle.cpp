@@ -2,7 +2,8 @@
 // monograph's Tab. 5.1 (objects A/B/C: 192, 16000, 32000 triangles; stand-ins of equal size:
 // a subdivided cube and two UV spheres, whose pole regions collapse in the first cycles)
 // extended with uniform geodesic spheres of 32k, 100k and 1M triangles and two real scanned
-// meshes (the 75k bunny, the 871k refined dragon) — and the OpenMesh half-edge peer in the same run.
+// meshes (the 75k bunny, the 871k refined dragon) — and the OpenMesh half-edge peer in the same run;
+// and the cost of one row of the per-cycle statistics beside it.
 //
 // Every benchmark melts its mesh for a warm-up (the UV spheres' pole regions collapse in the
 // first cycles), then times cycles from that state, restarting from it every
@@ -14,6 +15,7 @@
 #include <meltlab/sim/melt.h>
 #include <meltlab/sim/mesh_io.h>
 #include <meltlab/sim/mesh_order.h>
+#include <meltlab/sim/mesh_stats.h>
 #include <meltlab/sim/quality.h>
 
 #include <benchmark/benchmark.h>
@@ -158,6 +160,23 @@ void BM_OpenMeshPeer(benchmark::State& state) {
                  (std::is_same_v<Real, float> ? "float" : "double"));
 }
 
+// One row of `meltlab simulate`'s per-cycle statistics (Euler counts and quality measures) on
+// the warm state, with the object kept between rows as the CLI keeps it: its cost against a
+// cycle's (BM_MeltCycle on the same mesh in the same run).
+template <class Real>
+void BM_MeshStatistics(benchmark::State& state) {
+  const int id = static_cast<int>(state.range(0));
+  const bool parallel = state.range(1) != 0;
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                              parallel ? static_cast<std::size_t>(tbb::info::default_concurrency()) : 1);
+  const sim::TriMesh<Real>& mesh = warm_state<Real>(id);
+  sim::MeshStatistics stats;
+  for (auto _ : state) benchmark::DoNotOptimize(stats.compute(mesh).quality.Qd);
+  state.counters["triangles"] = static_cast<double>(mesh.live_triangle_count());
+  state.SetLabel(std::string(mesh_label(id)) + (parallel ? " parallel " : " serial ") +
+                 (std::is_same_v<Real, float> ? "float" : "double"));
+}
+
 void meshes_and_modes(benchmark::internal::Benchmark* b) {
   for (int id : {0, 1, 2, 6, 5, 3, 7, 4})
     for (int parallel : {0, 1}) b->Args({id, parallel});
@@ -177,6 +196,7 @@ void peer_meshes(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_MeltCycle<float>)->Apply(meshes_and_modes);
 BENCHMARK(BM_MeltCycle<double>)->Apply(meshes_and_modes);
 BENCHMARK(BM_OpenMeshPeer<float>)->Apply(peer_meshes);
+BENCHMARK(BM_MeshStatistics<double>)->Apply(meshes_and_modes);
 BENCHMARK(BM_OpenMeshPeer<double>)->Apply(peer_meshes);
 
 BENCHMARK_MAIN();

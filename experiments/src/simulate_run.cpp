@@ -5,6 +5,7 @@
 #include <meltlab/sim/cgal/self_intersection.h>
 #include <meltlab/core/error.h>
 #include <meltlab/sim/mesh_order.h>
+#include <meltlab/sim/mesh_stats.h>
 #include <meltlab/sim/quality.h>
 #include <meltlab/sim/topology.h>
 #include <meltlab/experiments/provenance.h>
@@ -209,6 +210,7 @@ namespace {
 struct StatsWriter {
   fs::path target, tmp;
   std::ofstream out;
+  sim::MeshStatistics stats;  // its buffers are reused by every row
   explicit StatsWriter(const fs::path& file) : target(file), tmp(temporary_path_for(file)) {
     out.open(tmp, std::ios::trunc);
     if (!out) throw InputError(fmt::format("{}: cannot open for writing", target.string()));
@@ -217,8 +219,9 @@ struct StatsWriter {
   }
   template <class Real>
   void row(std::int64_t cycle, const sim::TriMesh<Real>& m, const sim::CycleReport& r, double ms) {
-    const sim::EulerCounts topo = sim::euler_counts(m);
-    const sim::QualityReport q = sim::mesh_quality(m);
+    const sim::MeshStats& st = stats.compute(m);
+    const sim::EulerCounts& topo = st.topology;
+    const sim::QualityReport& q = st.quality;
     out << fmt::format(
         "{},{},{},{},{},{},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{},{},{:.4g},{:.4g},{:.4g},{:.4g}"
         "\n",

@@ -1,6 +1,5 @@
+#include <meltlab/sim/mesh_stats.h>
 #include <meltlab/sim/quality.h>
-
-#include "vertex_sort.h"
 
 #include <algorithm>
 #include <cmath>
@@ -20,11 +19,12 @@ std::optional<double> cosine(const Vec3<double>& u, const Vec3<double>& v) {
   return std::clamp(u.dot(v) / (nu * nv), -1.0, 1.0);
 }
 
-double angle_deg(const Vec3<double>& u, const Vec3<double>& v) {
-  const std::optional<double> c = cosine(u, v);
+}  // namespace
+
+double dihedral_deg(const Vec3<double>& n_a, const Vec3<double>& n_b) {
+  const std::optional<double> c = cosine(n_a, n_b);
   return c ? std::acos(*c) * kDegPerRad : 0.0;
 }
-}  // namespace
 
 // Twist (Eq. 2.4). For corner i the median runs from v_i to the midpoint of the opposite
 // side; the mid-line joins the midpoints of the two sides at v_i and is parallel to the
@@ -71,75 +71,8 @@ double mesh_volume(const TriMesh<Real>& m) {
 
 template <class Real>
 QualityReport mesh_quality(const TriMesh<Real>& m) {
-  QualityReport r;
-  r.bbox_min.setConstant(std::numeric_limits<double>::infinity());
-  r.bbox_max.setConstant(-std::numeric_limits<double>::infinity());
-  struct HalfEdge {
-    std::uint64_t key;
-    Index tri;
-  };
-  std::vector<HalfEdge> half;
-  half.reserve(3 * m.triangle_slots());
-  std::vector<Vec3<double>> unit_normal(m.triangle_slots(), Vec3<double>::Zero());
-  double sum_s = 0, sum_q = 0, six_v = 0;
-  std::int64_t nf = 0;
-  r.min_q = 1.0;
-  for (std::size_t t = 0; t < m.triangle_slots(); ++t) {
-    if (!m.triangle_alive[t]) continue;
-    const Triangle& tri = m.triangle[t];
-    Vec3<double> p[3];
-    for (int k = 0; k < 3; ++k) {
-      p[k] = m.position[static_cast<std::size_t>(tri[static_cast<std::size_t>(k)])].template cast<double>();
-      r.bbox_min = r.bbox_min.cwiseMin(p[k]);
-      r.bbox_max = r.bbox_max.cwiseMax(p[k]);
-    }
-    const Vec3<double> n = (p[1] - p[0]).cross(p[2] - p[0]);
-    r.area += 0.5 * n.norm();
-    six_v += p[0].dot(p[1].cross(p[2]));
-    if (n.squaredNorm() > 0) unit_normal[t] = n.normalized();
-    sum_s += triangle_twist_deg(p[0], p[1], p[2]);
-    const double q = triangle_quality(p[0], p[1], p[2]);
-    sum_q += q;
-    r.min_q = std::min(r.min_q, q);
-    ++nf;
-    for (int k = 0; k < 3; ++k) {
-      const auto u = static_cast<std::uint64_t>(tri[static_cast<std::size_t>(k)]);
-      const auto w = static_cast<std::uint64_t>(tri[static_cast<std::size_t>((k + 1) % 3)]);
-      half.push_back({(std::min(u, w) << 32) | std::max(u, w), static_cast<Index>(t)});
-    }
-  }
-  r.volume = six_v / 6.0;
-  if (nf == 0) {
-    r.bbox_min.setZero();
-    r.bbox_max.setZero();
-    r.min_q = 0;
-    return r;
-  }
-  r.Qs = sum_s / static_cast<double>(nf);
-  r.Qq = sum_q / static_cast<double>(nf);
-  // Ascending (key, tri): the half-edges were added in ascending triangle order.
-  sort_by_vertex_pair(half, m.vertex_slots());
-  double sum_d = 0, sum_len = 0;
-  std::int64_t n_len = 0;
-  for (std::size_t i = 0; i < half.size();) {
-    std::size_t j = i;
-    while (j < half.size() && half[j].key == half[i].key) ++j;
-    const auto lo = static_cast<std::size_t>(half[i].key >> 32);
-    const auto hi = static_cast<std::size_t>(half[i].key & 0xffffffffu);
-    sum_len += (m.position[lo].template cast<double>() - m.position[hi].template cast<double>()).norm();
-    ++n_len;
-    if (j - i == 2) {
-      const double d = angle_deg(unit_normal[static_cast<std::size_t>(half[i].tri)],
-                                 unit_normal[static_cast<std::size_t>(half[i + 1].tri)]);
-      sum_d += d;
-      r.max_d = std::max(r.max_d, d);
-      ++r.edges;
-    }
-    i = j;
-  }
-  r.Qd = r.edges > 0 ? sum_d / static_cast<double>(r.edges) : 0.0;
-  r.mean_edge_length = n_len > 0 ? sum_len / static_cast<double>(n_len) : 0.0;
-  return r;
+  MeshStatistics stats;
+  return stats.compute(m).quality;
 }
 
 template QualityReport mesh_quality(const TriMesh<float>&);

@@ -1,5 +1,6 @@
 #include <meltlab/sim/topology.h>
 
+#include "union_find.h"
 #include "vertex_sort.h"
 
 #include <fmt/format.h>
@@ -49,24 +50,6 @@ struct Loops {
     face_of.push_back(face);
   }
   std::size_t count() const { return face_of.size(); }
-};
-
-struct UnionFind {
-  std::vector<Index> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  Index find(Index x) {
-    while (parent[static_cast<std::size_t>(x)] != x) {
-      auto& p = parent[static_cast<std::size_t>(x)];
-      p = parent[static_cast<std::size_t>(p)];
-      x = p;
-    }
-    return x;
-  }
-  void unite(Index a, Index b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
-  }
 };
 
 void add_problem(TopologyReport& r, std::size_t max_problems, TopologyProblem p) {
@@ -211,19 +194,7 @@ void euler_counts(const Loops& L, std::int64_t E, Components& parts, std::vector
   for (std::size_t k = 0; k < L.count(); ++k) is_outer[k] = (k == 0 || L.face_of[k] != L.face_of[k - 1]) ? 1 : 0;
   for (std::size_t k = 0; k < L.count(); ++k)
     comp_sum[static_cast<std::size_t>(uf.find(L.verts[L.start[k]]))] += is_outer[k] ? 1 : -1;
-  for (std::size_t v = 0; v < n; ++v) {
-    if (!used[v] || uf.find(static_cast<Index>(v)) != static_cast<Index>(v)) continue;
-    ++c.S;
-    const std::int64_t x = comp_sum[v];  // 2 - 2 G for a closed orientable component
-    if ((x % 2) != 0 || x > 2) {
-      c.genus_valid = false;
-      c.G += (2 - x) / 2;  // truncated; chi below then shows the inconsistency
-    } else {
-      c.G += (2 - x) / 2;
-    }
-  }
-  c.chi = c.V - c.E + c.F - c.H - 2 * (c.S - c.G);
-  if (c.chi != 0) c.genus_valid = false;
+  finish_euler_counts(used, uf, comp_sum, c);
 }
 
 // `fans`: check the vertex fans (non-manifold vertices, low valence); the Euler counts do

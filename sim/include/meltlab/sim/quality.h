@@ -20,6 +20,9 @@ namespace meltlab::sim {
 
 double triangle_twist_deg(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c);
 double triangle_quality(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c);
+/// The dihedral measure d of an edge from its two faces' normals, in degrees (the angle
+/// between them; 0 if either is the zero vector, i.e. a degenerate face).
+double dihedral_deg(const Vec3<double>& n_a, const Vec3<double>& n_b);
 
 struct QualityReport {
   double Qs = 0;      ///< mean twist, degrees (Eq. 2.6)
@@ -36,7 +39,8 @@ struct QualityReport {
 };
 
 /// Quality and geometry of the live part of a closed triangle mesh. Edges are paired by
-/// sorting directed edges (O(n log n)); an edge without a twin is skipped in Qd.
+/// filing their uses under the smaller vertex (O(n), see mesh_stats.h, which computes this
+/// with the Euler counts and reuses its buffers); an edge without a twin is skipped in Qd.
 template <class Real>
 QualityReport mesh_quality(const TriMesh<Real>& m);
 

@@ -1,0 +1,56 @@
+#pragma once
+// Private to sim/src/mesh: union-find over vertex slots, and the Euler counts of §2.3 from the
+// per-component sums that the topology check and the per-cycle statistics both collect.
+
+#include <meltlab/sim/mesh.h>
+#include <meltlab/sim/topology.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <numeric>
+#include <vector>
+
+namespace meltlab::sim {
+
+/// Union-find whose root is always the smallest index of its set (unite links the larger root
+/// under the smaller), so the roots do not depend on the order of the unions.
+struct UnionFind {
+  std::vector<Index> parent;
+  UnionFind() = default;
+  explicit UnionFind(std::size_t n) { reset(n); }
+  void reset(std::size_t n) {
+    parent.resize(n);
+    std::iota(parent.begin(), parent.end(), 0);
+  }
+  Index find(Index x) {
+    while (parent[static_cast<std::size_t>(x)] != x) {
+      auto& p = parent[static_cast<std::size_t>(x)];
+      p = parent[static_cast<std::size_t>(p)];
+      x = p;
+    }
+    return x;
+  }
+  void unite(Index a, Index b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+  }
+};
+
+/// S, G, chi and genus_valid of `c` (V, E, F, H already set) from `comp_sum`, which holds at
+/// each component's root its V - E + F - H (2 - 2G for a closed orientable component).
+/// `used` marks the vertex slots that some face uses.
+inline void finish_euler_counts(const std::vector<std::uint8_t>& used, UnionFind& uf,
+                                const std::vector<std::int64_t>& comp_sum, EulerCounts& c) {
+  for (std::size_t v = 0; v < used.size(); ++v) {
+    if (!used[v] || uf.find(static_cast<Index>(v)) != static_cast<Index>(v)) continue;
+    ++c.S;
+    const std::int64_t x = comp_sum[v];
+    if ((x % 2) != 0 || x > 2) c.genus_valid = false;  // G truncated; chi below shows it
+    c.G += (2 - x) / 2;
+  }
+  c.chi = c.V - c.E + c.F - c.H - 2 * (c.S - c.G);
+  if (c.chi != 0) c.genus_valid = false;
+}
+
+}  // namespace meltlab::sim
