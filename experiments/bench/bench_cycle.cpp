@@ -2,7 +2,8 @@
 // monograph's Tab. 5.1 (objects A/B/C: 192, 16000, 32000 triangles; stand-ins of equal size:
 // a subdivided cube and two UV spheres, whose pole regions collapse in the first cycles)
 // extended with uniform geodesic spheres of 32k, 100k and 1M triangles and two real scanned
-// meshes (the 75k bunny, the 871k refined dragon) — and the OpenMesh half-edge peer in the same run;
+// meshes (the 75k bunny, the 871k refined dragon; both also in breadth-first order) — and the
+// OpenMesh half-edge peer in the same run;
 // and the cost of one row of the per-cycle statistics beside it.
 //
 // Every benchmark melts its mesh for a warm-up (the UV spheres' pole regions collapse in the
@@ -70,6 +71,12 @@ const sim::IndexedMesh& input_mesh(int id) {
     case 7:   // 871414 triangles, a refined scan in Morton order (as the CLI loads it)
       m = sim::reorder_for_locality(sim::load_mesh(datasets::dataset_path("dragon_871k")).mesh).mesh;
       break;
+    case 8:  // the same two scans breadth-first (`meltlab simulate --order bfs`)
+      m = sim::reorder_breadth_first(sim::load_mesh(datasets::dataset_path("dragon_871k")).mesh).mesh;
+      break;
+    case 9:
+      m = sim::reorder_breadth_first(sim::load_mesh(datasets::dataset_path("bunny00")).mesh).mesh;
+      break;
     default:
       break;
   }
@@ -77,8 +84,8 @@ const sim::IndexedMesh& input_mesh(int id) {
 }
 
 const char* mesh_label(int id) {
-  static const char* labels[] = {"A_192",       "B_16k",     "C_32k",        "geodesic_100k",
-                                 "geodesic_1M", "bunny_75k", "geodesic_32k", "dragon_871k"};
+  static const char* labels[] = {"A_192",     "B_16k",        "C_32k",       "geodesic_100k", "geodesic_1M",
+                                 "bunny_75k", "geodesic_32k", "dragon_871k", "dragon_bfs",    "bunny_bfs"};
   return labels[id];
 }
 
@@ -178,7 +185,7 @@ void BM_MeshStatistics(benchmark::State& state) {
 }
 
 void meshes_and_modes(benchmark::internal::Benchmark* b) {
-  for (int id : {0, 1, 2, 6, 5, 3, 7, 4})
+  for (int id : {0, 1, 2, 6, 5, 3, 7, 4, 8, 9})
     for (int parallel : {0, 1}) b->Args({id, parallel});
   b->ArgNames({"mesh", "parallel"});
   b->Unit(benchmark::kMillisecond);

@@ -82,7 +82,7 @@ json options_to_json(const SimulateOptions& o) {
             {"compact_below", o.compact_below},
             {"kl_file", o.kl_file.string()},
             {"double_precision", o.double_precision},
-            {"morton_order", o.morton_order},
+            {"order", o.order},
             {"weld_tolerance", o.load.weld_tolerance},
             {"repair_input", o.load.repair}};
   if (o.kN) j["kN"] = *o.kN;
@@ -109,7 +109,9 @@ SimulateOptions options_from_json(const json& j, const std::string& source) {
     o.compact_below = j.at("compact_below").get<double>();
     o.kl_file = j.at("kl_file").get<std::string>();
     o.double_precision = j.at("double_precision").get<bool>();
-    o.morton_order = j.at("morton_order").get<bool>();
+    // Run folders before the breadth-first order stored a flag.
+    o.order =
+        j.contains("order") ? j.at("order").get<std::string>() : (j.at("morton_order").get<bool>() ? "morton" : "file");
     o.load.weld_tolerance = j.at("weld_tolerance").get<double>();
     o.load.repair = j.at("repair_input").get<bool>();
   } catch (const json::exception& e) {
@@ -147,7 +149,10 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o,
   p->mesh_path = fs::absolute(resolve_mesh_argument(o.mesh));
   if (!o.kl_file.empty()) p->opt.kl_file = fs::absolute(o.kl_file);
   p->loaded = sim::load_mesh(p->mesh_path, o.load);
-  p->mesh = o.morton_order ? sim::reorder_for_locality(p->loaded.mesh).mesh : p->loaded.mesh;
+  require(o.order == "morton" || o.order == "bfs" || o.order == "file", "--order: must be morton, bfs or file");
+  p->mesh = o.order == "morton" ? sim::reorder_for_locality(p->loaded.mesh).mesh
+            : o.order == "bfs"  ? sim::reorder_breadth_first(p->loaded.mesh).mesh
+                                : p->loaded.mesh;
   const auto tm = sim::TriMesh<double>::from_indexed(p->mesh);
   const sim::QualityReport q = sim::mesh_quality(tm);
   p->mean_edge_length = q.mean_edge_length;
@@ -198,7 +203,7 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o,
       {"area", q.area},
       {"bbox_min", {q.bbox_min.x(), q.bbox_min.y(), q.bbox_min.z()}},
       {"bbox_max", {q.bbox_max.x(), q.bbox_max.y(), q.bbox_max.z()}},
-      {"order", o.morton_order ? "morton" : "file"},
+      {"order", o.order},
   };
   // The output folder last among the checks of the arguments, first before any work is written.
   if (check_output) p->output.emplace(o.out_dir, RunFolderOptions{"--out", "run.json", "run", o.overwrite});

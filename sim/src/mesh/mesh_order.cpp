@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cstdint>
 #include <numeric>
+#include <utility>
+#include <vector>
 
 namespace meltlab::sim {
 
@@ -17,9 +19,9 @@ std::uint64_t spread_bits(std::uint64_t x) {
   x = (x | x << 2) & 0x1249249249249249ULL;
   return x;
 }
-}  // namespace
 
-Reordered reorder_for_locality(const IndexedMesh& in) {
+// The vertices in Morton order of their positions: order[new] = old.
+std::vector<Index> morton_order(const IndexedMesh& in) {
   const std::size_t nv = in.V.size();
   Vec3<double> lo = Vec3<double>::Constant(0), hi = Vec3<double>::Constant(0);
   if (nv > 0) {
@@ -42,6 +44,13 @@ Reordered reorder_for_locality(const IndexedMesh& in) {
   std::stable_sort(order.begin(), order.end(), [&](Index a, Index b) {
     return code[static_cast<std::size_t>(a)] < code[static_cast<std::size_t>(b)];
   });
+  return order;
+}
+
+// Renumbers the vertices by `order` (order[new] = old), rotates each triangle min-first and
+// sorts the triangles by their new corners.
+Reordered renumbered(const IndexedMesh& in, const std::vector<Index>& order) {
+  const std::size_t nv = in.V.size();
   Reordered out;
   out.new_from_old_vertex.resize(nv);
   out.mesh.V.resize(nv);
@@ -65,6 +74,62 @@ Reordered reorder_for_locality(const IndexedMesh& in) {
   out.mesh.F.resize(in.F.size());
   for (std::size_t t = 0; t < in.F.size(); ++t)
     out.mesh.F[t] = tris[static_cast<std::size_t>(out.old_from_new_triangle[t])];
+  return out;
+}
+
+// Breadth-first over the edges of `in`, each component from its lowest index, the neighbours
+// of a vertex queued in ascending index: order[new] = old.
+std::vector<Index> breadth_first_order(const IndexedMesh& in) {
+  const std::size_t nv = in.V.size();
+  // The vertex graph in compressed rows: both directions of every triangle edge.
+  std::vector<std::size_t> start(nv + 1, 0);
+  for (const Triangle& f : in.F)
+    for (Index v : f) start[static_cast<std::size_t>(v) + 1] += 2;
+  for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  std::vector<Index> nb(start[nv]);
+  std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+  for (const Triangle& f : in.F)
+    for (std::size_t k = 0; k < 3; ++k) {
+      const auto v = static_cast<std::size_t>(f[k]);
+      nb[fill[v]++] = f[(k + 1) % 3];
+      nb[fill[v]++] = f[(k + 2) % 3];
+    }
+  for (std::size_t v = 0; v < nv; ++v)
+    std::sort(nb.begin() + static_cast<std::ptrdiff_t>(start[v]),
+              nb.begin() + static_cast<std::ptrdiff_t>(start[v + 1]));
+  std::vector<Index> order;
+  order.reserve(nv);
+  std::vector<std::uint8_t> queued(nv, 0);
+  for (std::size_t seed = 0; seed < nv; ++seed) {
+    if (queued[seed]) continue;
+    queued[seed] = 1;
+    order.push_back(static_cast<Index>(seed));
+    for (std::size_t head = order.size() - 1; head < order.size(); ++head) {
+      const auto v = static_cast<std::size_t>(order[head]);
+      for (std::size_t i = start[v]; i < start[v + 1]; ++i) {
+        const auto w = static_cast<std::size_t>(nb[i]);
+        if (queued[w]) continue;
+        queued[w] = 1;
+        order.push_back(nb[i]);
+      }
+    }
+  }
+  return order;
+}
+
+}  // namespace
+
+Reordered reorder_for_locality(const IndexedMesh& in) { return renumbered(in, morton_order(in)); }
+
+Reordered reorder_breadth_first(const IndexedMesh& in) {
+  const Reordered by_morton = reorder_for_locality(in);
+  Reordered out = renumbered(by_morton.mesh, breadth_first_order(by_morton.mesh));
+  // Compose the two renumberings so that both maps refer to the input.
+  std::vector<Index> new_from_old(in.V.size());
+  for (std::size_t v = 0; v < in.V.size(); ++v)
+    new_from_old[v] = out.new_from_old_vertex[static_cast<std::size_t>(by_morton.new_from_old_vertex[v])];
+  out.new_from_old_vertex = std::move(new_from_old);
+  for (Index& t : out.old_from_new_triangle) t = by_morton.old_from_new_triangle[static_cast<std::size_t>(t)];
   return out;
 }
 

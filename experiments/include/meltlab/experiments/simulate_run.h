@@ -41,8 +41,8 @@ struct SimulateOptions {
   double compact_below = 0.5;     ///< see sim::MeltParams::compact_below
   std::filesystem::path kl_file;  ///< YAML with a top-level `kl:`; empty = constant 1
   bool double_precision = true;
-  int threads = 0;           ///< 0 = all cores; 1 = serial execution
-  bool morton_order = true;  ///< renumber the input for memory locality
+  int threads = 0;               ///< 0 = all cores; 1 = serial execution
+  std::string order = "morton";  ///< vertex numbering: morton, bfs (breadth-first after morton) or file
   sim::LoadOptions load;
   std::int64_t snapshot_every = 0;  ///< 0 = first and last only
   std::string snapshot_format = "ply";
@@ -72,7 +72,7 @@ struct PreparedSimulation {
   SimulateOptions opt;
   std::filesystem::path mesh_path;
   sim::LoadedMesh loaded;
-  sim::IndexedMesh mesh;        ///< as melted (renumbered if morton_order)
+  sim::IndexedMesh mesh;        ///< as melted (renumbered unless order is file)
   double mean_edge_length = 0;  ///< L0 of the input, mesh units
   /// Mesh units per unit of the --ke/--kn/--kr options: L0 with relative units, else 1.
   double coefficient_unit() const { return opt.relative_units ? mean_edge_length : 1.0; }
