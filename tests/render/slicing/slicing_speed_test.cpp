@@ -317,8 +317,11 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
   // linear with 11 shared segments, TF 4 with 5 (the lanes' TF, mask and light together) in Blend
   // and combined, 13: MIP with the 11-segment TF and a gate and exponent of its own (unlit lanes
   // among lit ones), 14: lit Blend with the 5-segment TF, 15: variant 12 with std::pow
-  // (exact_pow, lane by lane); tiles of 16 and 5 pixels (packets cut at the tile's edge) and no
-  // skipping.
+  // (exact_pow, lane by lane), 16 and 17: Blend and combined on a two-valued copy of the volume
+  // (0 and 1: trilinear samples in uniform regions are exactly 0 or 1) with constant-TF ranges
+  // [0.5, 1) and [1, 1] (the lanes' float range tests at a bound that most samples of the
+  // object hit exactly, from both sides); tiles of 16, 5 and 10 pixels (packets cut at the tile's edge;
+  // 10: fifteen 4 x 2 blocks, so the packets' pairs cross block rows and one packet runs alone) and no skipping.
   const Volume& v = phantom();
   TransferFunction bone_only;
   {
@@ -333,12 +336,35 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
   for (int k = 0; k < v.nz(); ++k)
     for (int j = 0; j < v.ny(); ++j)
       for (int i = 0; i < v.nx(); ++i) bytes.set_value(i, j, k, v.value(i, j, k));
+  // The two-valued copy: 1 where the phantom is above the middle of its range, else 0.
+  Volume binary = Volume::allocate(v.nx(), v.ny(), v.nz(), SampleType::kFloat32);
+  binary.place_like(v);
+  const auto vr = v.value_range();
+  const double middle = 0.5 * (double(vr[0]) + double(vr[1]));
+  std::int64_t ones = 0;
+  for (int k = 0; k < v.nz(); ++k)
+    for (int j = 0; j < v.ny(); ++j)
+      for (int i = 0; i < v.nx(); ++i) {
+        const bool one = double(v.value(i, j, k)) > middle;
+        binary.set_value(i, j, k, one ? 1.0 : 0.0);
+        ones += one ? 1 : 0;
+      }
+  ASSERT_GT(ones, 0);
+  // (0.01, 0.5) one colour, [0.5, 1) another, [1, 1] a third (0 in none: the outside is empty).
+  TransferFunction edges;
+  {
+    std::vector<TfRange> r(3);
+    r[0] = {0.01, 0.5, false, false, Eigen::Vector3d(255, 60, 20), 0.25};
+    r[1] = {0.5, 1.0, true, false, Eigen::Vector3d(30, 255, 90), 0.4};
+    r[2] = {1.0, 1.0, true, true, Eigen::Vector3d(40, 70, 255), 0.6};
+    edges = TransferFunction(r, "edges");
+  }
   int compared = 0;
   for (const Camera& cam : cameras(v.domain()))
-    for (int variant = 0; variant < 16; ++variant)
-      for (int tile : {16, 5})
+    for (int variant = 0; variant < 18; ++variant)
+      for (int tile : {16, 5, 10})
         for (bool skip : {true, false}) {
-          if (!skip && tile == 5) continue;
+          if (!skip && tile != 16) continue;
           SlicingSettings s = variant_settings(v, variant < 6 ? variant : variant == 10 ? 3 : 0);
           if (variant == 6) s.tfs[0] = highlight();
           if (variant == 7) s.mask = test_mask(v), s.tfs[1] = bone_only;
@@ -357,10 +383,14 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
             s.light.gate = 0.3, s.light.exponent = 7.5, s.light.light_camera = Eigen::Vector3d(0.4, -0.4, 0);
           }
           if (variant == 14) s.lit_blend = true, s.tfs[0] = shared_points(6);
+          if (variant == 16 || variant == 17) {
+            s.tfs[0] = edges, s.value_range = std::make_pair(0.0, 1.0);  // fn = f: the bounds are the samples'
+            s.mode = variant == 16 ? SlicingMode::kBlend : SlicingMode::kCombined;
+          }
           s.tile = tile;
           s.skip_empty = skip;
           s.simd = false;
-          const Volume& vol = variant >= 9 ? bytes : v;
+          const Volume& vol = variant >= 16 ? binary : variant >= 9 ? bytes : v;
           const SlicingRenderer scalar_renderer(vol, s);
           const SlicingFrame scalar = scalar_renderer.render(cam);
           s.simd = true;
@@ -389,7 +419,7 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
           }
           ++compared;
         }
-  EXPECT_EQ(compared, 3 * 16 * 3);
+  EXPECT_EQ(compared, 3 * 18 * 4);
   const auto h = all_index_mask(v).histogram();
   for (int i = 0; i < 5; ++i) EXPECT_GT(h[std::size_t(i)], 0) << "mask index " << i;
   EXPECT_TRUE(SlicingSettings{}.simd);
