@@ -139,6 +139,7 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o,
   require(o.cycles >= 0, fmt::format("--cycles: must be >= 0 (got {})", o.cycles));
   require(o.snapshot_every >= 0, "--snapshot-every: must be >= 0");
   require(o.stats_every >= 1, "--stats-every: must be >= 1");
+  require(o.order == "morton" || o.order == "bfs" || o.order == "file", "--order: must be morton, bfs or file");
   require(o.check_every >= 0, "--check-every: must be >= 0");
   require(o.intersect_every >= 0, "--check-intersections-every: must be >= 0");
   require(o.threads >= 0, "--threads: must be >= 0");
@@ -149,7 +150,6 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o,
   p->mesh_path = fs::absolute(resolve_mesh_argument(o.mesh));
   if (!o.kl_file.empty()) p->opt.kl_file = fs::absolute(o.kl_file);
   p->loaded = sim::load_mesh(p->mesh_path, o.load);
-  require(o.order == "morton" || o.order == "bfs" || o.order == "file", "--order: must be morton, bfs or file");
   p->mesh = o.order == "morton" ? sim::reorder_for_locality(p->loaded.mesh).mesh
             : o.order == "bfs"  ? sim::reorder_breadth_first(p->loaded.mesh).mesh
                                 : p->loaded.mesh;
