@@ -48,7 +48,7 @@ TEST(Topology, TwoPartsCountTwoShells) {
   EXPECT_EQ(r.counts.chi, 0);
 }
 
-// euler_counts() (the per-cycle statistics of `meltlab simulate`) skips the vertex-fan and
+// euler_counts() (MeshStatistics, the per-cycle statistics of `meltlab simulate`) skips the vertex-fan and
 // orphan checks but must count exactly as the full check: valid meshes, two shells, an open
 // mesh, two tetrahedra sharing one vertex (a non-manifold vertex), a degenerate face and dead
 // triangles.

@@ -59,7 +59,7 @@ const MeshStats& MeshStatistics::compute(const TriMesh<Real>& m) {
           T.six_volume = p[0].dot(p[1].cross(p[2]));
           T.unit_normal = n.squaredNorm() > 0 ? Vec3<double>(n.normalized()) : Vec3<double>::Zero();
           T.twist_deg = triangle_twist_deg(p[0], p[1], p[2]);
-          T.quality = triangle_quality(p[0], p[1], p[2]);
+          T.quality = triangle_quality(T.half_area, p[0], p[1], p[2]);
         }
         return b;
       },

@@ -49,7 +49,10 @@ double triangle_twist_deg(const Vec3<double>& a, const Vec3<double>& b, const Ve
 }
 
 double triangle_quality(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c) {
-  const double area = 0.5 * (b - a).cross(c - a).norm();
+  return triangle_quality(0.5 * (b - a).cross(c - a).norm(), a, b, c);
+}
+
+double triangle_quality(double area, const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c) {
   const double s2 = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
   if (s2 == 0.0) return 0.0;
   return 4.0 * std::sqrt(3.0) * area / s2;

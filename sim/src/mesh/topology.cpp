@@ -1,3 +1,4 @@
+#include <meltlab/sim/mesh_stats.h>
 #include <meltlab/sim/topology.h>
 
 #include "union_find.h"
@@ -197,14 +198,12 @@ void euler_counts(const Loops& L, std::int64_t E, Components& parts, std::vector
   finish_euler_counts(used, uf, comp_sum, c);
 }
 
-// `fans`: check the vertex fans (non-manifold vertices, low valence); the Euler counts do
-// not need them.
-TopologyReport analyse(const Loops& L, std::size_t max_problems, bool fans = true) {
+TopologyReport analyse(const Loops& L, std::size_t max_problems) {
   TopologyReport r;
   Components parts = components_of(L);
   std::vector<std::int64_t> comp_sum(L.n_slots, 0);  // V - E + F - H per component root
   const std::int64_t E = check_edges(L, parts.uf, comp_sum, r, max_problems);
-  if (fans) check_vertex_fans(L, r, max_problems);
+  check_vertex_fans(L, r, max_problems);
   euler_counts(L, E, parts, comp_sum, r.counts);
   r.closed = r.boundary_edges == 0;
   r.oriented = r.misoriented_edges == 0;
@@ -260,8 +259,8 @@ Loops live_loops(const TriMesh<Real>& m, TopologyReport& pre, std::size_t max_pr
 
 template <class Real>
 EulerCounts euler_counts(const TriMesh<Real>& m) {
-  TopologyReport pre;
-  return analyse(live_loops(m, pre, 0), 0, /*fans=*/false).counts;
+  MeshStatistics stats;
+  return stats.compute(m).topology;
 }
 
 template <class Real>

@@ -1,11 +1,10 @@
 #pragma once
 // Private to sim/src/mesh: sorting per-edge and per-corner records by vertex index in O(n).
 //
-// The topology check and the quality measures pair the directed edges of a mesh by sorting
-// them on their (lo, hi) vertex pair. Vertex indices are slots in [0, n_slots), so a stable
+// The topology check pairs the directed edges of a mesh by sorting them on their (lo, hi)
+// vertex pair and groups corners by vertex. Vertex indices are slots in [0, n_slots), so a stable
 // counting sort by hi and then by lo gives the same order as a comparison sort on (lo, hi)
-// with ties in insertion order, in two linear passes instead of O(n log n) comparisons
-// (they were most of the time of `meltlab simulate`'s per-cycle statistics).
+// with ties in insertion order, in two linear passes instead of O(n log n) comparisons.
 
 #include <meltlab/sim/mesh.h>
 

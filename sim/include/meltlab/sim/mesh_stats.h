@@ -6,8 +6,8 @@
 // allocates nothing after the first. The per-triangle and per-edge measures (square roots,
 // divisions, arccosines) are evaluated in parallel into arrays and then summed in mesh order
 // by one thread: every value is that of a serial evaluation bit for bit, whatever the number
-// of threads (`mesh_quality` is this class on a fresh object; the counts equal
-// `euler_counts(TriMesh)`'s, which come from the general polygon-loop check, tested).
+// of threads (`mesh_quality` and `euler_counts(TriMesh)` are this class on a fresh object; its
+// counts are tested against the general polygon-loop check, `check_topology`).
 
 #include <meltlab/sim/mesh.h>
 #include <meltlab/sim/quality.h>

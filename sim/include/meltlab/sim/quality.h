@@ -20,6 +20,8 @@ namespace meltlab::sim {
 
 double triangle_twist_deg(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c);
 double triangle_quality(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c);
+/// The same with the area already known (0.5 |(b - a) × (c - a)|, as the overload above takes it).
+double triangle_quality(double area, const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c);
 /// The dihedral measure d of an edge from its two faces' normals, in degrees (the angle
 /// between them; 0 if either is the zero vector, i.e. a degenerate face).
 double dihedral_deg(const Vec3<double>& n_a, const Vec3<double>& n_b);

@@ -67,7 +67,8 @@ struct TopologyReport {
 EulerCounts euler_counts(const PolygonMesh& m);
 
 /// Counts of Eq. 2.3 for the live, non-degenerate triangles of a triangle mesh: the same
-/// counts as check_topology(m).counts, without the vertex-fan and orphan checks (O(n)).
+/// counts as check_topology(m).counts, without the vertex-fan and orphan checks (O(n); the
+/// counts of MeshStatistics, mesh_stats.h, which computes the quality measures with them).
 template <class Real>
 EulerCounts euler_counts(const TriMesh<Real>& m);
 
