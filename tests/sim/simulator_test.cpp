@@ -72,14 +72,13 @@ TEST(Simulator, SerialEqualsParallelBitwise) {
   check_serial_equals_parallel<double>(shuffled, relative_params(shuffled, 0.2, 0.7), 100, "icosphere(5) double");
 }
 
-// The deformation sweep split into parts (deform_schedule.h): vertices whose triangles lie in
-// one part are summed and moved inside it, the others ("halo" vertices) gather their sums
-// from stored triangle terms afterwards. Any partition must give the mesh of the one-part
-// sweep bitwise, serial or on threads, across collapses, repairs, remnant checks and a
-// compaction (each of which changes triangle lists and so the schedule). A simulator that
-// switches between one part and three every cycle checks the hand-over of the sum records
-// (a one-part sweep clears them all first and leaves them filled; a sweep in parts expects
-// them cleared and clears each group's records as it moves).
+// The deformation sweep split into parts (deform_schedule.h): every vertex is summed by the
+// part of its first triangle; a vertex with triangles in later parts adds their stored terms
+// afterwards, and groups of vertices not all inside one part move after every part. Any partition must give the mesh of
+// the one-part sweep bitwise, serial or on threads, across collapses, repairs, remnant checks and a compaction (each of
+// which changes triangle lists and so the schedule). A simulator that switches between one part and three every cycle
+// checks the hand-over of the sum records (a one-part sweep clears them all first and leaves them filled; a sweep in
+// parts expects them cleared and clears each group's records as it moves).
 template <class Real>
 void check_partitions_equal(const IndexedMesh& mesh, const MeltParams& p, int cycles, const std::string& name) {
   MeltSimulator<Real> one(TriMesh<Real>::from_indexed(mesh), p, make_constant_kl(1.0), Execution::kSerial);

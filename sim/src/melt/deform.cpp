@@ -134,7 +134,7 @@ struct Sweep {
   const VertexTriangles& adj;
   const DeformSchedule& plan;
   Real* packed;                       // positions as packed triples: gathered, then written by the moves
-  TriangleTerms<Real>* stored_terms;  // terms of the triangles of halo vertices
+  TriangleTerms<Real>* stored_terms;  // terms of triangles with a corner owned by an earlier part
   float* min_edge2;                   // out: shortest squared edge per triangle slot (+inf: dead)
   const ScaleAt& scale_at;            // kg·kl: a number, or a function of the vertex slot
 };
@@ -196,11 +196,11 @@ void move_group_at(const Sweep<Real, ScaleAt>& w, std::size_t g, MoveMaxima<Real
   std::copy_n(pad_packed, 3 * n, w.packed + 3 * v);
 }
 
-// Block b of the sweep: its triangles' terms, face normals, stored terms for halo vertices,
-// and the additions into the sums of the corners that are not halo vertices (kHalo: the
-// sweep has halo vertices at all).
+// Block b of the sweep, in part `part`: its triangles' terms and face normals, and the
+// additions into the sums of the corners the part owns; a triangle with a corner owned by an
+// earlier part stores its terms for the halo phase (kHalo: the sweep is in parts).
 template <bool kHalo, class Real, class ScaleAt>
-void sweep_block(const Sweep<Real, ScaleAt>& w, std::size_t b, TriangleBlockTerms<Real>& terms) {
+void sweep_block(const Sweep<Real, ScaleAt>& w, std::size_t b, std::size_t part, TriangleBlockTerms<Real>& terms) {
   TriMesh<Real>& m = w.m;
   const std::size_t first = b * kTriangleBlock;
   const std::size_t count = std::min(kTriangleBlock, m.triangle_slots() - first);
@@ -213,20 +213,24 @@ void sweep_block(const Sweep<Real, ScaleAt>& w, std::size_t b, TriangleBlockTerm
     FN[2][first + i] = alive[first + i] ? terms.nz[i] : FN[2][first + i];
   }
   std::memcpy(w.min_edge2 + first, terms.min_edge2, count * sizeof(float));
-  const bool store = kHalo && w.plan.block_stores_terms(b);
+  const std::uint16_t* const owner = w.plan.owners();
   for (std::size_t i = 0; i < count; ++i) {
     const std::size_t t = first + i;
     if (!alive[t]) continue;
-    if (store && w.plan.stores_terms(t)) {
+    const Triangle& tri = m.triangle[t];
+    bool store = false;
+    for (std::size_t k = 0; k < 3; ++k) {
+      if (kHalo && owner[static_cast<std::size_t>(tri[k])] != part) {
+        store = true;
+        continue;
+      }
+      w.sums[static_cast<std::size_t>(tri[k])].lane +=
+          Lanes<Real>{terms.nx[i], terms.ny[i], terms.nz[i], terms.ex[k][i], terms.ey[k][i], terms.ez[k][i], 0, 0};
+    }
+    if (kHalo && store) {
       TriangleTerms<Real>& out = w.stored_terms[t];
       out.normal = Vec3<Real>(terms.nx[i], terms.ny[i], terms.nz[i]);
       for (std::size_t k = 0; k < 3; ++k) out.edge[k] = Vec3<Real>(terms.ex[k][i], terms.ey[k][i], terms.ez[k][i]);
-    }
-    const Triangle& tri = m.triangle[t];
-    for (std::size_t k = 0; k < 3; ++k) {
-      if (kHalo && w.plan.halo_vertex(tri[k])) continue;
-      w.sums[static_cast<std::size_t>(tri[k])].lane +=
-          Lanes<Real>{terms.nx[i], terms.ny[i], terms.nz[i], terms.ex[k][i], terms.ey[k][i], terms.ez[k][i], 0, 0};
     }
   }
 }
@@ -237,26 +241,33 @@ template <bool kHalo, DeformMode kMode, class Real, class ScaleAt>
 void sweep_part(const Sweep<Real, ScaleAt>& w, std::size_t p, MoveMaxima<Real>& mx) {
   TriangleBlockTerms<Real> terms;
   for (std::size_t b = w.plan.part_first_block(p); b < w.plan.part_first_block(p + 1); ++b) {
-    sweep_block<kHalo>(w, b, terms);
+    sweep_block<kHalo>(w, b, p, terms);
     for (std::int32_t g : w.plan.ready_after(b)) move_group_at<Real, kMode>(w, static_cast<std::size_t>(g), mx);
   }
 }
 
-// A halo group: each vertex gathers its sums from the stored terms of its triangles in
-// ascending order (the additions of the serial sweep), then the group moves.
+// A halo group: each split vertex (triangles beyond its owner part) adds the stored terms of
+// those triangles to the sums its owner part added, in ascending order (the additions of the
+// serial sweep), then the group moves.
 template <DeformMode kMode, class Real, class ScaleAt>
 void halo_group(const Sweep<Real, ScaleAt>& w, std::size_t g, MoveMaxima<Real>& mx) {
   const TriMesh<Real>& m = w.m;
+  const DeformSchedule& plan = w.plan;
   const std::size_t end = std::min(m.vertex_slots(), (g + 1) * kLanes);
   for (std::size_t v = g * kLanes; v < end; ++v) {
     if (!m.vertex_alive[v]) continue;
-    Vec3<Real> N = Vec3<Real>::Zero(), M = Vec3<Real>::Zero();
-    for (Index t : w.adj.of(static_cast<Index>(v))) {
-      const TriangleTerms<Real>& terms = w.stored_terms[static_cast<std::size_t>(t)];
-      N += terms.normal;
-      M += terms.edge[corner_of(m.triangle[static_cast<std::size_t>(t)], static_cast<Index>(v))];
+    const auto list = w.adj.of(static_cast<Index>(v));
+    if (list.empty()) continue;
+    const std::size_t own = plan.owner(static_cast<Index>(v));
+    if (plan.part_of_triangle(static_cast<std::size_t>(list.back())) == own) continue;
+    Lanes<Real>& sums = w.sums[v].lane;
+    for (Index t : list) {
+      const auto ts = static_cast<std::size_t>(t);
+      if (plan.part_of_triangle(ts) == own) continue;  // added by the owner part
+      const TriangleTerms<Real>& terms = w.stored_terms[ts];
+      const Vec3<Real>& e = terms.edge[corner_of(m.triangle[ts], static_cast<Index>(v))];
+      sums += Lanes<Real>{terms.normal.x(), terms.normal.y(), terms.normal.z(), e.x(), e.y(), e.z(), 0, 0};
     }
-    w.sums[v].lane = Lanes<Real>{N.x(), N.y(), N.z(), M.x(), M.y(), M.z(), 0, 0};
   }
   move_group_at<Real, kMode>(w, g, mx);
 }
@@ -289,7 +300,7 @@ double sweep(const Sweep<Real, ScaleAt>& w, std::size_t parts, Execution exec) {
     MoveMaxima<Real> mx;
     TriangleBlockTerms<Real> terms;
     const std::size_t blocks = (w.m.triangle_slots() + kTriangleBlock - 1) / kTriangleBlock;
-    for (std::size_t b = 0; b < blocks; ++b) sweep_block<false>(w, b, terms);
+    for (std::size_t b = 0; b < blocks; ++b) sweep_block<false>(w, b, 0, terms);
     const std::size_t groups = (w.m.vertex_slots() + kGroup - 1) / kGroup;
     for (std::size_t g = 0; g < groups; ++g) move_group_at<Real, kMode>(w, g, mx);
     publish(mx);

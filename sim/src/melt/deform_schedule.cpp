@@ -12,7 +12,7 @@ template <class Real>
 void DeformSchedule::update(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t parts) {
   const std::size_t nt = m.triangle_slots();
   const std::size_t blocks = (nt + kTriangleBlock - 1) / kTriangleBlock;
-  parts = std::max<std::size_t>(1, std::min(parts, blocks));
+  parts = std::max<std::size_t>(1, std::min({parts, blocks, kMaxParts}));
   if (!valid_ || parts != this->parts() || nt != triangles_ || m.vertex_slots() != vertices_) {
     rebuild(m, adj, parts);
     return;
@@ -39,9 +39,8 @@ void DeformSchedule::rebuild(const TriMesh<Real>& m, const VertexTriangles& adj,
   for (std::size_t p = 0; p <= parts; ++p) part_first_block_[p] = p * blocks_ / parts;
   for (std::size_t p = 0; p < parts; ++p)
     for (std::size_t b = part_first_block_[p]; b < part_first_block_[p + 1]; ++b)
-      block_part_[b] = static_cast<std::uint32_t>(p);
-  store_terms_.assign(triangles_, 0);
-  block_stores_terms_.assign(blocks_, 0);
+      block_part_[b] = static_cast<std::uint16_t>(p);
+  owner_.assign(vertices_, 0);
   ready_.assign((vertices_ + kGroup - 1) / kGroup, 0);
   for (std::size_t g = 0; g < ready_.size(); ++g) classify(m, adj, g);
   touched_.clear();
@@ -56,29 +55,20 @@ void DeformSchedule::classify(const TriMesh<Real>& m, const VertexTriangles& adj
   std::int64_t part = -1;
   bool halo = blocks_ == 0;
   const std::size_t end = std::min(vertices_, (g + 1) * kGroup);
-  for (std::size_t v = g * kGroup; v < end && !halo; ++v) {
+  for (std::size_t v = g * kGroup; v < end; ++v) {
+    owner_[v] = 0;
     if (!m.vertex_alive[v]) continue;
     const auto list = adj.of(static_cast<Index>(v));
     if (list.empty()) continue;
     const auto first = static_cast<std::size_t>(list.front()) / kTriangleBlock;
     const auto last = static_cast<std::size_t>(list.back()) / kTriangleBlock;
     const std::int64_t p = block_part_[first];
+    owner_[v] = block_part_[first];
     if (block_part_[last] != p || (part >= 0 && part != p)) halo = true;
     part = p;
     ready = std::max<std::int64_t>(ready, static_cast<std::int64_t>(last));
   }
-  if (halo) {
-    ready_[g] = kHalo;
-    for (std::size_t v = g * kGroup; v < end; ++v) {
-      if (!m.vertex_alive[v]) continue;
-      for (Index t : adj.of(static_cast<Index>(v))) {
-        store_terms_[static_cast<std::size_t>(t)] = 1;
-        block_stores_terms_[static_cast<std::size_t>(t) / kTriangleBlock] = 1;
-      }
-    }
-  } else {
-    ready_[g] = static_cast<std::int32_t>(ready);
-  }
+  ready_[g] = halo ? kHalo : static_cast<std::int32_t>(ready);
 }
 
 void DeformSchedule::build_buckets() {

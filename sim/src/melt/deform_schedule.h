@@ -11,16 +11,21 @@
 // sweep over sum records that no longer fit in the cache.
 //
 // Parallel sweeps split the blocks into parts, one contiguous range of blocks each, run
-// side by side. A group whose vertices have all their triangles in one part is "interior"
-// to it: that part adds into its records and moves it, as above. Any other group is a
-// "halo" group: no part adds into its records; the triangles of its vertices store their
-// terms, and after every part has finished, each halo vertex gathers its sums from them in
-// ascending triangle order: the same additions in the same order as the serial sweep, so
-// serial and parallel cycles stay bitwise identical, and no record is written by two
-// threads.
-//
-// The schedule (ready block of every interior group, the halo groups, which triangles must
-// store their terms) depends only on the triangle lists and the partition. It is kept
+// side by side. Every vertex is owned by the part of its first triangle. A group whose
+// vertices have all their triangles in one part is "interior" to it: that part adds into
+// its records and moves it, as above. Any other group is a "halo" group and moves after
+// every part has finished. Each part adds a triangle's terms directly into the records of
+// the corners it owns (all of them, for a vertex whose triangles lie in one part); a
+// triangle with a corner owned by an earlier part stores its terms instead, and in the
+// halo phase that "split" vertex adds the stored terms of its triangles beyond its owner
+// part in ascending order. A part comes after its owner in triangle order, so every vertex
+// adds the same numbers in the same order as the serial sweep (serial and parallel cycles
+// stay bitwise identical), and no record is written by two threads. Only the triangles
+// of later parts at split vertices store terms (the boundary between parts once), not
+// every triangle of a halo group.
+
+// The schedule (ready block of every interior group, the halo groups, the owner part of every
+// vertex) depends only on the triangle lists and the partition. It is kept
 // across cycles and updated for the vertices whose lists changed.
 
 #include "adjacency.h"
@@ -60,9 +65,13 @@ class DeformSchedule {
     return {ready_groups_.data() + bucket_[b], static_cast<std::size_t>(bucket_[b + 1] - bucket_[b])};
   }
   std::span<const std::int32_t> halo_groups() const { return halo_; }
-  bool halo_vertex(Index v) const { return ready_[static_cast<std::size_t>(v) / kGroup] == kHalo; }
-  bool stores_terms(std::size_t t) const { return store_terms_[t] != 0; }
-  bool block_stores_terms(std::size_t b) const { return block_stores_terms_[b] != 0; }
+  /// The part of vertex v's first triangle (0 for a vertex without triangles).
+  std::size_t owner(Index v) const { return owner_[static_cast<std::size_t>(v)]; }
+  const std::uint16_t* owners() const { return owner_.data(); }
+  /// The part of triangle t.
+  std::size_t part_of_triangle(std::size_t t) const { return block_part_[t / kTriangleBlock]; }
+  /// At most this many parts (the owner of a vertex is stored in 16 bits).
+  static constexpr std::size_t kMaxParts = 65535;
 
  private:
   template <class Real>
@@ -74,13 +83,12 @@ class DeformSchedule {
   bool valid_ = false;
   std::size_t blocks_ = 0, triangles_ = 0, vertices_ = 0;
   std::vector<std::size_t> part_first_block_ = {0};
-  std::vector<std::uint32_t> block_part_;
+  std::vector<std::uint16_t> block_part_;
+  std::vector<std::uint16_t> owner_;        ///< per vertex slot: the part of its first triangle
   std::vector<std::int32_t> ready_;         ///< per group: ready block, or kHalo
   std::vector<std::int32_t> bucket_;        ///< per block: first entry in ready_groups_
   std::vector<std::int32_t> ready_groups_;  ///< interior groups by ready block
   std::vector<std::int32_t> halo_;          ///< halo groups, ascending
-  std::vector<std::uint8_t> store_terms_;   ///< per triangle: a halo vertex needs its terms
-  std::vector<std::uint8_t> block_stores_terms_;
   std::vector<Index> touched_;
 };
 

@@ -52,8 +52,8 @@ struct MeltWorkspace {
   /// a small mesh); tests set it to exercise other partitions (any count gives the same mesh).
   std::size_t deform_parts = 0;
 
-  // Deform: terms (unit normal + 3 unit edges) of the triangles whose corners include a halo
-  // vertex of a parallel sweep, indexed by triangle slot (only those slots are written).
+  // Deform: terms (unit normal + 3 unit edges) of the triangles of a parallel sweep that have a
+  // corner owned by an earlier part, indexed by triangle slot (only those slots are written).
   std::vector<TriangleTerms<float>> terms_f;
   std::vector<TriangleTerms<double>> terms_d;
   // Deform: per-vertex sums. A one-part sweep clears them first; a sweep in parts relies on
