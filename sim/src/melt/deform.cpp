@@ -11,13 +11,14 @@
 // operations in their order, read the old positions from the packed copy and write the new
 // ones to it and to the columns. A one-part (serial) sweep clears all sum records first,
 // adds all triangles and then moves every group in ascending order. A sweep in parts
-// (deform_schedule.h), whose groups clear their records as they move,
-// runs parts of the blocks side by side, and a group moves right after the block that
-// completes its sums; vertices whose triangles lie in more than one part gather their sums
-// afterwards from their triangles' stored terms, in the same ascending triangle order as
-// the serial sweep adds them. Every vertex therefore adds the same numbers in the same
-// order whatever the execution: bitwise-identical meshes (with -ffp-contract=off, see
-// cmake/flags.cmake). A vertex's triangle count is the length of its list.
+// (deform_schedule.h), whose groups clear their records as they move, runs parts of the
+// blocks side by side; each part adds its triangles into the records of the vertices it
+// owns and then moves the groups interior to it; vertices with triangles in later parts
+// add those triangles' stored terms afterwards, in the same ascending triangle order as the
+// serial sweep adds them, and the groups not interior to one part move then. Every vertex
+// therefore adds the same numbers in the same order whatever the execution:
+// bitwise-identical meshes (with -ffp-contract=off, see cmake/flags.cmake). A vertex's
+// triangle count is the length of its list.
 
 #include "deform_schedule.h"
 #include "triangle_kernels.h"
@@ -235,15 +236,15 @@ void sweep_block(const Sweep<Real, ScaleAt>& w, std::size_t b, std::size_t part,
   }
 }
 
-// Part p of the sweep: its blocks in ascending order, each followed by the groups it
-// completes.
+// Part p of the sweep: its blocks in ascending order, then its interior groups in ascending
+// order (the vertex arrays stream; moving each group right after the block that completes its
+// sums measured 1.5x slower on the 871k dragon, see docs/melt-core.md, issue 20 step 6).
 template <bool kHalo, DeformMode kMode, class Real, class ScaleAt>
 void sweep_part(const Sweep<Real, ScaleAt>& w, std::size_t p, MoveMaxima<Real>& mx) {
   TriangleBlockTerms<Real> terms;
-  for (std::size_t b = w.plan.part_first_block(p); b < w.plan.part_first_block(p + 1); ++b) {
+  for (std::size_t b = w.plan.part_first_block(p); b < w.plan.part_first_block(p + 1); ++b)
     sweep_block<kHalo>(w, b, p, terms);
-    for (std::int32_t g : w.plan.ready_after(b)) move_group_at<Real, kMode>(w, static_cast<std::size_t>(g), mx);
-  }
+  for (std::int32_t g : w.plan.interior_groups(p)) move_group_at<Real, kMode>(w, static_cast<std::size_t>(g), mx);
 }
 
 // A halo group: each split vertex (triangles beyond its owner part) adds the stored terms of

@@ -50,8 +50,7 @@ void DeformSchedule::rebuild(const TriMesh<Real>& m, const VertexTriangles& adj,
 
 template <class Real>
 void DeformSchedule::classify(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t g) {
-  // Free group (no live vertex with triangles): moves after block 0 (part 0).
-  std::int64_t ready = blocks_ > 0 ? 0 : kHalo;
+  // A free group (no live vertex with triangles) is interior to part 0.
   std::int64_t part = -1;
   bool halo = blocks_ == 0;
   const std::size_t end = std::min(vertices_, (g + 1) * kGroup);
@@ -60,19 +59,18 @@ void DeformSchedule::classify(const TriMesh<Real>& m, const VertexTriangles& adj
     if (!m.vertex_alive[v]) continue;
     const auto list = adj.of(static_cast<Index>(v));
     if (list.empty()) continue;
-    const auto first = static_cast<std::size_t>(list.front()) / kTriangleBlock;
-    const auto last = static_cast<std::size_t>(list.back()) / kTriangleBlock;
-    const std::int64_t p = block_part_[first];
-    owner_[v] = block_part_[first];
-    if (block_part_[last] != p || (part >= 0 && part != p)) halo = true;
-    part = p;
-    ready = std::max<std::int64_t>(ready, static_cast<std::int64_t>(last));
+    const std::uint16_t first = block_part_[static_cast<std::size_t>(list.front()) / kTriangleBlock];
+    const std::uint16_t last = block_part_[static_cast<std::size_t>(list.back()) / kTriangleBlock];
+    owner_[v] = first;
+    if (last != first || (part >= 0 && part != first)) halo = true;
+    part = first;
   }
-  ready_[g] = halo ? kHalo : static_cast<std::int32_t>(ready);
+  ready_[g] = halo ? kHalo : static_cast<std::int32_t>(std::max<std::int64_t>(part, 0));
 }
 
 void DeformSchedule::build_buckets() {
-  bucket_.assign(blocks_ + 1, 0);
+  const std::size_t parts = this->parts();
+  bucket_.assign(parts + 1, 0);
   halo_.clear();
   for (std::size_t g = 0; g < ready_.size(); ++g) {
     if (ready_[g] == kHalo)
@@ -80,13 +78,12 @@ void DeformSchedule::build_buckets() {
     else
       ++bucket_[static_cast<std::size_t>(ready_[g]) + 1];
   }
-  for (std::size_t b = 0; b < blocks_; ++b) bucket_[b + 1] += bucket_[b];
-  ready_groups_.resize(static_cast<std::size_t>(bucket_[blocks_]));
-  std::vector<std::int32_t> next(bucket_.begin(), bucket_.end() - 1);
-  for (std::size_t g = 0; g < ready_.size(); ++g)
+  for (std::size_t p = 0; p < parts; ++p) bucket_[p + 1] += bucket_[p];
+  interior_.resize(static_cast<std::size_t>(bucket_[parts]));
+  next_.assign(bucket_.begin(), bucket_.end() - 1);
+  for (std::size_t g = 0; g < ready_.size(); ++g)  // ascending within each part
     if (ready_[g] != kHalo)
-      ready_groups_[static_cast<std::size_t>(next[static_cast<std::size_t>(ready_[g])]++)] =
-          static_cast<std::int32_t>(g);
+      interior_[static_cast<std::size_t>(next_[static_cast<std::size_t>(ready_[g])]++)] = static_cast<std::int32_t>(g);
 }
 
 template void DeformSchedule::update(const TriMesh<float>&, const VertexTriangles&, std::size_t);

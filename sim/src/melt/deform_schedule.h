@@ -2,29 +2,25 @@
 // Private to the melt cycle: the order in which Alg. 1's sweep visits the mesh.
 //
 // The sweep runs over blocks of kTriangleBlock triangles in ascending order, computes their
-// terms and adds each corner's terms to its vertex's sum record. A vertex's sums are complete
-// once its last triangle (the end of its ascending triangle list) has been added, and from
-// then on no later triangle reads its position, so it can move at once, while its record is
-// still in the cache (the vertex moves run eight slots at a time: a group of eight moves
-// after the block that holds the last triangle of any of them, its "ready" block). The
-// sweep so streams once over the mesh instead of a triangle sweep followed by a vertex
-// sweep over sum records that no longer fit in the cache.
+// terms and adds each corner's terms to its vertex's sum record; then the vertices move,
+// eight slots at a time (a "group", one SIMD lane each), in ascending order, so that the
+// vertex arrays stream through the cache.
 //
 // Parallel sweeps split the blocks into parts, one contiguous range of blocks each, run
 // side by side. Every vertex is owned by the part of its first triangle. A group whose
 // vertices have all their triangles in one part is "interior" to it: that part adds into
-// its records and moves it, as above. Any other group is a "halo" group and moves after
-// every part has finished. Each part adds a triangle's terms directly into the records of
-// the corners it owns (all of them, for a vertex whose triangles lie in one part); a
-// triangle with a corner owned by an earlier part stores its terms instead, and in the
-// halo phase that "split" vertex adds the stored terms of its triangles beyond its owner
-// part in ascending order. A part comes after its owner in triangle order, so every vertex
-// adds the same numbers in the same order as the serial sweep (serial and parallel cycles
-// stay bitwise identical), and no record is written by two threads. Only the triangles
-// of later parts at split vertices store terms (the boundary between parts once), not
-// every triangle of a halo group.
+// its records and, after its last block, moves its interior groups in ascending order. Any
+// other group is a "halo" group and moves after every part has finished. Each part adds a
+// triangle's terms directly into the records of the corners it owns (all of them, for a
+// vertex whose triangles lie in one part); a triangle with a corner owned by an earlier
+// part stores its terms instead, and in the halo phase that "split" vertex adds the stored
+// terms of its triangles beyond its owner part in ascending order. A part comes after its
+// owner in triangle order, so every vertex adds the same numbers in the same order as the
+// serial sweep (serial and parallel cycles stay bitwise identical), and no record is
+// written by two threads. Only the triangles of later parts at split vertices store terms
+// (the boundary between parts once), not every triangle of a halo group.
 
-// The schedule (ready block of every interior group, the halo groups, the owner part of every
+// The schedule (the interior groups of every part, the halo groups, the owner part of every
 // vertex) depends only on the triangle lists and the partition. It is kept
 // across cycles and updated for the vertices whose lists changed.
 
@@ -60,9 +56,9 @@ class DeformSchedule {
   std::size_t groups() const { return ready_.size(); }
   /// Blocks [first, last) of part p.
   std::size_t part_first_block(std::size_t p) const { return part_first_block_[p]; }
-  /// Groups that move right after block b (interior groups whose ready block is b).
-  std::span<const std::int32_t> ready_after(std::size_t b) const {
-    return {ready_groups_.data() + bucket_[b], static_cast<std::size_t>(bucket_[b + 1] - bucket_[b])};
+  /// The interior groups of part p, ascending: they move after the part's last block.
+  std::span<const std::int32_t> interior_groups(std::size_t p) const {
+    return {interior_.data() + bucket_[p], static_cast<std::size_t>(bucket_[p + 1] - bucket_[p])};
   }
   std::span<const std::int32_t> halo_groups() const { return halo_; }
   /// The part of vertex v's first triangle (0 for a vertex without triangles).
@@ -84,11 +80,12 @@ class DeformSchedule {
   std::size_t blocks_ = 0, triangles_ = 0, vertices_ = 0;
   std::vector<std::size_t> part_first_block_ = {0};
   std::vector<std::uint16_t> block_part_;
-  std::vector<std::uint16_t> owner_;        ///< per vertex slot: the part of its first triangle
-  std::vector<std::int32_t> ready_;         ///< per group: ready block, or kHalo
-  std::vector<std::int32_t> bucket_;        ///< per block: first entry in ready_groups_
-  std::vector<std::int32_t> ready_groups_;  ///< interior groups by ready block
-  std::vector<std::int32_t> halo_;          ///< halo groups, ascending
+  std::vector<std::uint16_t> owner_;    ///< per vertex slot: the part of its first triangle
+  std::vector<std::int32_t> ready_;     ///< per group: the part it is interior to, or kHalo
+  std::vector<std::int32_t> bucket_;    ///< per part: first entry in interior_
+  std::vector<std::int32_t> interior_;  ///< interior groups by part, ascending
+  std::vector<std::int32_t> next_;      ///< build_buckets() scratch
+  std::vector<std::int32_t> halo_;      ///< halo groups, ascending
   std::vector<Index> touched_;
 };
 
