@@ -372,9 +372,8 @@ void deform_pass(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execu
   else
     sums.resize(m.vertex_slots());  // new slots are zero
   ws.sums_zero = clear_in_moves;
-  std::vector<TriangleTerms<Real>>& stored = ws.triangle_terms<Real>();
-  if (parts > 1 && !ws.schedule.halo_groups().empty() && stored.size() < m.triangle_slots())
-    stored.resize(m.triangle_slots());
+  StoredTerms<Real>& stored = ws.triangle_terms<Real>();
+  if (parts > 1 && !ws.schedule.halo_groups().empty()) stored.ensure(m.triangle_slots());
   const MoveConstants<Real> c{static_cast<Real>(p.kE), static_cast<Real>(p.kN), p.edge_sum == EdgeSumMode::kMean,
                               p.tie == TieRule::kLessEqual};
   const Index* counts = ws.adj.counts().data();
@@ -387,16 +386,16 @@ void deform_pass(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execu
   // A constant kl costs nothing per vertex: s = kg·kl is folded into one number.
   if (kl.is_constant()) {
     const auto s = static_cast<Real>(p.kg * kl.value(Vec3<double>::Zero()));
-    const Sweep<Real, Real> w{m,      c,           sums.data(),   clear_in_moves, counts,
-                              ws.adj, ws.schedule, packed.data(), stored.data(),  min_edge2.data(),
+    const Sweep<Real, Real> w{m,      c,           sums.data(),   clear_in_moves,    counts,
+                              ws.adj, ws.schedule, packed.data(), stored.slot.get(), min_edge2.data(),
                               s};
     ws.cycle_move_bound = sweep(w, p.deform, parts, exec);
   } else {
     auto scale_at = [&](std::size_t v) {
       return static_cast<Real>(p.kg * kl.value(m.position[v].template cast<double>()));
     };
-    const Sweep<Real, decltype(scale_at)> w{m,       c,           sums.data(),   clear_in_moves, counts,
-                                            ws.adj,  ws.schedule, packed.data(), stored.data(),  min_edge2.data(),
+    const Sweep<Real, decltype(scale_at)> w{m,       c,           sums.data(),   clear_in_moves,    counts,
+                                            ws.adj,  ws.schedule, packed.data(), stored.slot.get(), min_edge2.data(),
                                             scale_at};
     ws.cycle_move_bound = sweep(w, p.deform, parts, exec);
   }
