@@ -113,6 +113,35 @@ TEST(Remnants, InvertedPartIsRemoved) {
   EXPECT_EQ(remove_inverted_parts(m), 0) << "nothing left to remove";
 }
 
+// The parts' vertices interleaved in index order (a fixed shuffle), so that union-find joins
+// parts found from both ends and each part's root (its smallest index) lies anywhere: only
+// the inverted part goes, in float and double, and its vertices are exactly those removed.
+TEST(Remnants, InvertedPartAmongInterleavedPartsIsRemoved) {
+  auto inverted = test::translated(test::octahedron(0.5), {4, 0, 0});
+  for (auto& t : inverted.F) std::swap(t[1], t[2]);
+  const IndexedMesh parts = test::disjoint_union(test::disjoint_union(test::icosahedron(), inverted),
+                                                 test::translated(test::icosahedron(), {-4, 0, 0}));
+  const std::size_t n = parts.V.size();  // 12 + 6 + 12
+  std::vector<Index> new_index(n);
+  for (std::size_t v = 0; v < n; ++v) new_index[v] = static_cast<Index>((v * 7 + 3) % n);  // 7 is prime to 30
+  IndexedMesh shuffled;
+  shuffled.V.resize(n);
+  for (std::size_t v = 0; v < n; ++v) shuffled.V[static_cast<std::size_t>(new_index[v])] = parts.V[v];
+  for (const auto& f : parts.F)
+    shuffled.F.push_back({new_index[static_cast<std::size_t>(f[0])], new_index[static_cast<std::size_t>(f[1])],
+                          new_index[static_cast<std::size_t>(f[2])]});
+  auto check = [&](auto m) {
+    EXPECT_EQ(remove_inverted_parts(m), 1);
+    for (std::size_t v = 0; v < n; ++v)
+      EXPECT_EQ(m.vertex_alive[static_cast<std::size_t>(new_index[v])] != 0, v < 12 || v >= 18) << "vertex " << v;
+    const auto topo = check_topology(m);
+    EXPECT_TRUE(topo.valid());
+    EXPECT_EQ(topo.counts.S, 2);
+  };
+  check(TriMesh<double>::from_indexed(shuffled));
+  check(TriMesh<float>::from_indexed(shuffled));
+}
+
 // Compaction drops dead slots, keeps the live mesh and the relative order of indices (so
 // every triangle stays min-index first and Alg. 2's comparisons are unchanged).
 TEST(Compact, KeepsLiveMeshAndIndexOrder) {

@@ -30,24 +30,38 @@ std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws) {
   for (std::size_t t = 0; t < nt; ++t) {
     if (!m.triangle_alive[t]) continue;
     const Triangle& tri = m.triangle[t];
+    Index a = find_root(parent, tri[0]);
     for (int k = 1; k < 3; ++k) {
-      Index a = find_root(parent, tri[0]), b = find_root(parent, tri[static_cast<std::size_t>(k)]);
-      if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+      const Index b = find_root(parent, tri[static_cast<std::size_t>(k)]);
+      if (a == b) continue;
+      parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+      a = std::min(a, b);
     }
   }
-  std::vector<double> six_volume(nv, 0.0);
+  // Every link points to a smaller index, so one ascending pass leaves each vertex's root.
+  for (std::size_t v = 0; v < nv; ++v) parent[v] = parent[static_cast<std::size_t>(parent[v])];
+  // Corners from the packed copy of the positions when it is current (the same numbers; one
+  // cache line per corner instead of three).
+  const std::vector<Real>& packed = ws.packed_positions<Real>();
+  const bool use_packed = ws.packed_valid && packed.size() == 3 * nv + 1;
+  auto corner = [&](Index v) {
+    const auto vs = static_cast<std::size_t>(v);
+    if (use_packed) return Vec3<double>(packed[3 * vs], packed[3 * vs + 1], packed[3 * vs + 2]);
+    return Vec3<double>(m.position[vs].template cast<double>());
+  };
+  std::vector<double>& six_volume = ws.part_six_volume;
+  six_volume.assign(nv, 0.0);
   for (std::size_t t = 0; t < nt; ++t) {
     if (!m.triangle_alive[t]) continue;
     const Triangle& tri = m.triangle[t];
-    const Vec3<double> a = m.position[static_cast<std::size_t>(tri[0])].template cast<double>();
-    const Vec3<double> b = m.position[static_cast<std::size_t>(tri[1])].template cast<double>();
-    const Vec3<double> c = m.position[static_cast<std::size_t>(tri[2])].template cast<double>();
-    six_volume[static_cast<std::size_t>(find_root(parent, tri[0]))] += a.dot(b.cross(c));
+    const Vec3<double> a = corner(tri[0]), b = corner(tri[1]), c = corner(tri[2]);
+    six_volume[static_cast<std::size_t>(parent[static_cast<std::size_t>(tri[0])])] += a.dot(b.cross(c));
   }
   std::int64_t removed = 0;
-  std::vector<std::uint8_t> doomed(nv, 0);
+  std::vector<std::uint8_t>& doomed = ws.part_doomed;
+  doomed.assign(nv, 0);
   for (std::size_t v = 0; v < nv; ++v) {
-    if (!m.vertex_alive[v] || find_root(parent, static_cast<Index>(v)) != static_cast<Index>(v)) continue;
+    if (!m.vertex_alive[v] || parent[v] != static_cast<Index>(v)) continue;
     if (ws.adj.built() && ws.adj.of(static_cast<Index>(v)).empty()) continue;
     if (six_volume[v] <= 0.0) {
       doomed[v] = 1;
@@ -57,10 +71,10 @@ std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws) {
   if (removed == 0) return 0;
   ws.schedule.invalidate();
   for (std::size_t t = 0; t < nt; ++t)
-    if (m.triangle_alive[t] && doomed[static_cast<std::size_t>(find_root(parent, m.triangle[t][0]))])
+    if (m.triangle_alive[t] && doomed[static_cast<std::size_t>(parent[static_cast<std::size_t>(m.triangle[t][0])])])
       m.triangle_alive[t] = 0;
   for (std::size_t v = 0; v < nv; ++v) {
-    if (!m.vertex_alive[v] || !doomed[static_cast<std::size_t>(find_root(parent, static_cast<Index>(v)))]) continue;
+    if (!m.vertex_alive[v] || !doomed[static_cast<std::size_t>(parent[v])]) continue;
     m.vertex_alive[v] = 0;
     m.triangle_count[v] = 0;
     if (ws.adj.built()) ws.adj.assign(static_cast<Index>(v), {});

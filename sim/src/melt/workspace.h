@@ -101,8 +101,10 @@ struct MeltWorkspace {
   bool min_edge2_current = false;
   double cycle_move_bound = 0.0;  ///< this cycle's largest vertex move + rounding, mesh units
 
-  std::vector<Index> root;    ///< flattened merge target of every vertex
-  std::vector<Index> merged;  ///< vertices merged this cycle (ascending)
+  std::vector<Index> root;                ///< flattened merge target of every vertex
+  std::vector<double> part_six_volume;    ///< remnant check: 6 x volume per part (at its root)
+  std::vector<std::uint8_t> part_doomed;  ///< remnant check: the part is removed
+  std::vector<Index> merged;              ///< vertices merged this cycle (ascending)
   std::vector<std::int32_t> cluster_size;
   std::vector<Index> touched_roots;
 
