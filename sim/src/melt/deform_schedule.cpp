@@ -41,8 +41,8 @@ void DeformSchedule::rebuild(const TriMesh<Real>& m, const VertexTriangles& adj,
     for (std::size_t b = part_first_block_[p]; b < part_first_block_[p + 1]; ++b)
       block_part_[b] = static_cast<std::uint16_t>(p);
   owner_.assign(vertices_, 0);
-  ready_.assign((vertices_ + kGroup - 1) / kGroup, 0);
-  for (std::size_t g = 0; g < ready_.size(); ++g) classify(m, adj, g);
+  group_part_.assign((vertices_ + kGroup - 1) / kGroup, 0);
+  for (std::size_t g = 0; g < group_part_.size(); ++g) classify(m, adj, g);
   touched_.clear();
   build_buckets();
   valid_ = true;
@@ -65,25 +65,26 @@ void DeformSchedule::classify(const TriMesh<Real>& m, const VertexTriangles& adj
     if (last != first || (part >= 0 && part != first)) halo = true;
     part = first;
   }
-  ready_[g] = halo ? kHalo : static_cast<std::int32_t>(std::max<std::int64_t>(part, 0));
+  group_part_[g] = halo ? kHalo : static_cast<std::int32_t>(std::max<std::int64_t>(part, 0));
 }
 
 void DeformSchedule::build_buckets() {
   const std::size_t parts = this->parts();
   bucket_.assign(parts + 1, 0);
   halo_.clear();
-  for (std::size_t g = 0; g < ready_.size(); ++g) {
-    if (ready_[g] == kHalo)
+  for (std::size_t g = 0; g < group_part_.size(); ++g) {
+    if (group_part_[g] == kHalo)
       halo_.push_back(static_cast<std::int32_t>(g));
     else
-      ++bucket_[static_cast<std::size_t>(ready_[g]) + 1];
+      ++bucket_[static_cast<std::size_t>(group_part_[g]) + 1];
   }
   for (std::size_t p = 0; p < parts; ++p) bucket_[p + 1] += bucket_[p];
   interior_.resize(static_cast<std::size_t>(bucket_[parts]));
   next_.assign(bucket_.begin(), bucket_.end() - 1);
-  for (std::size_t g = 0; g < ready_.size(); ++g)  // ascending within each part
-    if (ready_[g] != kHalo)
-      interior_[static_cast<std::size_t>(next_[static_cast<std::size_t>(ready_[g])]++)] = static_cast<std::int32_t>(g);
+  for (std::size_t g = 0; g < group_part_.size(); ++g)  // ascending within each part
+    if (group_part_[g] != kHalo)
+      interior_[static_cast<std::size_t>(next_[static_cast<std::size_t>(group_part_[g])]++)] =
+          static_cast<std::int32_t>(g);
 }
 
 template void DeformSchedule::update(const TriMesh<float>&, const VertexTriangles&, std::size_t);

@@ -19,7 +19,7 @@
 // serial sweep (serial and parallel cycles stay bitwise identical), and no record is
 // written by two threads. Only the triangles of later parts at split vertices store terms
 // (the boundary between parts once), not every triangle of a halo group.
-
+//
 // The schedule (the interior groups of every part, the halo groups, the owner part of every
 // vertex) depends only on the triangle lists and the partition. It is kept
 // across cycles and updated for the vertices whose lists changed.
@@ -53,7 +53,7 @@ class DeformSchedule {
 
   std::size_t parts() const { return part_first_block_.size() - 1; }
   std::size_t blocks() const { return blocks_; }
-  std::size_t groups() const { return ready_.size(); }
+  std::size_t groups() const { return group_part_.size(); }
   /// Blocks [first, last) of part p.
   std::size_t part_first_block(std::size_t p) const { return part_first_block_[p]; }
   /// The interior groups of part p, ascending: they move after the part's last block.
@@ -80,12 +80,12 @@ class DeformSchedule {
   std::size_t blocks_ = 0, triangles_ = 0, vertices_ = 0;
   std::vector<std::size_t> part_first_block_ = {0};
   std::vector<std::uint16_t> block_part_;
-  std::vector<std::uint16_t> owner_;    ///< per vertex slot: the part of its first triangle
-  std::vector<std::int32_t> ready_;     ///< per group: the part it is interior to, or kHalo
-  std::vector<std::int32_t> bucket_;    ///< per part: first entry in interior_
-  std::vector<std::int32_t> interior_;  ///< interior groups by part, ascending
-  std::vector<std::int32_t> next_;      ///< build_buckets() scratch
-  std::vector<std::int32_t> halo_;      ///< halo groups, ascending
+  std::vector<std::uint16_t> owner_;      ///< per vertex slot: the part of its first triangle
+  std::vector<std::int32_t> group_part_;  ///< per group: the part it is interior to, or kHalo
+  std::vector<std::int32_t> bucket_;      ///< per part: first entry in interior_
+  std::vector<std::int32_t> interior_;    ///< interior groups by part, ascending
+  std::vector<std::int32_t> next_;        ///< build_buckets() scratch
+  std::vector<std::int32_t> halo_;        ///< halo groups, ascending
   std::vector<Index> touched_;
 };
 

@@ -37,7 +37,7 @@ struct TriangleTerms {
 /// indexed by triangle slot. Only those slots are written (and read), so the array is
 /// allocated without initialisation: the pages nobody writes are never touched (the 871k
 /// dragon's 68 MB in double, of which the part boundary uses a few pages; zeroing them all
-/// cost ~40 ms whenever a simulator started).
+/// cost ~30 ms whenever a simulator started).
 template <class Real>
 struct StoredTerms {
   std::unique_ptr<TriangleTerms<Real>[]> slot;
