@@ -320,19 +320,17 @@ double sweep(const Sweep<Real, ScaleAt>& w, std::size_t parts, Execution exec) {
     else
       tbb::parallel_for(all, run_parts, tbb::simple_partitioner());
     const auto halo = plan.halo_groups();
-    auto run_halo = [&](const tbb::blocked_range<std::size_t>& r) {
-      MoveMaxima<Real> mx;
-      for (std::size_t i = r.begin(); i < r.end(); ++i) halo_group<kMode>(w, static_cast<std::size_t>(halo[i]), mx);
-      publish(mx);
-    };
     // Halo groups are few (a part boundary) but each gathers stored terms and moves eight
     // vertices: on the threads from 2 x kHaloGrain groups on (geodesic 32k, 209 groups: 4 %
     // off a two-thread cycle). Every group writes only its own records and vertices.
-    const tbb::blocked_range<std::size_t> halo_range(0, halo.size(), kHaloGrain);
-    if (exec == Execution::kSerial || halo.size() < 2 * kHaloGrain)
-      run_halo(halo_range);
-    else
-      tbb::parallel_for(halo_range, run_halo);
+    for_range(
+        exec, halo.size(),
+        [&](std::size_t begin, std::size_t end) {
+          MoveMaxima<Real> mx;
+          for (std::size_t i = begin; i < end; ++i) halo_group<kMode>(w, static_cast<std::size_t>(halo[i]), mx);
+          publish(mx);
+        },
+        kHaloGrain);
   }
   // |move| <= sqrt(3) * max component; rounding of each component <= eps * |coordinate|.
   constexpr double kSqrt3 = 1.7320508075688772;

@@ -4,42 +4,24 @@
 // part with correct (outward) orientation has positive volume; <= 0 means it is inside out
 // or flat, i.e. it has melted through itself.
 
+#include "../mesh/union_find.h"
 #include "workspace.h"
 
-#include <numeric>
-
 namespace meltlab::sim {
-
-namespace {
-Index find_root(std::vector<Index>& parent, Index x) {
-  while (parent[static_cast<std::size_t>(x)] != x) {
-    Index& p = parent[static_cast<std::size_t>(x)];
-    p = parent[static_cast<std::size_t>(p)];
-    x = p;
-  }
-  return x;
-}
-}  // namespace
 
 template <class Real>
 std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws) {
   const std::size_t nv = m.vertex_slots(), nt = m.triangle_slots();
-  std::vector<Index>& parent = ws.root;  // free between cycles
-  if (parent.size() < nv) parent.resize(nv);
-  std::iota(parent.begin(), parent.begin() + static_cast<std::ptrdiff_t>(nv), 0);
+  UnionFind& parts = ws.remnant_parts;
+  parts.reset(nv);
   for (std::size_t t = 0; t < nt; ++t) {
     if (!m.triangle_alive[t]) continue;
     const Triangle& tri = m.triangle[t];
-    Index a = find_root(parent, tri[0]);
-    for (int k = 1; k < 3; ++k) {
-      const Index b = find_root(parent, tri[static_cast<std::size_t>(k)]);
-      if (a == b) continue;
-      parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
-      a = std::min(a, b);
-    }
+    parts.unite(tri[0], tri[1]);
+    parts.unite(tri[0], tri[2]);
   }
-  // Every link points to a smaller index, so one ascending pass leaves each vertex's root.
-  for (std::size_t v = 0; v < nv; ++v) parent[v] = parent[static_cast<std::size_t>(parent[v])];
+  parts.flatten();
+  const std::vector<Index>& parent = parts.parent;  // each slot's root
   // Corners from the packed copy of the positions when it is current (the same numbers; one
   // cache line per corner instead of three).
   const std::vector<Real>& packed = ws.packed_positions<Real>();

@@ -6,6 +6,7 @@
 #include "deform_schedule.h"
 #include "lanes.h"
 #include "triangle_kernels.h"
+#include "../mesh/union_find.h"
 
 #include <meltlab/sim/melt.h>
 
@@ -102,6 +103,7 @@ struct MeltWorkspace {
   double cycle_move_bound = 0.0;  ///< this cycle's largest vertex move + rounding, mesh units
 
   std::vector<Index> root;                ///< flattened merge target of every vertex
+  UnionFind remnant_parts;                ///< remnant check: the connected parts
   std::vector<double> part_six_volume;    ///< remnant check: 6 x volume per part (at its root)
   std::vector<std::uint8_t> part_doomed;  ///< remnant check: the part is removed
   std::vector<Index> merged;              ///< vertices merged this cycle (ascending)
@@ -147,15 +149,16 @@ struct MeltWorkspace {
   }
 };
 
-/// Runs body(begin, end) over [0, n) serially or as TBB tasks. The body must not depend on
-/// how the range is split (every element's result is computed by the same code).
+/// Runs body(begin, end) over [0, n) serially or as TBB tasks of at least `grain` elements
+/// (serially below two of them). The body must not depend on how the range is split (every
+/// element's result is computed by the same code).
 template <class Body>
-inline void for_range(Execution exec, std::size_t n, const Body& body) {
-  if (exec == Execution::kSerial || n < 2 * kParallelGrain) {
+inline void for_range(Execution exec, std::size_t n, const Body& body, std::size_t grain = kParallelGrain) {
+  if (exec == Execution::kSerial || n < 2 * grain) {
     body(std::size_t{0}, n);
     return;
   }
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kParallelGrain),
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
                     [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
 }
 

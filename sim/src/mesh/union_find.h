@@ -1,5 +1,6 @@
 #pragma once
-// Private to sim/src/mesh: union-find over vertex slots, and the Euler counts of §2.3 from the
+// Private to sim/src: union-find over vertex slots (the topology check, the per-cycle
+// statistics and the melt cycle's remnant check), and the Euler counts of §2.3 from the
 // per-component sums that the topology check and the per-cycle statistics both collect.
 
 #include <meltlab/sim/mesh.h>
@@ -34,6 +35,11 @@ struct UnionFind {
     a = find(a);
     b = find(b);
     if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+  }
+  /// Points every slot straight at its root: every link goes to a smaller index, so one
+  /// ascending pass does it. Afterwards parent[v] is v's root.
+  void flatten() {
+    for (std::size_t v = 0; v < parent.size(); ++v) parent[v] = parent[static_cast<std::size_t>(parent[v])];
   }
 };
 
