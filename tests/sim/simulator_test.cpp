@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <cstring>
 #include <random>
 
 namespace meltlab::sim {
@@ -131,6 +132,65 @@ TEST(Simulator, AnySweepPartitionGivesTheSameMeshBitwise) {
   check_partitions_equal<float>(c, relative_params(c, 0.05, 0.5), 60, "object C float");
   check_partitions_equal<double>(c, relative_params(c, 0.05, 0.5), 60, "object C double");
   check_partitions_equal<double>(dumbbell, relative_params(dumbbell, 0.05, 0.5), 1100, "dumbbell double");
+}
+
+// MeltSimulator writes the N, M and Nf columns only when asked (set_record_vectors): the
+// positions and the topology are bitwise the same either way, the columns stay as they were
+// when off, and when on they are Alg. 1's of that cycle — what deform() writes on the mesh
+// before the step (checked in every cycle without a merge, repair or compaction), for one
+// part and for a sweep in parts (halo groups), serial and on threads, constant and varying kl.
+template <class Real>
+void check_recorded_vectors(const IndexedMesh& mesh, const MeltParams& p, const KlFieldPtr& kl, Execution exec,
+                            std::size_t parts, int cycles, const std::string& name) {
+  MeltSimulator<Real> off(TriMesh<Real>::from_indexed(mesh), p, kl, exec);
+  MeltSimulator<Real> on(TriMesh<Real>::from_indexed(mesh), p, kl, exec);
+  EXPECT_FALSE(off.record_vectors()) << name << ": recording is off by default";
+  on.set_record_vectors(true);
+  off.set_sweep_parts(parts), on.set_sweep_parts(parts);
+  auto same_bits = [](const Vec3Columns<Real>& a, const Vec3Columns<Real>& b, std::size_t i) {
+    return std::memcmp(a[i].data(), b[i].data(), 3 * sizeof(Real)) == 0;
+  };
+  int compared = 0;
+  std::int64_t merges = 0;
+  for (int c = 1; c <= cycles && !on.empty(); ++c) {
+    TriMesh<Real> before = on.mesh();
+    const CycleReport r = on.step();
+    off.step();
+    merges += r.merged_vertices;
+    expect_bitwise_equal(off.mesh(), on.mesh(), name + " cycle " + std::to_string(c));
+    const TriMesh<Real>& m = off.mesh();
+    std::size_t written = 0;
+    for (std::size_t v = 0; v < m.vertex_slots(); ++v)
+      written += (m.normal[v].array() != 0).any() || (m.displacement[v].array() != 0).any();
+    for (std::size_t t = 0; t < m.triangle_slots(); ++t) written += (m.face_normal[t].array() != 0).any();
+    EXPECT_EQ(written, 0u) << name << " cycle " << c << ": columns written with recording off";
+    if (r.merged_vertices == 0 && !r.compacted && !r.topology_changed()) {
+      deform(before, p, *kl);
+      const TriMesh<Real>& got = on.mesh();
+      std::size_t differ = 0;
+      for (std::size_t v = 0; v < got.vertex_slots(); ++v)
+        if (got.vertex_alive[v])
+          differ += !same_bits(got.normal, before.normal, v) || !same_bits(got.displacement, before.displacement, v);
+      for (std::size_t t = 0; t < got.triangle_slots(); ++t)
+        if (got.triangle_alive[t]) differ += !same_bits(got.face_normal, before.face_normal, t);
+      EXPECT_EQ(differ, 0u) << name << " cycle " << c << ": recorded N, M or Nf differ from deform()'s";
+      ++compared;
+    }
+    if (::testing::Test::HasFailure()) return;
+  }
+  EXPECT_GT(compared, cycles / 4) << name;
+  EXPECT_GT(merges, 0) << name << ": the run must include collapses";
+}
+
+TEST(Simulator, RecordingTheVectorsChangesNothingElse) {
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 4);
+  const IndexedMesh c = datasets::benchmark_object('C');
+  const MeltParams p = relative_params(c, 0.05, 0.5);
+  const KlFieldPtr constant = make_constant_kl(1.0);
+  const KlFieldPtr field = make_point_source_kl(Vec3<double>(1, 0, 0), 0.2, 0.8, 0.5, Falloff::kGaussian);
+  check_recorded_vectors<float>(c, p, constant, Execution::kSerial, 1, 40, "object C float, one part");
+  check_recorded_vectors<double>(c, p, field, Execution::kSerial, 3, 40, "object C double, 3 parts, kl field");
+  check_recorded_vectors<double>(c, p, constant, Execution::kParallel, 7, 40, "object C double, 7 parts on threads");
 }
 
 // The simulator reuses work across cycles (triangle lists, the next cycle's triangle terms

@@ -53,6 +53,7 @@ struct VertexGroup {
   const Index* count;  // triangles per vertex
   const std::uint8_t* alive;
   Real *px, *py, *pz;     // out: positions, 8 per column
+  bool record;            // write the normals and displacements (MeltWorkspace::record_vectors)
   Real *nx, *ny, *nz;     // out: normals
   Real *mx, *my, *mz;     // out: displacements
   Index* triangle_count;  // out
@@ -114,9 +115,11 @@ inline void move_group(const MoveConstants<Real>& c, const VertexGroup<Real>& g,
   px = has ? px + mx : px, py = has ? py + my : py, pz = has ? pz + mz : pz;  // Eq. 3.8
   store_lanes<Real>(g.px, px), store_lanes<Real>(g.py, py), store_lanes<Real>(g.pz, pz);
   interleave3<Real>(g.packed, px, py, pz);
-  store_lanes<Real>(g.nx, has ? Nx : zero), store_lanes<Real>(g.ny, has ? Ny : zero);
-  store_lanes<Real>(g.nz, has ? Nz : zero);
-  store_lanes<Real>(g.mx, mx), store_lanes<Real>(g.my, my), store_lanes<Real>(g.mz, mz);
+  if (g.record) {
+    store_lanes<Real>(g.nx, has ? Nx : zero), store_lanes<Real>(g.ny, has ? Ny : zero);
+    store_lanes<Real>(g.nz, has ? Nz : zero);
+    store_lanes<Real>(g.mx, mx), store_lanes<Real>(g.my, my), store_lanes<Real>(g.mz, mz);
+  }
   for (std::size_t i = 0; i < kLanes; ++i) g.triangle_count[i] = g.alive[i] ? g.count[i] : 0;
   max_move = lane_max<Real>(max_move,
                             lane_max<Real>(lane_max<Real>(lane_abs<Real>(mx), lane_abs<Real>(my)), lane_abs<Real>(mz)));
@@ -131,6 +134,7 @@ struct Sweep {
   MoveConstants<Real> c;
   VertexSums<Real>* sums;
   bool clear_sums;      // the moves clear the records they read (a sweep in parts)
+  bool record;          // write N, M and Nf (MeltWorkspace::record_vectors)
   const Index* counts;  // triangles per vertex (the list lengths)
   const VertexTriangles& adj;
   const DeformSchedule& plan;
@@ -170,10 +174,10 @@ void move_group_at(const Sweep<Real, ScaleAt>& w, std::size_t g, MoveMaxima<Real
   const std::size_t v = g * kLanes;
   const std::size_t n = std::min(kLanes, m.vertex_slots() - v);
   if (n == kLanes) {
-    const VertexGroup<Real> grp{
-        &w.sums[v],      w.clear_sums, &w.counts[v], &m.vertex_alive[v], P[0] + v, P[1] + v, P[2] + v,
-        N[0] + v,        N[1] + v,     N[2] + v,     D[0] + v,           D[1] + v, D[2] + v, &m.triangle_count[v],
-        w.packed + 3 * v};
+    const VertexGroup<Real> grp{&w.sums[v],      w.clear_sums, &w.counts[v], &m.vertex_alive[v], P[0] + v,
+                                P[1] + v,        P[2] + v,     w.record,     N[0] + v,           N[1] + v,
+                                N[2] + v,        D[0] + v,     D[1] + v,     D[2] + v,           &m.triangle_count[v],
+                                w.packed + 3 * v};
     move_group<Real, kMode>(w.c, grp, scale(v, grp.count, grp.alive), mx.move, mx.coord);
     return;
   }
@@ -188,13 +192,15 @@ void move_group_at(const Sweep<Real, ScaleAt>& w, std::size_t g, MoveMaxima<Real
   std::copy_n(&m.vertex_alive[v], n, pad_alive);
   std::copy_n(w.packed + 3 * v, 3 * n, pad_packed);
   move_group<Real, kMode>(w.c,
-                          {pad_sums, false, pad_count, pad_alive, pad_p[0], pad_p[1], pad_p[2], pad_n[0], pad_n[1],
-                           pad_n[2], pad_d[0], pad_d[1], pad_d[2], pad_tcount, pad_packed},
+                          {pad_sums, false, pad_count, pad_alive, pad_p[0], pad_p[1], pad_p[2], true, pad_n[0],
+                           pad_n[1], pad_n[2], pad_d[0], pad_d[1], pad_d[2], pad_tcount, pad_packed},
                           scale(v, pad_count, pad_alive), mx.move, mx.coord);
   for (int a = 0; a < 3; ++a) {
     std::copy_n(pad_p[a], n, P[a] + v);
-    std::copy_n(pad_n[a], n, N[a] + v);
-    std::copy_n(pad_d[a], n, D[a] + v);
+    if (w.record) {
+      std::copy_n(pad_n[a], n, N[a] + v);
+      std::copy_n(pad_d[a], n, D[a] + v);
+    }
   }
   std::copy_n(pad_tcount, n, &m.triangle_count[v]);
   std::copy_n(pad_packed, 3 * n, w.packed + 3 * v);
@@ -211,11 +217,12 @@ void sweep_block(const Sweep<Real, ScaleAt>& w, std::size_t b, std::size_t part,
   triangle_block_terms(m, w.packed, first, count, terms);
   Real* const FN[3] = {m.face_normal.x().data(), m.face_normal.y().data(), m.face_normal.z().data()};
   const std::uint8_t* const alive = m.triangle_alive.data();
-  for (std::size_t i = 0; i < count; ++i) {  // dead slots keep their face normal
-    FN[0][first + i] = alive[first + i] ? terms.nx[i] : FN[0][first + i];
-    FN[1][first + i] = alive[first + i] ? terms.ny[i] : FN[1][first + i];
-    FN[2][first + i] = alive[first + i] ? terms.nz[i] : FN[2][first + i];
-  }
+  if (w.record)
+    for (std::size_t i = 0; i < count; ++i) {  // dead slots keep their face normal
+      FN[0][first + i] = alive[first + i] ? terms.nx[i] : FN[0][first + i];
+      FN[1][first + i] = alive[first + i] ? terms.ny[i] : FN[1][first + i];
+      FN[2][first + i] = alive[first + i] ? terms.nz[i] : FN[2][first + i];
+    }
   std::memcpy(w.min_edge2 + first, terms.min_edge2, count * sizeof(float));
   const std::uint16_t* const owner = w.plan.owners();
   for (std::size_t i = 0; i < count; ++i) {
@@ -395,17 +402,16 @@ void deform_pass(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execu
   // A constant kl costs nothing per vertex: s = kg·kl is folded into one number.
   if (kl.is_constant()) {
     const auto s = static_cast<Real>(p.kg * kl.value(Vec3<double>::Zero()));
-    const Sweep<Real, Real> w{m,      c,           sums.data(),   clear_in_moves,    counts,
-                              ws.adj, ws.schedule, packed.data(), stored.slot.get(), min_edge2.data(),
-                              s};
+    const Sweep<Real, Real> w{m,      c,           sums.data(),   clear_in_moves,    ws.record_vectors, counts,
+                              ws.adj, ws.schedule, packed.data(), stored.slot.get(), min_edge2.data(),  s};
     ws.cycle_move_bound = sweep(w, p.deform, parts, exec);
   } else {
     auto scale_at = [&](std::size_t v) {
       return static_cast<Real>(p.kg * kl.value(m.position[v].template cast<double>()));
     };
-    const Sweep<Real, decltype(scale_at)> w{m,       c,           sums.data(),   clear_in_moves,    counts,
-                                            ws.adj,  ws.schedule, packed.data(), stored.slot.get(), min_edge2.data(),
-                                            scale_at};
+    const Sweep<Real, decltype(scale_at)> w{
+        m,      c,           sums.data(),   clear_in_moves,    ws.record_vectors, counts,
+        ws.adj, ws.schedule, packed.data(), stored.slot.get(), min_edge2.data(),  scale_at};
     ws.cycle_move_bound = sweep(w, p.deform, parts, exec);
   }
 }

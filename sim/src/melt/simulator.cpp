@@ -46,6 +46,7 @@ MeltSimulator<Real>::MeltSimulator(TriMesh<Real> mesh, MeltParams params, KlFiel
   sort_triangle_indices(mesh_);  // "once: sort triangle indices" before the first cycle
   for (std::size_t v = 0; v < mesh_.vertex_slots(); ++v) mesh_.reindex[v] = static_cast<Index>(v);
   prepare_workspace(*ws_, mesh_);
+  ws_->record_vectors = false;
 }
 
 template <class Real>
@@ -64,6 +65,16 @@ void MeltSimulator<Real>::set_params(const MeltParams& p) {
 template <class Real>
 void MeltSimulator<Real>::set_sweep_parts(std::size_t parts) {
   ws_->deform_parts = parts;
+}
+
+template <class Real>
+void MeltSimulator<Real>::set_record_vectors(bool on) {
+  ws_->record_vectors = on;
+}
+
+template <class Real>
+bool MeltSimulator<Real>::record_vectors() const {
+  return ws_->record_vectors;
 }
 
 template <class Real>

@@ -69,6 +69,10 @@ struct MeltWorkspace {
   /// Parts of the deformation sweep: 0 = one per thread TBB may use (1 for a serial cycle or
   /// a small mesh); tests set it to exercise other partitions (any count gives the same mesh).
   std::size_t deform_parts = 0;
+  /// Alg. 1 writes the mesh's N, M and Nf columns (vertex normals, moves, face normals). No
+  /// pass of the cycle reads them (each computes what it needs), so MeltSimulator turns this
+  /// off unless asked (set_record_vectors); `deform()` alone keeps it on.
+  bool record_vectors = true;
 
   // Deform: terms (unit normal + 3 unit edges) of the triangles of a parallel sweep that have a
   // corner owned by an earlier part, indexed by triangle slot (only those slots are written).

@@ -137,6 +137,13 @@ class MeltSimulator {
   /// 1 for a serial cycle or a small mesh). Any count gives bitwise the same mesh; tests set
   /// it to exercise partitions (halo vertices) independently of the thread count.
   void set_sweep_parts(std::size_t parts);
+  /// Whether Alg. 1 writes the mesh's N and M columns (vertex normal, last move) and Nf (face
+  /// normal). Off by default: no pass of the cycle reads them back (each computes what it
+  /// needs in registers), and their stores cost about 5 % of a 32k cycle (docs/melt-core.md,
+  /// issue 20 step 7); the columns then keep the values they had. Turn it on to inspect them
+  /// after step(): positions and topology are bitwise the same either way.
+  void set_record_vectors(bool on);
+  bool record_vectors() const;
   std::int64_t cycle() const { return cycle_; }
   bool empty() const;  ///< true once every triangle has melted away
 
@@ -151,7 +158,8 @@ class MeltSimulator {
 
 // ---- the individual algorithms, for tests and for callers that compose their own cycle ----
 
-/// Alg. 1 on all live vertices: face normals, vertex normals, M_E, and the move.
+/// Alg. 1 on all live vertices: face normals, vertex normals, M_E, and the move (all written
+/// to the mesh's columns, unlike MeltSimulator's cycle by default).
 template <class Real>
 void deform(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execution exec = Execution::kSerial);
 

@@ -146,10 +146,11 @@ struct TriMesh {
   // ---- vertex arrays (monograph Tab. of §3.5: e, P, N, M, t, i) ----
   std::vector<std::uint8_t> vertex_alive;  ///< e: 1 = live, 0 = deleted
   Vec3Columns<Real> position;              ///< P: object frame, mesh units
-  Vec3Columns<Real> normal;                ///< N: unit outward vertex normal (Eq. 2.10); 0 if undefined
-  Vec3Columns<Real> displacement;          ///< M: the move applied to P in the last cycle, mesh units
-  std::vector<Index> triangle_count;       ///< t: live triangles on the vertex (after the last cycle)
-  std::vector<Index> reindex;              ///< i: merge target of the last collapse pass (i == self if none)
+  // N, M and Nf are written by deform(), and by MeltSimulator only with set_record_vectors(true).
+  Vec3Columns<Real> normal;           ///< N: unit outward vertex normal (Eq. 2.10); 0 if undefined
+  Vec3Columns<Real> displacement;     ///< M: the move applied to P in the last cycle, mesh units
+  std::vector<Index> triangle_count;  ///< t: live triangles on the vertex (after the last cycle)
+  std::vector<Index> reindex;         ///< i: merge target of the last collapse pass (i == self if none)
 
   // ---- triangle arrays (e, a b c, Nf) ----
   std::vector<std::uint8_t> triangle_alive;  ///< e
