@@ -139,7 +139,7 @@ class MeltSimulator {
   void set_sweep_parts(std::size_t parts);
   /// Whether Alg. 1 writes the mesh's N and M columns (vertex normal, last move) and Nf (face
   /// normal). Off by default: no pass of the cycle reads them back (each computes what it
-  /// needs in registers), and their stores cost about 5 % of a 32k cycle (docs/melt-core.md,
+  /// needs in registers), and their stores cost 6-9 % of a serial 32k cycle (docs/melt-core.md,
   /// issue 20 step 7); the columns then keep the values they had. Turn it on to inspect them
   /// after step(): positions and topology are bitwise the same either way.
   void set_record_vectors(bool on);
