@@ -4,7 +4,9 @@
 // extended with uniform geodesic spheres of 32k, 100k and 1M triangles and two real scanned
 // meshes (the 75k bunny, the 871k refined dragon; both also in breadth-first order) — and the
 // OpenMesh half-edge peer in the same run;
-// and the cost of one row of the per-cycle statistics beside it.
+// and the cost of one row of the per-cycle statistics beside it; and the ceiling of two threads
+// on this machine: two serial cycles at once on their own copies of the mesh, pinned to CPU 0
+// and CPU 1, sharing no data (BM_IndependentCopies).
 //
 // Every benchmark melts its mesh for a warm-up (the UV spheres' pole regions collapse in the
 // first cycles), then times cycles from that state, restarting from it every
@@ -23,11 +25,18 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <algorithm>
+#include <chrono>
+#include <latch>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include "openmesh_peer.h"
+#include "pin_thread.h"
 
 namespace {
 
@@ -184,6 +193,47 @@ void BM_MeshStatistics(benchmark::State& state) {
                  (std::is_same_v<Real, float> ? "float" : "double"));
 }
 
+// `copies` serial cycles at once, each on its own copy of the warm state, made and melted by
+// a thread pinned to CPU k: no data is shared between them, so their summed throughput is the
+// most that `copies` threads can give on this machine, the ceiling of
+// BM_MeltCycle<Real>/mesh/parallel:1 on the same mesh. An iteration: every thread makes its copy,
+// all start together, each times kCyclesPerRestart cycles (the iteration's time is the slowest
+// copy's). Counters: each copy's ms per cycle, and ms_per_cycle = 1 / (summed cycles per ms).
+template <class Real>
+void BM_IndependentCopies(benchmark::State& state) {
+  const int id = static_cast<int>(state.range(0));
+  const auto copies = static_cast<std::size_t>(state.range(1));
+  const sim::MeltParams p = bench_params(input_mesh(id));
+  const sim::TriMesh<Real>& start = warm_state<Real>(id);
+  std::vector<double> copy_s(copies, 0.0), iteration_s(copies, 0.0);
+  for (auto _ : state) {
+    std::latch ready(static_cast<std::ptrdiff_t>(copies));
+    std::vector<std::thread> threads;
+    for (std::size_t k = 0; k < copies; ++k)
+      threads.emplace_back([&, k] {
+        bench::pin_this_thread(static_cast<unsigned>(k));
+        sim::MeltSimulator<Real> s(start, p, sim::make_constant_kl(1.0), sim::Execution::kSerial);
+        ready.arrive_and_wait();
+        const auto t0 = std::chrono::steady_clock::now();
+        for (int c = 0; c < kCyclesPerRestart; ++c) benchmark::DoNotOptimize(s.step());
+        iteration_s[k] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        copy_s[k] += iteration_s[k];
+      });
+    for (auto& t : threads) t.join();
+    state.SetIterationTime(*std::max_element(iteration_s.begin(), iteration_s.end()));
+  }
+  const auto cycles_per_copy = static_cast<double>(state.iterations() * kCyclesPerRestart);
+  double cycles_per_ms = 0;
+  for (std::size_t k = 0; k < copies; ++k) {
+    const double ms = copy_s[k] * 1e3 / cycles_per_copy;
+    state.counters["cpu" + std::to_string(k) + "_ms"] = ms;
+    cycles_per_ms += 1.0 / ms;
+  }
+  state.counters["ms_per_cycle"] = 1.0 / cycles_per_ms;
+  state.SetLabel(std::string(mesh_label(id)) + " " + std::to_string(copies) + (copies == 1 ? " copy " : " copies ") +
+                 (std::is_same_v<Real, float> ? "float" : "double"));
+}
+
 void meshes_and_modes(benchmark::internal::Benchmark* b) {
   for (int id : {0, 1, 2, 6, 5, 3, 7, 4, 8, 9})
     for (int parallel : {0, 1}) b->Args({id, parallel});
@@ -198,6 +248,15 @@ void peer_meshes(benchmark::internal::Benchmark* b) {
   b->MinTime(0.5);
 }
 
+void copies_meshes(benchmark::internal::Benchmark* b) {
+  for (int id : {2, 6, 9, 8})
+    for (int copies : {1, 2}) b->Args({id, copies});
+  b->ArgNames({"mesh", "copies"});
+  b->Unit(benchmark::kMillisecond);
+  b->MinTime(0.5);
+  b->UseManualTime();
+}
+
 }  // namespace
 
 BENCHMARK(BM_MeltCycle<float>)->Apply(meshes_and_modes);
@@ -205,5 +264,7 @@ BENCHMARK(BM_MeltCycle<double>)->Apply(meshes_and_modes);
 BENCHMARK(BM_OpenMeshPeer<float>)->Apply(peer_meshes);
 BENCHMARK(BM_MeshStatistics<double>)->Apply(meshes_and_modes);
 BENCHMARK(BM_OpenMeshPeer<double>)->Apply(peer_meshes);
+BENCHMARK(BM_IndependentCopies<float>)->Apply(copies_meshes);
+BENCHMARK(BM_IndependentCopies<double>)->Apply(copies_meshes);
 
 BENCHMARK_MAIN();
