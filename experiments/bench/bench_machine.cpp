@@ -35,7 +35,8 @@ void BM_LoadLatency(benchmark::State& state) {
   std::vector<std::uint64_t> order(lines);
   std::iota(order.begin(), order.end(), 0);
   std::mt19937_64 rng(42);
-  for (std::size_t i = lines - 1; i > 0; --i) std::swap(order[i], order[std::uniform_int_distribution<std::size_t>(0, i - 1)(rng)]);
+  for (std::size_t i = lines - 1; i > 0; --i)
+    std::swap(order[i], order[std::uniform_int_distribution<std::size_t>(0, i - 1)(rng)]);
   std::vector<std::uint64_t> next(lines * kWordsPerLine);
   for (std::size_t i = 0; i < lines; ++i) next[i * kWordsPerLine] = order[i] * kWordsPerLine;
   constexpr std::int64_t kLoadsPerIteration = 1 << 16;

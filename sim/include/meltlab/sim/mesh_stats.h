@@ -4,8 +4,9 @@
 //
 // A MeshStatistics keeps its buffers between calls, so a run that asks for a row every cycle
 // allocates nothing after the first. The per-triangle and per-edge measures (square roots,
-// divisions, arccosines) are evaluated in parallel into arrays and then summed in mesh order
-// by one thread: every value is that of a serial evaluation bit for bit, whatever the number
+// divisions, arccosines) are evaluated in parallel into arrays (the triangles' eight at a time on
+// SIMD lanes, with the scalar operations in their order) and then summed in mesh order by one
+// thread: every value is that of a serial evaluation bit for bit, whatever the number
 // of threads (`mesh_quality` and `euler_counts(TriMesh)` are this class on a fresh object; its
 // counts are tested against the general polygon-loop check, `check_topology`).
 
@@ -14,6 +15,7 @@
 #include <meltlab/sim/topology.h>
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace meltlab::sim {
@@ -32,8 +34,18 @@ class MeshStatistics {
  private:
   struct TriangleTerms {
     double half_area = 0, six_volume = 0, twist_deg = 0, quality = 0;
-    Vec3<double> unit_normal = Vec3<double>::Zero();
   };
+  /// Bounding box of the corners of the live triangles.
+  struct Box {
+    Vec3<double> lo = Vec3<double>::Constant(std::numeric_limits<double>::infinity());
+    Vec3<double> hi = Vec3<double>::Constant(-std::numeric_limits<double>::infinity());
+    void join(const Box& o) {
+      lo = lo.cwiseMin(o.lo);
+      hi = hi.cwiseMax(o.hi);
+    }
+  };
+  template <class Real>
+  void triangle_terms(const TriMesh<Real>& m, std::size_t begin, std::size_t end, Box& box);
   /// One use of an undirected edge (lo, hi), lo <= hi, filed under lo: `tri` is the using
   /// triangle, or ~tri for a degenerate one (left out of the Euler counts).
   struct EdgeUse {
@@ -46,7 +58,8 @@ class MeshStatistics {
 
   MeshStats stats_;
   std::vector<TriangleTerms> tri_;
-  std::vector<std::size_t> start_;  ///< uses of edges filed under lo: use_[start_[lo] .. start_[lo + 1])
+  std::vector<Vec3<double>> unit_normal_;  ///< of each triangle slot, apart: the dihedral measures read them
+  std::vector<std::size_t> start_;         ///< uses of edges filed under lo: use_[start_[lo] .. start_[lo + 1])
   std::vector<EdgeUse> use_;
   std::vector<EdgeTerms> edge_;  ///< at the first use of each edge
   std::vector<std::uint8_t> used_;
