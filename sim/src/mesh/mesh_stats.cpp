@@ -113,6 +113,39 @@ void MeshStatistics::triangle_terms(const TriMesh<Real>& m, std::size_t begin, s
   }
 }
 
+// The length and, for an edge of two uses (ta >= 0), the dihedral measure of `count` <= kLanes
+// edges on eight lanes, into edge_ at each edge's first use: the operations of
+// (p_lo - p_hi).norm() and quality.cpp's dihedral_deg in their order, so bitwise the scalar values.
+template <class Real>
+void MeshStatistics::edge_terms(const TriMesh<Real>& m, const PendingEdge* pending, std::size_t count) {
+  using L = Lanes<double>;
+  double gathered[3][3][kLanes] = {};  // the edge vector, n_a, n_b; axis; lane
+  for (std::size_t i = 0; i < count; ++i) {
+    const PendingEdge& q = pending[i];
+    const Vec3<double> d = m.position[static_cast<std::size_t>(q.lo)].template cast<double>() -
+                           m.position[static_cast<std::size_t>(q.hi)].template cast<double>();
+    for (int a = 0; a < 3; ++a) gathered[0][a][i] = d[a];
+    if (q.ta < 0) continue;
+    const Vec3<double>& na = unit_normal_[static_cast<std::size_t>(q.ta)];
+    const Vec3<double>& nb = unit_normal_[static_cast<std::size_t>(q.tb)];
+    for (int a = 0; a < 3; ++a) gathered[1][a][i] = na[a], gathered[2][a][i] = nb[a];
+  }
+  L v[3][3];
+  for (int k = 0; k < 3; ++k)
+    for (int a = 0; a < 3; ++a) v[k][a] = load_lanes<double>(gathered[k][a]);
+  auto dot = [](const L(&u)[3], const L(&w)[3]) { return (u[0] * w[0] + u[1] * w[1]) + u[2] * w[2]; };
+  const L length = lane_sqrt<double>(dot(v[0], v[0]));
+  const L nu = lane_sqrt<double>(dot(v[1], v[1])), nv = lane_sqrt<double>(dot(v[2], v[2]));
+  const LaneMask<double> no_angle = (nu == 0.0) | (nv == 0.0);
+  L cos = dot(v[1], v[2]) / (nu * nv);
+  cos = cos < -1.0 ? broadcast(-1.0) : (1.0 < cos ? broadcast(1.0) : cos);  // std::clamp
+  for (std::size_t i = 0; i < count; ++i) {
+    EdgeTerms& E = edge_[pending[i].use];
+    E.length = length[i];
+    if (pending[i].ta >= 0) E.dihedral_deg = no_angle[i] ? 0.0 : std::acos(cos[i]) * kDegPerRad;
+  }
+}
+
 template <class Real>
 const MeshStats& MeshStatistics::compute(const TriMesh<Real>& m) {
   const std::size_t nt = m.triangle_slots(), nv = m.vertex_slots();
@@ -192,9 +225,12 @@ const MeshStats& MeshStatistics::compute(const TriMesh<Real>& m) {
   start_[0] = 0;
 
   // 4. Each list sorted by hi (stable: a few uses per vertex), and each edge's length and, for
-  //    an edge of two uses, the dihedral measure, at the edge's first use; in parallel.
+  //    an edge of two uses, the dihedral measure, at the edge's first use, eight edges at a time
+  //    on lanes; in parallel.
   edge_.resize(use_.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const tbb::blocked_range<std::size_t>& range) {
+    PendingEdge pending[kLanes];
+    std::size_t n_pending = 0;
     for (std::size_t lo = range.begin(); lo != range.end(); ++lo) {
       const std::size_t b = start_[lo], e = start_[lo + 1];
       for (std::size_t i = b + 1; i < e; ++i) {
@@ -203,20 +239,20 @@ const MeshStats& MeshStatistics::compute(const TriMesh<Real>& m) {
         for (; j > b && use_[j - 1].hi > x.hi; --j) use_[j] = use_[j - 1];
         use_[j] = x;
       }
-      const Vec3<double> p_lo = m.position[lo].template cast<double>();
       for (std::size_t i = b; i < e;) {
         std::size_t j = i + 1;
         while (j < e && use_[j].hi == use_[i].hi) ++j;
-        EdgeTerms& E = edge_[i];
-        E.length = (p_lo - m.position[static_cast<std::size_t>(use_[i].hi)].template cast<double>()).norm();
+        PendingEdge& q = pending[n_pending++];
+        q = {i, static_cast<Index>(lo), use_[i].hi, -1, -1};
         if (j - i == 2) {
-          const auto ta = static_cast<std::size_t>(use_[i].tri >= 0 ? use_[i].tri : ~use_[i].tri);
-          const auto tb = static_cast<std::size_t>(use_[i + 1].tri >= 0 ? use_[i + 1].tri : ~use_[i + 1].tri);
-          E.dihedral_deg = dihedral_deg(unit_normal_[ta], unit_normal_[tb]);
+          q.ta = use_[i].tri >= 0 ? use_[i].tri : ~use_[i].tri;
+          q.tb = use_[i + 1].tri >= 0 ? use_[i + 1].tri : ~use_[i + 1].tri;
         }
+        if (n_pending == kLanes) edge_terms(m, pending, n_pending), n_pending = 0;
         i = j;
       }
     }
+    edge_terms(m, pending, n_pending);
   });
 
   // 5. The edges in (lo, hi) order (one thread): the sums of the quality measures, and the
@@ -272,6 +308,8 @@ const MeshStats& MeshStatistics::compute(const TriMesh<Real>& m) {
 template const MeshStats& MeshStatistics::compute(const TriMesh<float>&);
 template void MeshStatistics::triangle_terms(const TriMesh<float>&, std::size_t, std::size_t, Box&);
 template void MeshStatistics::triangle_terms(const TriMesh<double>&, std::size_t, std::size_t, Box&);
+template void MeshStatistics::edge_terms(const TriMesh<float>&, const PendingEdge*, std::size_t);
+template void MeshStatistics::edge_terms(const TriMesh<double>&, const PendingEdge*, std::size_t);
 template const MeshStats& MeshStatistics::compute(const TriMesh<double>&);
 
 }  // namespace meltlab::sim

@@ -55,6 +55,14 @@ class MeshStatistics {
   struct EdgeTerms {
     double length = 0, dihedral_deg = 0;
   };
+  /// An edge waiting for its terms: its first use, its vertices and, for an edge of two uses,
+  /// the two triangles (else -1).
+  struct PendingEdge {
+    std::size_t use;
+    Index lo, hi, ta, tb;
+  };
+  template <class Real>
+  void edge_terms(const TriMesh<Real>& m, const PendingEdge* pending, std::size_t count);
 
   MeshStats stats_;
   std::vector<TriangleTerms> tri_;
