@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """Summarise meltlab_bench_cycle's JSON: median ms per cycle for every mesh, mode and
 precision, the speed-up of the parallel cycle, the ratio to the OpenMesh peer measured
-in the same run and the share of the serial cycle spent in Alg. 1 / Alg. 2; writes
+in the same run, the share of the serial cycle spent in Alg. 1 / Alg. 2, the two-thread
+ceiling (two serial cycles at once on their own copies: BM_IndependentCopies' throughput
+ratio, where measured) and the serial cost of one statistics row; writes
 bench_cycle.png (time per cycle against triangles) beside the JSON.
 
 Usage: report/bench_summary.py bench_cycle.json
@@ -41,10 +43,20 @@ def main(argv):
         m = re.match(r"(\S+) (\S+) (\S+) ?(\S+)?", label)
         if not m:
             continue
+        family = b.get("run_name", b["name"]).split("<")[0]
         mesh = m.group(1)
-        mode = m.group(2) if m.group(2) != "openmesh-peer" else "openmesh"
-        prec = m.group(4) if mode == "openmesh" else m.group(3)
         ms = b["real_time"] if b.get("time_unit") == "ms" else b["real_time"] / 1e6
+        if family == "BM_MeltCycle":
+            mode, prec = m.group(2), m.group(3)
+        elif family == "BM_OpenMeshPeer":
+            mode, prec = "openmesh", m.group(4)
+        elif family == "BM_MeshStatistics":  # one statistics row, not a cycle
+            mode, prec = "stats-" + m.group(2), m.group(3)
+        elif family == "BM_IndependentCopies":  # "<mesh> <n> copy|copies <prec>": 1 / summed throughput
+            mode, prec = "copies" + m.group(2), m.group(4)
+            ms = b.get("ms_per_cycle", ms)
+        else:
+            continue
         rows[(mesh, mode, prec)] = (ms, b.get("triangles", 0.0), b.get("deform_ms"), b.get("collapse_ms"))
     meshes = []
     for (mesh, _, _) in rows:
@@ -52,7 +64,8 @@ def main(argv):
             meshes.append(mesh)
     ctx = doc.get("context", {})
     print(f"machine: {ctx.get('num_cpus')} CPUs at {ctx.get('mhz_per_cpu')} MHz; median ms per cycle")
-    hdr = f"{'mesh':<12}{'prec':<7}{'triangles':>10}{'serial':>9}{'parallel':>9}{'speed-up':>9}{'OpenMesh':>10}{'peer/ours':>10}{'Alg.1/2 %':>10}{'  monograph CPU/GPU (2009)'}"
+    hdr = (f"{'mesh':<12}{'prec':<7}{'triangles':>10}{'serial':>9}{'parallel':>9}{'speed-up':>9}{'ceiling':>9}"
+           f"{'OpenMesh':>10}{'peer/ours':>10}{'Alg.1/2 %':>10}{'stats row':>10}{'  monograph CPU/GPU (2009)'}")
     print(hdr)
     print("-" * len(hdr))
     for mesh in meshes:
@@ -60,13 +73,16 @@ def main(argv):
             s = rows.get((mesh, "serial", prec))
             p = rows.get((mesh, "parallel", prec))
             o = rows.get((mesh, "openmesh", prec))
+            c1, c2 = rows.get((mesh, "copies1", prec)), rows.get((mesh, "copies2", prec))
+            st = rows.get((mesh, "stats-serial", prec))
             if not s:
                 continue
             mono = MONOGRAPH_MS.get(mesh, ("", ""))
             print(f"{mesh:<12}{prec:<7}{s[1]:>10.0f}{s[0]:>9.3f}"
                   f"{(p[0] if p else float('nan')):>9.3f}{(s[0] / p[0] if p else float('nan')):>9.2f}"
+                  f"{(c1[0] / c2[0] if c1 and c2 else float('nan')):>9.2f}"
                   f"{(o[0] if o else float('nan')):>10.3f}{(o[0] / s[0] if o else float('nan')):>10.2f}"
-                  f"{share(s):>10}"
+                  f"{share(s):>10}{(st[0] if st else float('nan')):>10.3f}"
                   f"  {mono[0]:>5} / {mono[1]}")
     fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
     for mode, style in (("serial", "o-"), ("parallel", "s-"), ("openmesh", "^--")):

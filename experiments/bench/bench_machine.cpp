@@ -4,13 +4,20 @@
 //    64-byte line, on CPU `cpu`: where the L2 ends and how much of the L3 this CPU gets;
 //  - BM_ReadBandwidth: the sum of a buffer of `mb` MB on CPU `cpu` (bytes per second);
 //  - BM_LineRoundTrip: one cache line passed between threads on CPU 0 and CPU 1 and back: what a
-//    value written on one CPU and read on the other costs.
+//    value written on one CPU and read on the other costs;
+//  - BM_ParallelRegionAfterGap: a TBB parallel_for of two 20 µs tasks after `gap_us` of serial work
+//    (the melt cycle's passes, a statistics row): the time above 20 µs is what starting the region
+//    costs, small while the worker still spins, large once it has gone to sleep.
 // All pinned with pthread_setaffinity_np; on a machine with one CPU both "CPUs" are the same.
 
 #include <benchmark/benchmark.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <numeric>
 #include <random>
@@ -86,6 +93,27 @@ void BM_LineRoundTrip(benchmark::State& state) {
   unpin_this_thread();
 }
 
+void spin_us(double us) {
+  const auto t0 = std::chrono::steady_clock::now();
+  while (std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() < us) {
+  }
+}
+
+void BM_ParallelRegionAfterGap(benchmark::State& state) {
+  const auto gap_us = static_cast<double>(state.range(0));
+  constexpr double kTaskUs = 20;
+  double region_us = 0;
+  for (auto _ : state) {
+    spin_us(gap_us);
+    const auto t0 = std::chrono::steady_clock::now();
+    tbb::parallel_for(
+        tbb::blocked_range<int>(0, 2, 1), [](const tbb::blocked_range<int>&) { spin_us(kTaskUs); },
+        tbb::simple_partitioner());
+    region_us += std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+  }
+  state.counters["start_us"] = region_us / static_cast<double>(state.iterations()) - kTaskUs;
+}
+
 void latency_args(benchmark::internal::Benchmark* b) {
   for (int cpu : {0, 1})
     for (int kb : {64, 512, 1024, 2048, 4096, 8192, 16384, 65536}) b->Args({cpu, kb});
@@ -97,5 +125,9 @@ void latency_args(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_LoadLatency)->Apply(latency_args)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ReadBandwidth)->ArgsProduct({{0, 1}, {256}})->ArgNames({"cpu", "mb"})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LineRoundTrip)->Unit(benchmark::kNanosecond);
+BENCHMARK(BM_ParallelRegionAfterGap)
+    ->ArgsProduct({{0, 50, 100, 200, 500, 1000, 5000}})
+    ->ArgNames({"gap_us"})
+    ->Unit(benchmark::kMicrosecond);
 
 BENCHMARK_MAIN();
