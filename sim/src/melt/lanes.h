@@ -1,8 +1,8 @@
 #pragma once
-// Private to the melt cycle: eight lanes of a real number as one SIMD value (GCC/Clang
-// vector extension; the compiler maps it to the machine's registers: one AVX register for
-// float, one AVX-512 register or two AVX registers for double) and the shuffles that move
-// data between per-element records and lanes:
+// Private to sim/src (the melt cycle, and the per-cycle statistics in mesh/mesh_stats.cpp): eight
+// lanes of a real number as one SIMD value (GCC/Clang vector extension; the compiler maps it to
+// the machine's registers: one AVX register for float, one AVX-512 register or two AVX registers
+// for double) and the shuffles that move data between per-element records and lanes:
 //   - transpose8: eight records of eight numbers <-> eight lanes of one number each;
 //   - deinterleave3 / interleave3: eight packed xyz triples (Vec3 arrays) <-> x, y, z lanes.
 // Arithmetic on lanes is element by element with the same IEEE operations as scalar code

@@ -99,7 +99,7 @@ void MeshStatistics::triangle_terms(const TriMesh<Real>& m, std::size_t begin, s
   sub(p[2], p[1], bc);
   sub(p[0], p[2], ca);
   const L s2 = (dot(e1, e1) + dot(bc, bc)) + dot(ca, ca);
-  constexpr double k4Sqrt3 = 4.0 * 1.7320508075688772;  // 4 * std::sqrt(3.0), both exact roundings
+  constexpr double k4Sqrt3 = 4.0 * std::numbers::sqrt3;  // = 4.0 * std::sqrt(3.0): both correctly rounded
   const L quality = s2 == 0.0 ? L{} : (k4Sqrt3 * half_area) / s2;
 
   for (std::size_t i = 0; i < end - begin; ++i) {

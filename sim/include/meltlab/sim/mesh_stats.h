@@ -4,9 +4,9 @@
 //
 // A MeshStatistics keeps its buffers between calls, so a run that asks for a row every cycle
 // allocates nothing after the first. The per-triangle and per-edge measures (square roots,
-// divisions, arccosines) are evaluated in parallel into arrays (the triangles' eight at a time on
-// SIMD lanes, with the scalar operations in their order) and then summed in mesh order by one
-// thread: every value is that of a serial evaluation bit for bit, whatever the number
+// divisions, arccosines) are evaluated in parallel into arrays (eight triangles or edges at a
+// time on SIMD lanes, with the scalar operations in their order) and then summed in mesh order by
+// one thread: every value is that of a serial evaluation bit for bit, whatever the number
 // of threads (`mesh_quality` and `euler_counts(TriMesh)` are this class on a fresh object; its
 // counts are tested against the general polygon-loop check, `check_topology`).
 
