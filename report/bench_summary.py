@@ -64,7 +64,7 @@ def main(argv):
             meshes.append(mesh)
     ctx = doc.get("context", {})
     print(f"machine: {ctx.get('num_cpus')} CPUs at {ctx.get('mhz_per_cpu')} MHz; median ms per cycle")
-    hdr = (f"{'mesh':<12}{'prec':<7}{'triangles':>10}{'serial':>9}{'parallel':>9}{'speed-up':>9}{'ceiling':>9}"
+    hdr = (f"{'mesh':<14}{'prec':<7}{'triangles':>10}{'serial':>9}{'parallel':>9}{'speed-up':>9}{'ceiling':>9}"
            f"{'OpenMesh':>10}{'peer/ours':>10}{'Alg.1/2 %':>10}{'stats row':>10}{'  monograph CPU/GPU (2009)'}")
     print(hdr)
     print("-" * len(hdr))
@@ -78,7 +78,7 @@ def main(argv):
             if not s:
                 continue
             mono = MONOGRAPH_MS.get(mesh, ("", ""))
-            print(f"{mesh:<12}{prec:<7}{s[1]:>10.0f}{s[0]:>9.3f}"
+            print(f"{mesh:<14}{prec:<7}{s[1]:>10.0f}{s[0]:>9.3f}"
                   f"{(p[0] if p else float('nan')):>9.3f}{(s[0] / p[0] if p else float('nan')):>9.2f}"
                   f"{(c1[0] / c2[0] if c1 and c2 else float('nan')):>9.2f}"
                   f"{(o[0] if o else float('nan')):>10.3f}{(o[0] / s[0] if o else float('nan')):>10.2f}"
