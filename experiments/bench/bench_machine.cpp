@@ -1,5 +1,5 @@
 // The machine's limits that the parallel melt cycle and the renderers run into, measured in the
-// same run as they are (docs/melt-core.md, "The machine's limits"):
+// same run as they are (docs/melt-core.md, "Issue 20, step 8"):
 //  - BM_LoadLatency: dependent loads over a random cycle through a buffer of `kb` KB, one load per
 //    64-byte line, on CPU `cpu`: where the L2 ends and how much of the L3 this CPU gets;
 //  - BM_ReadBandwidth: the sum of a buffer of `mb` MB on CPU `cpu` (bytes per second);

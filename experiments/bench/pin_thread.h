@@ -1,7 +1,7 @@
 #pragma once
 // Benchmarks only: run the calling thread on one CPU (Linux), so a measurement names the CPU it
 // was taken on. The two vCPUs of the development VM differ in the cache they share with other
-// tenants (docs/melt-core.md, "The machine's limits").
+// tenants (docs/melt-core.md, "Issue 20, step 8").
 
 #include <pthread.h>
 #include <sched.h>

@@ -24,6 +24,14 @@ constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 bool degenerate(const Triangle& t) { return t[0] == t[1] || t[1] == t[2] || t[2] == t[0]; }
 
+using L = Lanes<double>;
+
+/// Eigen's order for a three-term dot product: (x + y) + z.
+L dot3(const L (&u)[3], const L (&v)[3]) { return (u[0] * v[0] + u[1] * v[1]) + u[2] * v[2]; }
+
+/// std::clamp(c, -1.0, 1.0), lane by lane (quality.cpp's cosine).
+L clamp_unit(L c) { return c < -1.0 ? broadcast(-1.0) : (1.0 < c ? broadcast(1.0) : c); }
+
 }  // namespace
 
 // The measures of the live triangles among slots [begin, end), end - begin <= kLanes, on eight
@@ -34,7 +42,6 @@ bool degenerate(const Triangle& t) { return t[0] == t[1] || t[1] == t[2] || t[2]
 // store nothing.
 template <class Real>
 void MeshStatistics::triangle_terms(const TriMesh<Real>& m, std::size_t begin, std::size_t end, Box& box) {
-  using L = Lanes<double>;
   double gathered[3][3][kLanes] = {};  // corner, axis, lane
   bool live[kLanes] = {};
   for (std::size_t i = 0; i < end - begin; ++i) {
@@ -57,7 +64,6 @@ void MeshStatistics::triangle_terms(const TriMesh<Real>& m, std::size_t begin, s
     out[1] = u[2] * v[0] - u[0] * v[2];
     out[2] = u[0] * v[1] - u[1] * v[0];
   };
-  auto dot = [](const L(&u)[3], const L(&v)[3]) { return (u[0] * v[0] + u[1] * v[1]) + u[2] * v[2]; };
   auto sub = [](const L(&u)[3], const L(&v)[3], L(&out)[3]) {
     for (int a = 0; a < 3; ++a) out[a] = u[a] - v[a];
   };
@@ -66,11 +72,11 @@ void MeshStatistics::triangle_terms(const TriMesh<Real>& m, std::size_t begin, s
   sub(p[1], p[0], e1);
   sub(p[2], p[0], e2);
   cross(e1, e2, n);
-  const L n2 = dot(n, n);
-  const L half_area = 0.5 * lane_sqrt<double>(n2);
+  const L n2 = dot3(n, n);
+  const L n_len = lane_sqrt<double>(n2);  // |n|: the area's and the unit normal's
+  const L half_area = 0.5 * n_len;
   cross(p[1], p[2], c);
-  const L six_volume = dot(p[0], c);
-  const L n_len = lane_sqrt<double>(n2);
+  const L six_volume = dot3(p[0], c);
   const auto has_normal = n2 > 0.0;
   L unit[3];
   for (int a = 0; a < 3; ++a) unit[a] = has_normal ? n[a] / n_len : L{};
@@ -87,10 +93,9 @@ void MeshStatistics::triangle_terms(const TriMesh<Real>& m, std::size_t begin, s
       median[a] = 0.5 * (vj[a] + vk[a]) - vi[a];
       midline[a] = 0.5 * (vk[a] - vj[a]);
     }
-    const L nu = lane_sqrt<double>(dot(median, median)), nv = lane_sqrt<double>(dot(midline, midline));
+    const L nu = lane_sqrt<double>(dot3(median, median)), nv = lane_sqrt<double>(dot3(midline, midline));
     degenerate_twist |= (nu == 0.0) | (nv == 0.0);
-    L cos = dot(median, midline) / (nu * nv);
-    cos = cos < -1.0 ? broadcast(-1.0) : (1.0 < cos ? broadcast(1.0) : cos);  // std::clamp
+    const L cos = clamp_unit(dot3(median, midline) / (nu * nv));
     max_cos = lane_max<double>(max_cos, cos);
   }
 
@@ -98,7 +103,7 @@ void MeshStatistics::triangle_terms(const TriMesh<Real>& m, std::size_t begin, s
   L bc[3], ca[3];
   sub(p[2], p[1], bc);
   sub(p[0], p[2], ca);
-  const L s2 = (dot(e1, e1) + dot(bc, bc)) + dot(ca, ca);
+  const L s2 = (dot3(e1, e1) + dot3(bc, bc)) + dot3(ca, ca);
   constexpr double k4Sqrt3 = 4.0 * std::numbers::sqrt3;  // = 4.0 * std::sqrt(3.0): both correctly rounded
   const L quality = s2 == 0.0 ? L{} : (k4Sqrt3 * half_area) / s2;
 
@@ -118,7 +123,6 @@ void MeshStatistics::triangle_terms(const TriMesh<Real>& m, std::size_t begin, s
 // (p_lo - p_hi).norm() and quality.cpp's dihedral_deg in their order, so bitwise the scalar values.
 template <class Real>
 void MeshStatistics::edge_terms(const TriMesh<Real>& m, const PendingEdge* pending, std::size_t count) {
-  using L = Lanes<double>;
   double gathered[3][3][kLanes] = {};  // the edge vector, n_a, n_b; axis; lane
   for (std::size_t i = 0; i < count; ++i) {
     const PendingEdge& q = pending[i];
@@ -133,12 +137,10 @@ void MeshStatistics::edge_terms(const TriMesh<Real>& m, const PendingEdge* pendi
   L v[3][3];
   for (int k = 0; k < 3; ++k)
     for (int a = 0; a < 3; ++a) v[k][a] = load_lanes<double>(gathered[k][a]);
-  auto dot = [](const L(&u)[3], const L(&w)[3]) { return (u[0] * w[0] + u[1] * w[1]) + u[2] * w[2]; };
-  const L length = lane_sqrt<double>(dot(v[0], v[0]));
-  const L nu = lane_sqrt<double>(dot(v[1], v[1])), nv = lane_sqrt<double>(dot(v[2], v[2]));
+  const L length = lane_sqrt<double>(dot3(v[0], v[0]));
+  const L nu = lane_sqrt<double>(dot3(v[1], v[1])), nv = lane_sqrt<double>(dot3(v[2], v[2]));
   const LaneMask<double> no_angle = (nu == 0.0) | (nv == 0.0);
-  L cos = dot(v[1], v[2]) / (nu * nv);
-  cos = cos < -1.0 ? broadcast(-1.0) : (1.0 < cos ? broadcast(1.0) : cos);  // std::clamp
+  const L cos = clamp_unit(dot3(v[1], v[2]) / (nu * nv));
   for (std::size_t i = 0; i < count; ++i) {
     EdgeTerms& E = edge_[pending[i].use];
     E.length = length[i];
