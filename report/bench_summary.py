@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Summarise meltlab_bench_cycle's JSON: median ms per cycle for every mesh, mode and
 precision, the speed-up of the parallel cycle, the ratio to the OpenMesh peer measured
-in the same run, the share of the serial cycle spent in Alg. 1 / Alg. 2, the two-thread
+in the same run, the share of the serial cycle spent in Alg. 1 / Alg. 2, the parallel cycle's work on one
+thread (its sweep in two parts, BM_MeltCycleInParts, ms), the two-thread
 ceiling (two serial cycles at once on their own copies: BM_IndependentCopies' throughput
 ratio, where measured) and the serial cost of one statistics row; writes
 bench_cycle.png (time per cycle against triangles) beside the JSON.
@@ -40,7 +41,7 @@ def main(argv):
         if b.get("aggregate_name", "median") != "median":
             continue
         label = b.get("label", "")
-        m = re.match(r"(\S+) (\S+) (\S+) ?(\S+)?", label)
+        m = re.match(r"(\S+) (\S+) (\S+) ?(\S+)?(?: (\S+))?", label)
         if not m:
             continue
         family = b.get("run_name", b["name"]).split("<")[0]
@@ -52,6 +53,8 @@ def main(argv):
             mode, prec = "openmesh", m.group(4)
         elif family == "BM_MeshStatistics":  # one statistics row, not a cycle
             mode, prec = "stats-" + m.group(2), m.group(3)
+        elif family == "BM_MeltCycleInParts":  # "<mesh> <n> parts serial <prec>": the parallel work on one thread
+            mode, prec = "parts" + m.group(2), m.group(5)
         elif family == "BM_IndependentCopies":  # "<mesh> <n> copy|copies <prec>": 1 / summed throughput
             mode, prec = "copies" + m.group(2), m.group(4)
             ms = b.get("ms_per_cycle", ms)
@@ -64,7 +67,7 @@ def main(argv):
             meshes.append(mesh)
     ctx = doc.get("context", {})
     print(f"machine: {ctx.get('num_cpus')} CPUs at {ctx.get('mhz_per_cpu')} MHz; median ms per cycle")
-    hdr = (f"{'mesh':<14}{'prec':<7}{'triangles':>10}{'serial':>9}{'parallel':>9}{'speed-up':>9}{'ceiling':>9}"
+    hdr = (f"{'mesh':<14}{'prec':<7}{'triangles':>10}{'serial':>9}{'parallel':>9}{'speed-up':>9}{'2 parts':>9}{'ceiling':>9}"
            f"{'OpenMesh':>10}{'peer/ours':>10}{'Alg.1/2 %':>10}{'stats row':>10}{'  monograph CPU/GPU (2009)'}")
     print(hdr)
     print("-" * len(hdr))
@@ -75,11 +78,13 @@ def main(argv):
             o = rows.get((mesh, "openmesh", prec))
             c1, c2 = rows.get((mesh, "copies1", prec)), rows.get((mesh, "copies2", prec))
             st = rows.get((mesh, "stats-serial", prec))
+            p2 = rows.get((mesh, "parts2", prec))
             if not s:
                 continue
             mono = MONOGRAPH_MS.get(mesh, ("", ""))
             print(f"{mesh:<14}{prec:<7}{s[1]:>10.0f}{s[0]:>9.3f}"
                   f"{(p[0] if p else float('nan')):>9.3f}{(s[0] / p[0] if p else float('nan')):>9.2f}"
+                  f"{(p2[0] if p2 else float('nan')):>9.3f}"
                   f"{(c1[0] / c2[0] if c1 and c2 else float('nan')):>9.2f}"
                   f"{(o[0] if o else float('nan')):>10.3f}{(o[0] / s[0] if o else float('nan')):>10.2f}"
                   f"{share(s):>10}{(st[0] if st else float('nan')):>10.3f}"

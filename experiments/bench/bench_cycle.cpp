@@ -86,6 +86,12 @@ const sim::IndexedMesh& input_mesh(int id) {
     case 9:
       m = sim::reorder_breadth_first(sim::load_mesh(datasets::dataset_path("bunny00")).mesh).mesh;
       break;
+    case 10:
+      m = sim::reorder_breadth_first(datasets::geodesic_sphere(40, 0.05)).mesh;
+      break;
+    case 11:
+      m = sim::reorder_for_locality(datasets::geodesic_sphere(40, 0.05)).mesh;
+      break;
     default:
       break;
   }
@@ -93,8 +99,9 @@ const sim::IndexedMesh& input_mesh(int id) {
 }
 
 const char* mesh_label(int id) {
-  static const char* labels[] = {"A_192",     "B_16k",        "C_32k",       "geodesic_100k", "geodesic_1M",
-                                 "bunny_75k", "geodesic_32k", "dragon_871k", "dragon_bfs",    "bunny_bfs"};
+  static const char* labels[] = {
+      "A_192",        "B_16k",       "C_32k",      "geodesic_100k", "geodesic_1M",      "bunny_75k",
+      "geodesic_32k", "dragon_871k", "dragon_bfs", "bunny_bfs",     "geodesic_32k_bfs", "geodesic_32k_morton"};
   return labels[id];
 }
 
@@ -147,6 +154,43 @@ void BM_MeltCycle(benchmark::State& state) {
   state.counters["glued_repair_ms"] = benchmark::Counter(glued_repair_ms, benchmark::Counter::kAvgIterations);
   state.counters["threads"] = parallel ? tbb::info::default_concurrency() : 1;
   state.SetLabel(std::string(mesh_label(id)) + (parallel ? " parallel " : " serial ") +
+                 (std::is_same_v<Real, float> ? "float" : "double"));
+}
+
+// The parallel cycle's work on one thread: the sweep in `parts` parts (interior groups, the
+// stored terms of split vertices, the halo groups) run one after another. Against
+// BM_MeltCycle/parallel:0 (one part) it is the extra work of the partition; against
+// BM_MeltCycle/parallel:1 (two parts on two threads) it separates that work from what the
+// two CPUs cost each other.
+template <class Real>
+void BM_MeltCycleInParts(benchmark::State& state) {
+  const int id = static_cast<int>(state.range(0));
+  const auto parts = static_cast<std::size_t>(state.range(1));
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 1);
+  const sim::MeltParams p = bench_params(input_mesh(id));
+  const sim::TriMesh<Real>& start = warm_state<Real>(id);
+  auto make = [&] {
+    auto s = std::make_unique<sim::MeltSimulator<Real>>(start, p, sim::make_constant_kl(1.0), sim::Execution::kSerial);
+    s->set_sweep_parts(parts);
+    return s;
+  };
+  auto sim = make();
+  int since_restart = 0;
+  double deform_ms = 0;
+  for (auto _ : state) {
+    if (since_restart == kCyclesPerRestart) {
+      state.PauseTiming();
+      sim = make();
+      since_restart = 0;
+      state.ResumeTiming();
+    }
+    const sim::CycleReport r = sim->step();
+    benchmark::DoNotOptimize(r);
+    deform_ms += r.deform_ms;
+    ++since_restart;
+  }
+  state.counters["deform_ms"] = benchmark::Counter(deform_ms, benchmark::Counter::kAvgIterations);
+  state.SetLabel(std::string(mesh_label(id)) + " " + std::to_string(parts) + " parts serial " +
                  (std::is_same_v<Real, float> ? "float" : "double"));
 }
 
@@ -235,7 +279,7 @@ void BM_IndependentCopies(benchmark::State& state) {
 }
 
 void meshes_and_modes(benchmark::internal::Benchmark* b) {
-  for (int id : {0, 1, 2, 6, 5, 3, 7, 4, 8, 9})
+  for (int id : {0, 1, 2, 6, 5, 3, 7, 4, 8, 9, 10, 11})
     for (int parallel : {0, 1}) b->Args({id, parallel});
   b->ArgNames({"mesh", "parallel"});
   b->Unit(benchmark::kMillisecond);
@@ -244,6 +288,14 @@ void meshes_and_modes(benchmark::internal::Benchmark* b) {
 void peer_meshes(benchmark::internal::Benchmark* b) {
   for (int id : {0, 1, 2, 6, 5, 3}) b->Args({id});
   b->ArgNames({"mesh"});
+  b->Unit(benchmark::kMillisecond);
+  b->MinTime(0.5);
+}
+
+void parts_meshes(benchmark::internal::Benchmark* b) {
+  for (int id : {2, 6, 9, 8})
+    for (int parts : {1, 2}) b->Args({id, parts});
+  b->ArgNames({"mesh", "parts"});
   b->Unit(benchmark::kMillisecond);
   b->MinTime(0.5);
 }
@@ -264,6 +316,8 @@ BENCHMARK(BM_MeltCycle<double>)->Apply(meshes_and_modes);
 BENCHMARK(BM_OpenMeshPeer<float>)->Apply(peer_meshes);
 BENCHMARK(BM_MeshStatistics<double>)->Apply(meshes_and_modes);
 BENCHMARK(BM_OpenMeshPeer<double>)->Apply(peer_meshes);
+BENCHMARK(BM_MeltCycleInParts<float>)->Apply(parts_meshes);
+BENCHMARK(BM_MeltCycleInParts<double>)->Apply(parts_meshes);
 BENCHMARK(BM_IndependentCopies<float>)->Apply(copies_meshes);
 BENCHMARK(BM_IndependentCopies<double>)->Apply(copies_meshes);
 
