@@ -93,37 +93,67 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
     const Real* p = packed + 3 * static_cast<std::size_t>(v);
     return Vec3<Real>(p[0], p[1], p[2]);
   };
+  // The exact test of triangle t (after the moves); returns whether it marked.
+  auto test = [&m, &target, corner, kr2, parallel](std::size_t t) {
+    const Triangle& tri = m.triangle[t];
+    const Vec3<Real> pa = corner(tri[0]), pb = corner(tri[1]), pc = corner(tri[2]);
+    const Vec3<Real> ab = pb - pa, bc = pc - pb, ca = pa - pc;
+    const Real l2[3] = {ab.x() * ab.x() + ab.y() * ab.y() + ab.z() * ab.z(),
+                        bc.x() * bc.x() + bc.y() * bc.y() + bc.z() * bc.z(),
+                        ca.x() * ca.x() + ca.y() * ca.y() + ca.z() * ca.z()};
+    Index from, to;
+    if (l2[0] < kr2) {
+      from = tri[1], to = tri[0];
+    } else if (l2[1] < kr2) {
+      from = std::max(tri[1], tri[2]), to = std::min(tri[1], tri[2]);
+    } else if (l2[2] < kr2) {
+      from = tri[2], to = tri[0];
+    } else {
+      return false;
+    }
+    Index& slot = target[static_cast<std::size_t>(from)];
+    if (parallel)
+      atomic_min(slot, to);
+    else if (to < slot)
+      slot = to;
+    return true;
+  };
   auto mark_range = [&, key, alive, skip_above](std::size_t begin, std::size_t end) {
     bool local_mark = false;
-    for (std::size_t t = begin; t < end; ++t) {
-      // Most triangles are skipped: test eight keys at once (aligned groups inside the range).
-      if (key && t % kLanes == 0 && t + kLanes <= end && all_greater(load_lanes(key + t), skip_above)) {
-        t += kLanes - 1;
-        continue;
+    if (!key) {
+      for (std::size_t t = begin; t < end; ++t)
+        if (alive[t]) local_mark |= test(t);
+      if (local_mark) any_mark.store(true, std::memory_order_relaxed);
+      return;
+    }
+    // In chunks: list the triangles whose keys do not rule them out (most are ruled out, eight
+    // keys at once), then test them with their corners prefetched kAhead candidates ahead. The
+    // candidates are few and scattered, so testing each as the scan finds it waited for its
+    // corners one candidate at a time (the 871k dragon: ~80k candidates per cycle, their corners
+    // mostly out of the cache after the sweep).
+    constexpr std::size_t kChunk = 1024, kAhead = 8;
+    Index candidate[kChunk];
+    for (std::size_t chunk = begin; chunk < end; chunk += kChunk) {
+      const std::size_t chunk_end = std::min(end, chunk + kChunk);
+      std::size_t n = 0;
+      for (std::size_t t = chunk; t < chunk_end; ++t) {
+        if (t % kLanes == 0 && t + kLanes <= chunk_end && all_greater(load_lanes(key + t), skip_above)) {
+          t += kLanes - 1;
+          continue;
+        }
+        if (key[t] > skip_above || !alive[t]) continue;
+        candidate[n++] = static_cast<Index>(t);
+        __builtin_prefetch(&m.triangle[t]);
       }
-      if ((key && key[t] > skip_above) || !alive[t]) continue;
-      const Triangle& tri = m.triangle[t];
-      const Vec3<Real> pa = corner(tri[0]), pb = corner(tri[1]), pc = corner(tri[2]);
-      const Vec3<Real> ab = pb - pa, bc = pc - pb, ca = pa - pc;
-      const Real l2[3] = {ab.x() * ab.x() + ab.y() * ab.y() + ab.z() * ab.z(),
-                          bc.x() * bc.x() + bc.y() * bc.y() + bc.z() * bc.z(),
-                          ca.x() * ca.x() + ca.y() * ca.y() + ca.z() * ca.z()};
-      Index from, to;
-      if (l2[0] < kr2) {
-        from = tri[1], to = tri[0];
-      } else if (l2[1] < kr2) {
-        from = std::max(tri[1], tri[2]), to = std::min(tri[1], tri[2]);
-      } else if (l2[2] < kr2) {
-        from = tri[2], to = tri[0];
-      } else {
-        continue;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (i + kAhead < n)
+          for (Index v : m.triangle[static_cast<std::size_t>(candidate[i + kAhead])]) {
+            const Real* p = packed + 3 * static_cast<std::size_t>(v);
+            __builtin_prefetch(p);
+            __builtin_prefetch(p + 2);
+          }
+        local_mark |= test(static_cast<std::size_t>(candidate[i]));
       }
-      local_mark = true;
-      Index& slot = target[static_cast<std::size_t>(from)];
-      if (parallel)
-        atomic_min(slot, to);
-      else if (to < slot)
-        slot = to;
     }
     if (local_mark) any_mark.store(true, std::memory_order_relaxed);
   };
@@ -187,43 +217,83 @@ void repoint_triangles(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report)
   const std::vector<Index>& root = ws.root;
   std::vector<Index>& affected = ws.affected;
   affected.clear();
-  for (Index k : ws.merged)
-    for (Index t : ws.adj.of(k)) affected.push_back(t);
+  const VertexTriangles& adj = ws.adj;
+  prefetched_for_each(ws.merged,
+                      std::tuple{[&](Index k) { adj.prefetch_record(k); }, [&](Index k) { adj.prefetch_list(k); }},
+                      [&](Index k) {
+                        for (Index t : adj.of(k)) affected.push_back(t);
+                      });
   std::sort(affected.begin(), affected.end());
   affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
   std::int64_t degenerate = 0;
-  for (Index t : affected) {
-    const auto ts = static_cast<std::size_t>(t);
-    Triangle& tri = m.triangle[ts];
-    for (Index& v : tri) {
-      v = root[static_cast<std::size_t>(v)];
-      ws.mark_dirty(v);
-    }
-    if (is_degenerate(tri)) {
-      m.triangle_alive[ts] = 0;
-      ++degenerate;
-    } else {
-      tri = rotate_min_first(tri);
-    }
-  }
+  prefetched_for_each(affected,
+                      std::tuple{[&](Index t) { __builtin_prefetch(&m.triangle[static_cast<std::size_t>(t)]); },
+                                 [&](Index t) {
+                                   for (Index v : m.triangle[static_cast<std::size_t>(t)]) {
+                                     __builtin_prefetch(&root[static_cast<std::size_t>(v)]);
+                                     __builtin_prefetch(&ws.dirty[static_cast<std::size_t>(v)]);
+                                   }
+                                 }},
+                      [&](Index t) {
+                        const auto ts = static_cast<std::size_t>(t);
+                        Triangle& tri = m.triangle[ts];
+                        for (Index& v : tri) {
+                          v = root[static_cast<std::size_t>(v)];
+                          ws.mark_dirty(v);
+                        }
+                        if (is_degenerate(tri)) {
+                          m.triangle_alive[ts] = 0;
+                          ++degenerate;
+                        } else {
+                          tri = rotate_min_first(tri);
+                        }
+                      });
   report.degenerate_triangles += degenerate;
 }
 
-// Update the triangle lists (roots take their members' triangles).
+// Update the triangle lists: roots take their members' triangles, and the triangles that died
+// in the re-pointing leave the lists of their corners. Every other entry stays right: a
+// re-pointed triangle that lives still has each listed vertex as a corner (an unmerged corner
+// keeps its index, a merged one is replaced by its root, which takes its list), so the lists
+// come out as the live triangles of each vertex without re-reading the triangles of every
+// vertex that a re-pointing touched (the 871k dragon: ~10k such vertices per cycle, each a few
+// cache misses).
 template <class Real>
 void update_triangle_lists(TriMesh<Real>& m, MeltWorkspace& ws) {
-  for (Index k : ws.merged) {
-    const Index r = ws.root[static_cast<std::size_t>(k)];
-    // Append k's triangles to r's list (sorted merge, duplicates removed), then drop k's.
-    std::vector<Index>& merged_list = ws.scratch;
-    merged_list.clear();
-    const auto a = ws.adj.of(r);
-    const auto b = ws.adj.of(k);
-    std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged_list));
-    ws.adj.assign(r, merged_list);
-    ws.adj.assign(k, {});
-  }
-  for (Index v : ws.dirty_list) refresh_list(ws, m, v);
+  VertexTriangles& adj = ws.adj;
+  const std::vector<Index>& root = ws.root;
+  prefetched_for_each(ws.merged,
+                      std::tuple{[&](Index k) {
+                                   adj.prefetch_record(k);
+                                   adj.prefetch_record(root[static_cast<std::size_t>(k)]);
+                                 },
+                                 [&](Index k) {
+                                   adj.prefetch_list(k);
+                                   adj.prefetch_list(root[static_cast<std::size_t>(k)]);
+                                 }},
+                      [&](Index k) {
+                        const Index r = root[static_cast<std::size_t>(k)];
+                        // Append k's triangles to r's list (sorted merge, duplicates removed), then drop k's.
+                        std::vector<Index>& merged_list = ws.scratch;
+                        merged_list.clear();
+                        const auto a = adj.of(r);
+                        const auto b = adj.of(k);
+                        std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged_list));
+                        adj.assign(r, merged_list);
+                        adj.assign(k, {});
+                      });
+  const std::uint8_t* const alive = m.triangle_alive.data();
+  prefetched_for_each(ws.affected,
+                      std::tuple{[&](Index t) { __builtin_prefetch(alive + t); },
+                                 [&](Index t) {
+                                   if (!alive[t])
+                                     for (Index v : m.triangle[static_cast<std::size_t>(t)]) adj.prefetch_record(v);
+                                 }},
+                      [&](Index t) {
+                        if (alive[t]) return;
+                        for (Index v : m.triangle[static_cast<std::size_t>(t)])
+                          adj.erase(v, t);  // a repeated corner: the second finds nothing
+                      });
 }
 
 }  // namespace

@@ -13,7 +13,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
+#include <iterator>
+#include <tuple>
+#include <utility>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -166,6 +170,36 @@ inline void for_range(Execution exec, std::size_t n, const Body& body, std::size
                     [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
 }
 
+/// Runs body(item) for every item in order, having called the prefetch stages on the items
+/// ahead of it: the last stage kAhead items ahead, the one before it 2 kAhead ahead, and so
+/// on, so that each stage finds in the cache what it reads to prefetch for the next (e.g. a
+/// vertex's list record, then its list, then its triangles). The passes after the deformation
+/// visit a few scattered elements of a large mesh, mostly out of the cache; without this, each
+/// element's misses were waited for one element at a time.
+template <class Items, class Body, class... Stages>
+inline void prefetched_for_each(const Items& items, const std::tuple<Stages...>& stages, const Body& body) {
+  constexpr std::size_t kAhead = 8, kStages = sizeof...(Stages);
+  const std::size_t n = std::size(items);
+  auto run_stages = [&]<std::size_t... S>(std::index_sequence<S...>, std::size_t i, bool warm_up) {
+    // Stage S runs (kStages - S) kAhead items ahead of the body.
+    (
+        [&] {
+          constexpr std::size_t ahead = (kStages - S) * kAhead;
+          if (warm_up) {
+            for (std::size_t k = 0; k < std::min(n, ahead); ++k) std::get<S>(stages)(items[k]);
+          } else if (i + ahead < n) {
+            std::get<S>(stages)(items[i + ahead]);
+          }
+        }(),
+        ...);
+  };
+  run_stages(std::index_sequence_for<Stages...>{}, 0, true);
+  for (std::size_t i = 0; i < n; ++i) {
+    run_stages(std::index_sequence_for<Stages...>{}, i, false);
+    body(items[i]);
+  }
+}
+
 /// x = min(x, value), atomically (the order of concurrent calls cannot change the result).
 inline void atomic_min(Index& x, Index value) {
   std::atomic_ref<Index> ref(x);
@@ -188,19 +222,6 @@ void prepare_workspace(MeltWorkspace& ws, const TriMesh<Real>& m) {
   if (ws.dirty.size() < n) ws.dirty.resize(n, 0);
   if (ws.root.size() < n) ws.root.resize(n);
   if (ws.cluster_size.size() < n) ws.cluster_size.resize(n, 0);
-}
-
-/// Replaces v's list by its triangles that are still alive and still contain v.
-template <class Real>
-void refresh_list(MeltWorkspace& ws, const TriMesh<Real>& m, Index v) {
-  ws.scratch.clear();
-  for (Index t : ws.adj.of(v)) {
-    const auto ts = static_cast<std::size_t>(t);
-    if (!m.triangle_alive[ts]) continue;
-    const Triangle& tri = m.triangle[ts];
-    if (tri[0] == v || tri[1] == v || tri[2] == v) ws.scratch.push_back(t);
-  }
-  ws.adj.assign(v, ws.scratch);
 }
 
 // Pass implementations shared by the free functions and MeltSimulator.
