@@ -352,6 +352,53 @@ TEST(Simulator, DumbbellSplitsIntoTwoParts) {
   EXPECT_TRUE(s.empty());
 }
 
+// After a cycle, m.reindex (the monograph's i) differs from the identity exactly at this
+// cycle's merged vertices (Alg. 2) and the repair's collapsed ones, each dead and pointing to a
+// smaller index; a compaction leaves the identity. The short-edge test resets only the entries
+// the previous cycle changed, so a stale entry would show here as one too many.
+TEST(Simulator, ReindexHoldsOnlyThisCyclesMerges) {
+  struct Case {
+    const char* name;
+    IndexedMesh mesh;
+    double compact_below;
+  };
+  const Case cases[] = {{"dumbbell", datasets::dumbbell(), 0.9},
+                        {"object C, compacting often", datasets::benchmark_object('C'), 0.97},
+                        {"airplane mold (the repair collapses an edge at cycle 1035), no compaction",
+                         datasets::mold_mesh(datasets::Mold::kAirplane), 0.0}};
+  std::int64_t repair_collapses = 0;
+  for (const Case& c : cases) {
+    MeltParams p = relative_params(c.mesh, 0.05, 0.5);
+    p.compact_below = c.compact_below;
+    for (const Execution exec : {Execution::kSerial, Execution::kParallel}) {
+      MeltSimulator<double> s(TriMesh<double>::from_indexed(c.mesh), p, make_constant_kl(1.0), exec);
+      std::int64_t merges = 0, compactions = 0;
+      for (int cycle = 1; cycle <= 1100 && !s.empty(); ++cycle) {
+        const CycleReport r = s.step();
+        merges += r.merged_vertices;
+        repair_collapses += r.repair_edge_collapses;
+        compactions += r.compacted ? 1 : 0;
+        const TriMesh<double>& m = s.mesh();
+        std::int64_t changed = 0;
+        for (std::size_t v = 0; v < m.vertex_slots(); ++v) {
+          const Index to = m.reindex[v];
+          if (to == static_cast<Index>(v)) continue;
+          ++changed;
+          ASSERT_LT(to, static_cast<Index>(v)) << c.name << " cycle " << cycle;
+          ASSERT_FALSE(m.vertex_alive[v]) << c.name << " cycle " << cycle << ": v" << v << " was merged but lives";
+        }
+        const std::int64_t expected = r.compacted ? 0 : r.merged_vertices + r.repair_edge_collapses;
+        ASSERT_EQ(changed, expected) << c.name << " cycle " << cycle;
+      }
+      EXPECT_GT(merges, 100) << c.name;
+      if (c.compact_below > 0) {
+        EXPECT_GT(compactions, 0) << c.name;
+      }
+    }
+  }
+  EXPECT_GT(repair_collapses, 0) << "the repair's edge collapses write m.reindex too: they must be covered";
+}
+
 // A heat source at one ball makes that ball melt first (Fig. 3.9a, 3.10): the heated tip
 // recedes along the axis faster than the far tip, in the ratio of kl at the two tips.
 TEST(Simulator, HeatSourceMeltsItsSideFaster) {

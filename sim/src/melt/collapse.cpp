@@ -24,28 +24,20 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 
 namespace meltlab::sim {
-
-namespace {
-// Returns the number of merged vertices; root[k] = end of k's chain.
-std::int64_t flatten_chains(const Index* target, Index* root, std::size_t n) {
-  std::int64_t merged = 0;
-  for (std::size_t v = 0; v < n; ++v) {
-    const Index t = target[v];
-    root[v] = t == static_cast<Index>(v) ? t : root[static_cast<std::size_t>(t)];
-    merged += root[v] != static_cast<Index>(v) ? 1 : 0;
-  }
-  return merged;
-}
-}  // namespace
 
 std::vector<Index> flatten_merge_targets(const std::vector<Index>& target) {
   for (std::size_t v = 0; v < target.size(); ++v)
     if (target[v] < 0 || target[v] > static_cast<Index>(v))
       throw InvariantError(fmt::format("merge target of v{} is v{}; targets must not exceed the index", v, target[v]));
+  // root[k] = end of k's chain: targets are smaller indices, so ascending order resolves them.
   std::vector<Index> root(target.size());
-  flatten_chains(target.data(), root.data(), target.size());
+  for (std::size_t v = 0; v < target.size(); ++v) {
+    const Index t = target[v];
+    root[v] = t == static_cast<Index>(v) ? t : root[static_cast<std::size_t>(t)];
+  }
   return root;
 }
 
@@ -61,7 +53,16 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
   const std::size_t nt = m.triangle_slots();
   const auto kr2 = static_cast<Real>(kr * kr);
   std::vector<Index>& target = m.reindex;
-  for (std::size_t v = 0; v < nv; ++v) target[v] = static_cast<Index>(v);
+  // Every target back to itself: only the entries the last cycle changed, where those are known.
+  if (ws.reindex_tracked) {
+    for (Index v : ws.reindex_changed) target[static_cast<std::size_t>(v)] = v;
+  } else {
+    for (std::size_t v = 0; v < nv; ++v) target[v] = static_cast<Index>(v);
+  }
+  ws.reindex_changed.clear();
+  ws.reindex_tracked = true;
+  ws.marked.clear();
+  std::mutex marked_mutex;
   // The keys were computed in Real from the positions before the moves (relative error a few
   // eps of Real, as the exact test's) and rounded down to float; the margin of 64 float eps
   // covers these and the rounding of the bound. Below the smallest normal float the rounding
@@ -77,7 +78,6 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
   const float skip_above =
       keys ? std::nextafter(static_cast<float>(reach * reach), std::numeric_limits<float>::infinity()) : 0.0f;
   const bool parallel = exec == Execution::kParallel;
-  std::atomic<bool> any_mark{false};
   const float* const key = keys ? min_edge2.data() : nullptr;  // locals: the stores below cannot alias them
   const std::uint8_t* const alive = m.triangle_alive.data();
   // Corners are read from the packed copy of the positions (the same numbers as the columns;
@@ -93,8 +93,9 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
     const Real* p = packed + 3 * static_cast<std::size_t>(v);
     return Vec3<Real>(p[0], p[1], p[2]);
   };
-  // The exact test of triangle t (after the moves); returns whether it marked.
-  auto test = [&m, &target, corner, kr2, parallel](std::size_t t) {
+  // The exact test of triangle t (after the moves); a vertex that gets its first target this
+  // cycle joins `newly` (in parallel: the thread whose exchange replaced the vertex itself).
+  auto test = [&m, &target, corner, kr2, parallel](std::size_t t, std::vector<Index>& newly) {
     const Triangle& tri = m.triangle[t];
     const Vec3<Real> pa = corner(tri[0]), pb = corner(tri[1]), pc = corner(tri[2]);
     const Vec3<Real> ab = pb - pa, bc = pc - pb, ca = pa - pc;
@@ -109,21 +110,32 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
     } else if (l2[2] < kr2) {
       from = tri[2], to = tri[0];
     } else {
-      return false;
+      return;
     }
     Index& slot = target[static_cast<std::size_t>(from)];
-    if (parallel)
-      atomic_min(slot, to);
-    else if (to < slot)
+    if (parallel) {
+      // to < from: the loop ends with `before` the value it replaced, or one already <= to.
+      std::atomic_ref<Index> ref(slot);
+      Index before = ref.load(std::memory_order_relaxed);
+      while (to < before && !ref.compare_exchange_weak(before, to, std::memory_order_relaxed)) {
+      }
+      if (before == from) newly.push_back(from);
+    } else if (to < slot) {
+      if (slot == from) newly.push_back(from);
       slot = to;
-    return true;
+    }
   };
   auto mark_range = [&, key, alive, skip_above](std::size_t begin, std::size_t end) {
-    bool local_mark = false;
+    std::vector<Index> newly;
+    auto publish = [&] {
+      if (newly.empty()) return;
+      const std::lock_guard<std::mutex> lock(marked_mutex);
+      ws.marked.insert(ws.marked.end(), newly.begin(), newly.end());
+    };
     if (!key) {
       for (std::size_t t = begin; t < end; ++t)
-        if (alive[t]) local_mark |= test(t);
-      if (local_mark) any_mark.store(true, std::memory_order_relaxed);
+        if (alive[t]) test(t, newly);
+      publish();
       return;
     }
     // In chunks: list the triangles whose keys do not rule them out (most are ruled out, eight
@@ -152,29 +164,33 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
             __builtin_prefetch(p);
             __builtin_prefetch(p + 2);
           }
-        local_mark |= test(static_cast<std::size_t>(candidate[i]));
+        test(static_cast<std::size_t>(candidate[i]), newly);
       }
     }
-    if (local_mark) any_mark.store(true, std::memory_order_relaxed);
+    publish();
   };
   for_range(exec, nt, mark_range);
-  return any_mark.load();
+  std::sort(ws.marked.begin(), ws.marked.end());
+  return !ws.marked.empty();
 }
 
 // Flatten chains (ws.root, and m.reindex = the monograph's i after flattening) and list the
-// merged vertices (ws.merged, ascending).
+// merged vertices (ws.merged, ascending): the marked ones. Their targets are smaller indices,
+// so in ascending order each one's target already has its final root (Fig. 3.11), and every
+// unmarked vertex is its own root (ws.root is the identity outside them). The same roots as
+// flatten_merge_targets over every vertex.
 template <class Real>
 void flatten_and_list_merged(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report) {
-  const std::size_t nv = m.vertex_slots();
   std::vector<Index>& target = m.reindex;
   std::vector<Index>& root = ws.root;
-  const std::int64_t merged = flatten_chains(target.data(), root.data(), nv);
-  report.merged_vertices += merged;
-  ws.merged.clear();
-  for (std::size_t v = 0; v < nv; ++v) {
-    target[v] = root[v];
-    if (root[v] != static_cast<Index>(v)) ws.merged.push_back(static_cast<Index>(v));
+  ws.merged.swap(ws.marked);
+  for (Index v : ws.merged) {
+    const auto vs = static_cast<std::size_t>(v);
+    root[vs] = root[static_cast<std::size_t>(target[vs])];
+    target[vs] = root[vs];
   }
+  report.merged_vertices += static_cast<std::int64_t>(ws.merged.size());
+  ws.reindex_changed.assign(ws.merged.begin(), ws.merged.end());
 }
 
 // Merge positions into the roots, members in ascending order (ws.touched_roots: the roots).
@@ -307,6 +323,7 @@ void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec,
   merge_positions(m, merge, ws);
   repoint_triangles(m, ws, report);
   update_triangle_lists(m, ws);
+  for (Index v : ws.merged) ws.root[static_cast<std::size_t>(v)] = v;  // the identity again
 }
 
 template <class Real>

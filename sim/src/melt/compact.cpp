@@ -52,7 +52,9 @@ void compact_workspace(TriMesh<Real>& m, MeltWorkspace& ws) {
   ws.schedule.invalidate();
   ws.packed_valid = false;
   ws.dirty.assign(m.vertex_slots(), 0);
-  ws.root.assign(m.vertex_slots(), 0);
+  ws.root.clear();             // identity again (prepare_workspace)
+  ws.reindex_changed.clear();  // compact_mesh made m.reindex the identity
+  ws.reindex_tracked = true;
   ws.cluster_size.assign(m.vertex_slots(), 0);
   prepare_workspace(ws, m);
 }

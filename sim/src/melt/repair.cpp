@@ -208,6 +208,7 @@ class Repairer {
     m_.position.set(ks, (m_.position[ks] + m_.position[gs]) / Real(2));
     m_.vertex_alive[gs] = 0;
     m_.reindex[gs] = keep;
+    ws_.reindex_changed.push_back(gone);
     std::vector<Index> moved;
     for (Index t : tg) {
       Triangle& tri = m_.triangle[static_cast<std::size_t>(t)];

@@ -110,7 +110,15 @@ struct MeltWorkspace {
   bool min_edge2_current = false;
   double cycle_move_bound = 0.0;  ///< this cycle's largest vertex move + rounding, mesh units
 
-  std::vector<Index> root;                ///< flattened merge target of every vertex
+  /// Flattened merge target of every vertex: the identity between collapse passes (a pass
+  /// sets the merged vertices' entries and puts them back), so a pass visits only those.
+  std::vector<Index> root;
+  std::vector<Index> marked;  ///< short-edge test: the vertices it gave a merge target
+  /// The entries of m.reindex that may differ from their index (the last collapse's merged
+  /// vertices, the repair's collapsed ones): the next short-edge test resets only these.
+  /// `reindex_tracked` says the list is complete (else it resets every entry).
+  std::vector<Index> reindex_changed;
+  bool reindex_tracked = false;
   UnionFind remnant_parts;                ///< remnant check: the connected parts
   std::vector<double> part_six_volume;    ///< remnant check: 6 x volume per part (at its root)
   std::vector<std::uint8_t> part_doomed;  ///< remnant check: the part is removed
@@ -200,14 +208,6 @@ inline void prefetched_for_each(const Items& items, const std::tuple<Stages...>&
   }
 }
 
-/// x = min(x, value), atomically (the order of concurrent calls cannot change the result).
-inline void atomic_min(Index& x, Index value) {
-  std::atomic_ref<Index> ref(x);
-  Index cur = ref.load(std::memory_order_relaxed);
-  while (value < cur && !ref.compare_exchange_weak(cur, value, std::memory_order_relaxed)) {
-  }
-}
-
 inline bool is_degenerate(const Triangle& t) { return t[0] == t[1] || t[1] == t[2] || t[2] == t[0]; }
 
 /// Position of v among the corners of t (v must be a corner).
@@ -220,7 +220,7 @@ void prepare_workspace(MeltWorkspace& ws, const TriMesh<Real>& m) {
   if (!ws.adj.built()) ws.adj.build(m);
   ws.adj.grow(n);
   if (ws.dirty.size() < n) ws.dirty.resize(n, 0);
-  if (ws.root.size() < n) ws.root.resize(n);
+  for (std::size_t v = ws.root.size(); v < n; ++v) ws.root.push_back(static_cast<Index>(v));
   if (ws.cluster_size.size() < n) ws.cluster_size.resize(n, 0);
 }
 
