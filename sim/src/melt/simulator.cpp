@@ -103,13 +103,15 @@ CycleReport MeltSimulator<Real>::step() {
     glued_pass(mesh_, ws, r);
     r.glued_ms = ms_since(t);
     t = Clock::now();
-    if (params_.repair) repair_pass(mesh_, ws, r);
+    if (params_.repair) repair_pass(mesh_, ws, r, exec_);
     r.repair_ms = ms_since(t);
   }
   ws.schedule.touch(ws.dirty_list);  // their triangle lists changed
   ws.clear_dirty();
   if (params_.remnant_check_every > 0 && (cycle_ + 1) % params_.remnant_check_every == 0) {
+    t = Clock::now();
     r.inverted_parts_removed = remove_inverted_parts_pass(mesh_, ws);
+    r.remnant_ms = ms_since(t);
   }
   r.live_vertices = static_cast<std::int64_t>(mesh_.live_vertex_count());
   r.live_triangles = static_cast<std::int64_t>(mesh_.live_triangle_count());

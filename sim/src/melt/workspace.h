@@ -233,7 +233,7 @@ void collapse_pass(TriMesh<Real>& m, double kr, MergeMode merge, Execution exec,
 template <class Real>
 void glued_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report);
 template <class Real>
-void repair_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report);
+void repair_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report, Execution exec);
 template <class Real>
 std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws);
 /// Compacts the mesh (compact_mesh) and brings the workspace along: triangle lists rebuilt,
