@@ -296,20 +296,18 @@ void peer_meshes(benchmark::internal::Benchmark* b) {
   b->MinTime(0.5);
 }
 
-void parts_meshes(benchmark::internal::Benchmark* b) {
+// Object C, the geodesic 32k, the bunny and the dragon (breadth-first), each with 1 and 2 of
+// `what` (parts of the sweep on one thread, or independent copies on two CPUs).
+void meshes_with_one_and_two(benchmark::internal::Benchmark* b, const char* what) {
   for (int id : {2, 6, 9, 8})
-    for (int parts : {1, 2}) b->Args({id, parts});
-  b->ArgNames({"mesh", "parts"});
+    for (int n : {1, 2}) b->Args({id, n});
+  b->ArgNames({"mesh", what});
   b->Unit(benchmark::kMillisecond);
   b->MinTime(0.5);
 }
-
+void parts_meshes(benchmark::internal::Benchmark* b) { meshes_with_one_and_two(b, "parts"); }
 void copies_meshes(benchmark::internal::Benchmark* b) {
-  for (int id : {2, 6, 9, 8})
-    for (int copies : {1, 2}) b->Args({id, copies});
-  b->ArgNames({"mesh", "copies"});
-  b->Unit(benchmark::kMillisecond);
-  b->MinTime(0.5);
+  meshes_with_one_and_two(b, "copies");
   b->UseManualTime();
 }
 
