@@ -11,7 +11,9 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cstring>
+#include <numeric>
 #include <random>
 
 namespace meltlab::sim {
@@ -397,6 +399,51 @@ TEST(Simulator, ReindexHoldsOnlyThisCyclesMerges) {
     }
   }
   EXPECT_GT(repair_collapses, 0) << "the repair's edge collapses write m.reindex too: they must be covered";
+}
+
+// Spheres of 1280 triangles, every third one inside out, their vertices shuffled in index
+// order so that the unions of the two threads meet in deep trees: serial and parallel remnant
+// checks (more than 2 × 2048 triangles, so the union-find splits) remove the same parts, exactly
+// the inverted ones.
+TEST(Remnants, ParallelUnionFindRemovesTheSameParts) {
+  IndexedMesh all;
+  std::vector<int> inverted_vertex;
+  std::int64_t inverted_parts = 0;
+  for (int p = 0; p < 12; ++p) {
+    IndexedMesh part = datasets::icosphere(3, 1.0);
+    for (auto& v : part.V) v += Vec3<double>(3.0 * p, 0, 0);
+    const bool inverted = p % 3 == 1;
+    if (inverted) {
+      for (auto& t : part.F) std::swap(t[1], t[2]);
+      ++inverted_parts;
+    }
+    inverted_vertex.insert(inverted_vertex.end(), part.V.size(), inverted ? 1 : 0);
+    const auto offset = static_cast<Index>(all.V.size());
+    all.V.insert(all.V.end(), part.V.begin(), part.V.end());
+    for (auto t : part.F) all.F.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  }
+  ASSERT_GT(all.F.size(), 2u * 2048u);
+  const std::size_t n = all.V.size();
+  std::vector<Index> new_index(n);
+  std::iota(new_index.begin(), new_index.end(), 0);
+  std::shuffle(new_index.begin(), new_index.end(), std::mt19937(11));
+  IndexedMesh shuffled;
+  shuffled.V.resize(n);
+  for (std::size_t v = 0; v < n; ++v) shuffled.V[static_cast<std::size_t>(new_index[v])] = all.V[v];
+  for (const auto& f : all.F)
+    shuffled.F.push_back({new_index[static_cast<std::size_t>(f[0])], new_index[static_cast<std::size_t>(f[1])],
+                          new_index[static_cast<std::size_t>(f[2])]});
+  for (int round = 0; round < 5; ++round) {  // the threads interleave differently each time
+    auto serial = TriMesh<double>::from_indexed(shuffled);
+    auto parallel = serial;
+    EXPECT_EQ(remove_inverted_parts(serial, Execution::kSerial), inverted_parts);
+    EXPECT_EQ(remove_inverted_parts(parallel, Execution::kParallel), inverted_parts);
+    EXPECT_EQ(serial.vertex_alive, parallel.vertex_alive);
+    EXPECT_EQ(serial.triangle_alive, parallel.triangle_alive);
+    for (std::size_t v = 0; v < n; ++v)
+      ASSERT_EQ(parallel.vertex_alive[static_cast<std::size_t>(new_index[v])] != 0, inverted_vertex[v] == 0)
+          << "vertex " << v;
+  }
 }
 
 // A heat source at one ball makes that ball melt first (Fig. 3.9a, 3.10): the heated tip

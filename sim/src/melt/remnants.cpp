@@ -9,17 +9,66 @@
 
 namespace meltlab::sim {
 
+namespace {
+
+// Unites the corners of every live triangle. In parallel, a link is a compare-exchange of a root's
+// parent from itself to the smaller root, retried with fresh roots when another thread linked
+// first; a find halves its path with plain stores (each moves a non-root's parent to one of its
+// ancestors, which concurrent links cannot invalidate). Every link goes to a smaller index, so a
+// part's root is its smallest vertex whatever the order of the unions: the same parents after
+// flatten() as the serial loop.
 template <class Real>
-std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws) {
+void unite_corners(const TriMesh<Real>& m, UnionFind& parts, Execution exec) {
+  const std::size_t nt = m.triangle_slots();
+  if (exec == Execution::kSerial || nt < 2 * kParallelGrain) {
+    for (std::size_t t = 0; t < nt; ++t) {
+      if (!m.triangle_alive[t]) continue;
+      const Triangle& tri = m.triangle[t];
+      // The two unions share the first corner's root: one find fewer than two unite() calls.
+      const Index r = parts.link(parts.find(tri[0]), parts.find(tri[1]));
+      parts.link(r, parts.find(tri[2]));
+    }
+    return;
+  }
+  Index* const parent = parts.parent.data();
+  auto at = [parent](Index x) { return std::atomic_ref<Index>(parent[static_cast<std::size_t>(x)]); };
+  auto find = [&at](Index x) {
+    for (;;) {
+      const Index p = at(x).load(std::memory_order_relaxed);
+      if (p == x) return x;
+      const Index g = at(p).load(std::memory_order_relaxed);
+      if (g != p) at(x).store(g, std::memory_order_relaxed);
+      x = g;
+    }
+  };
+  auto unite = [&](Index a, Index b) {
+    for (;;) {
+      a = find(a);
+      b = find(b);
+      if (a == b) return;
+      if (a < b) std::swap(a, b);
+      Index expected = a;
+      if (at(a).compare_exchange_strong(expected, b, std::memory_order_relaxed)) return;
+    }
+  };
+  for_range(exec, nt, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t t = begin; t < end; ++t) {
+      if (!m.triangle_alive[t]) continue;
+      const Triangle& tri = m.triangle[t];
+      unite(tri[0], tri[1]);
+      unite(tri[0], tri[2]);
+    }
+  });
+}
+
+}  // namespace
+
+template <class Real>
+std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws, Execution exec) {
   const std::size_t nv = m.vertex_slots(), nt = m.triangle_slots();
   UnionFind& parts = ws.remnant_parts;
   parts.reset(nv);
-  for (std::size_t t = 0; t < nt; ++t) {
-    if (!m.triangle_alive[t]) continue;
-    const Triangle& tri = m.triangle[t];
-    parts.unite(tri[0], tri[1]);
-    parts.unite(tri[0], tri[2]);
-  }
+  unite_corners(m, parts, exec);
   parts.flatten();
   const std::vector<Index>& parent = parts.parent;  // each slot's root
   // Corners from the packed copy of the positions when it is current (the same numbers; one
@@ -65,14 +114,14 @@ std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws) {
 }
 
 template <class Real>
-std::int64_t remove_inverted_parts(TriMesh<Real>& m) {
+std::int64_t remove_inverted_parts(TriMesh<Real>& m, Execution exec) {
   MeltWorkspace ws;
-  return remove_inverted_parts_pass(m, ws);
+  return remove_inverted_parts_pass(m, ws, exec);
 }
 
-template std::int64_t remove_inverted_parts_pass(TriMesh<float>&, MeltWorkspace&);
-template std::int64_t remove_inverted_parts_pass(TriMesh<double>&, MeltWorkspace&);
-template std::int64_t remove_inverted_parts(TriMesh<float>&);
-template std::int64_t remove_inverted_parts(TriMesh<double>&);
+template std::int64_t remove_inverted_parts_pass(TriMesh<float>&, MeltWorkspace&, Execution);
+template std::int64_t remove_inverted_parts_pass(TriMesh<double>&, MeltWorkspace&, Execution);
+template std::int64_t remove_inverted_parts(TriMesh<float>&, Execution);
+template std::int64_t remove_inverted_parts(TriMesh<double>&, Execution);
 
 }  // namespace meltlab::sim

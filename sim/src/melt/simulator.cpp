@@ -110,7 +110,7 @@ CycleReport MeltSimulator<Real>::step() {
   ws.clear_dirty();
   if (params_.remnant_check_every > 0 && (cycle_ + 1) % params_.remnant_check_every == 0) {
     t = Clock::now();
-    r.inverted_parts_removed = remove_inverted_parts_pass(mesh_, ws);
+    r.inverted_parts_removed = remove_inverted_parts_pass(mesh_, ws, exec_);
     r.remnant_ms = ms_since(t);
   }
   r.live_vertices = static_cast<std::int64_t>(mesh_.live_vertex_count());

@@ -235,7 +235,7 @@ void glued_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report);
 template <class Real>
 void repair_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report, Execution exec);
 template <class Real>
-std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws);
+std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws, Execution exec);
 /// Compacts the mesh (compact_mesh) and brings the workspace along: triangle lists rebuilt,
 /// edge keys moved with their triangles, per-vertex scratch resized.
 template <class Real>

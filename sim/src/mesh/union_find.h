@@ -31,10 +31,12 @@ struct UnionFind {
     }
     return x;
   }
-  void unite(Index a, Index b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+  void unite(Index a, Index b) { link(find(a), find(b)); }
+  /// Joins the sets of roots a and b; returns the root of the joined set.
+  Index link(Index a, Index b) {
+    if (a == b) return a;
+    parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+    return std::min(a, b);
   }
   /// Points every slot straight at its root: every link goes to a smaller index, so one
   /// ascending pass does it. Afterwards parent[v] is v's root.

@@ -185,9 +185,10 @@ template <class Real>
 CycleReport repair_topology(TriMesh<Real>& m, const std::vector<Index>& vertices);
 
 /// Deletes every connected part of the live mesh whose signed volume is <= 0 (see
-/// MeltParams::remnant_check_every). Returns the number of parts removed. O(n).
+/// MeltParams::remnant_check_every). Returns the number of parts removed. O(n). In parallel the
+/// union-find over the triangles runs in chunks side by side; the parts are the same.
 template <class Real>
-std::int64_t remove_inverted_parts(TriMesh<Real>& m);
+std::int64_t remove_inverted_parts(TriMesh<Real>& m, Execution exec = Execution::kSerial);
 
 /// Drops dead slots from every array, keeping the relative order of the live vertices and
 /// triangles (so Alg. 2's index comparisons are unchanged). Returns, for every old vertex
