@@ -124,12 +124,7 @@ TEST(Remnants, InvertedPartAmongInterleavedPartsIsRemoved) {
   const std::size_t n = parts.V.size();  // 12 + 6 + 12
   std::vector<Index> new_index(n);
   for (std::size_t v = 0; v < n; ++v) new_index[v] = static_cast<Index>((v * 7 + 3) % n);  // 7 is prime to 30
-  IndexedMesh shuffled;
-  shuffled.V.resize(n);
-  for (std::size_t v = 0; v < n; ++v) shuffled.V[static_cast<std::size_t>(new_index[v])] = parts.V[v];
-  for (const auto& f : parts.F)
-    shuffled.F.push_back({new_index[static_cast<std::size_t>(f[0])], new_index[static_cast<std::size_t>(f[1])],
-                          new_index[static_cast<std::size_t>(f[2])]});
+  const IndexedMesh shuffled = test::renumbered(parts, new_index);
   auto check = [&](auto m) {
     EXPECT_EQ(remove_inverted_parts(m), 1);
     for (std::size_t v = 0; v < n; ++v)

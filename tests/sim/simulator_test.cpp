@@ -16,6 +16,8 @@
 #include <numeric>
 #include <random>
 
+#include "hand_meshes.h"
+
 namespace meltlab::sim {
 namespace {
 
@@ -418,21 +420,14 @@ TEST(Remnants, ParallelUnionFindRemovesTheSameParts) {
       ++inverted_parts;
     }
     inverted_vertex.insert(inverted_vertex.end(), part.V.size(), inverted ? 1 : 0);
-    const auto offset = static_cast<Index>(all.V.size());
-    all.V.insert(all.V.end(), part.V.begin(), part.V.end());
-    for (auto t : part.F) all.F.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    all = test::disjoint_union(std::move(all), part);
   }
   ASSERT_GT(all.F.size(), 2u * 2048u);
   const std::size_t n = all.V.size();
   std::vector<Index> new_index(n);
   std::iota(new_index.begin(), new_index.end(), 0);
   std::shuffle(new_index.begin(), new_index.end(), std::mt19937(11));
-  IndexedMesh shuffled;
-  shuffled.V.resize(n);
-  for (std::size_t v = 0; v < n; ++v) shuffled.V[static_cast<std::size_t>(new_index[v])] = all.V[v];
-  for (const auto& f : all.F)
-    shuffled.F.push_back({new_index[static_cast<std::size_t>(f[0])], new_index[static_cast<std::size_t>(f[1])],
-                          new_index[static_cast<std::size_t>(f[2])]});
+  const IndexedMesh shuffled = test::renumbered(all, new_index);
   for (int round = 0; round < 5; ++round) {  // the threads interleave differently each time
     auto serial = TriMesh<double>::from_indexed(shuffled);
     auto parallel = serial;

@@ -5,6 +5,7 @@
 #include <meltlab/sim/mesh.h>
 
 #include <cmath>
+#include <vector>
 
 namespace meltlab::test {
 
@@ -44,6 +45,17 @@ inline IndexedMesh disjoint_union(IndexedMesh a, const IndexedMesh& b) {
   a.V.insert(a.V.end(), b.V.begin(), b.V.end());
   for (const auto& t : b.F) a.F.push_back({t[0] + off, t[1] + off, t[2] + off});
   return a;
+}
+
+/// `m` with vertex v renumbered new_index[v] (a permutation), the faces following.
+inline IndexedMesh renumbered(const IndexedMesh& m, const std::vector<sim::Index>& new_index) {
+  IndexedMesh out;
+  out.V.resize(m.V.size());
+  for (std::size_t v = 0; v < m.V.size(); ++v) out.V[static_cast<std::size_t>(new_index[v])] = m.V[v];
+  for (const auto& f : m.F)
+    out.F.push_back({new_index[static_cast<std::size_t>(f[0])], new_index[static_cast<std::size_t>(f[1])],
+                     new_index[static_cast<std::size_t>(f[2])]});
+  return out;
 }
 
 /// Moves every vertex of `m` by `d`.
