@@ -181,7 +181,7 @@ inline void for_range(Execution exec, std::size_t n, const Body& body, std::size
 /// Runs body(item) for every item in order, having called the prefetch stages on the items
 /// ahead of it: the last stage kAhead items ahead, the one before it 2 kAhead ahead, and so
 /// on, so that each stage finds in the cache what it reads to prefetch for the next (e.g. a
-/// vertex's list record, then its list, then its triangles). The passes after the deformation
+/// vertex's list record, then its list). The passes after the deformation
 /// visit a few scattered elements of a large mesh, mostly out of the cache; without this, each
 /// element's misses were waited for one element at a time.
 template <class Items, class Body, class... Stages>
