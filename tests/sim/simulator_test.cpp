@@ -75,6 +75,10 @@ TEST(Simulator, SerialEqualsParallelBitwise) {
   check_serial_equals_parallel<float>(giraffe, relative_params(giraffe, 0.1, 0.6), 150, "giraffe float");
   const IndexedMesh shuffled = reorder_for_locality(datasets::icosphere(5, 1.0)).mesh;
   check_serial_equals_parallel<double>(shuffled, relative_params(shuffled, 0.2, 0.7), 100, "icosphere(5) double");
+  // kr near the mean edge: many merges per cycle, so that the repair's link tests split too
+  // (> 2 × 512 dirty vertices: 1701 and 1132 in two of these cycles).
+  const IndexedMesh geodesic = datasets::geodesic_sphere(40, 0.05);
+  check_serial_equals_parallel<double>(geodesic, relative_params(geodesic, 0.05, 0.98), 30, "geodesic 32k double");
 }
 
 // The deformation sweep split into parts (deform_schedule.h): every vertex is summed by the
