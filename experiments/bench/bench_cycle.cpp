@@ -119,6 +119,31 @@ const sim::TriMesh<Real>& warm_state(int id) {
   return cache.emplace(id, s.mesh()).first->second;
 }
 
+// Times one step() of `make()`'s simulator per iteration, making a fresh one from the warm state
+// every kCyclesPerRestart cycles (outside the timing), and hands each cycle's report to `seen`.
+template <class Make, class Seen>
+void time_cycles(benchmark::State& state, const Make& make, const Seen& seen) {
+  auto cycle = make();
+  int since_restart = 0;
+  for (auto _ : state) {
+    if (since_restart == kCyclesPerRestart) {
+      state.PauseTiming();
+      cycle = make();
+      since_restart = 0;
+      state.ResumeTiming();
+    }
+    const sim::CycleReport r = cycle->step();
+    benchmark::DoNotOptimize(r);
+    seen(r);
+    ++since_restart;
+  }
+}
+
+template <class Real>
+const char* precision_name() {
+  return std::is_same_v<Real, float> ? "float" : "double";
+}
+
 template <class Real>
 void BM_MeltCycle(benchmark::State& state) {
   const int id = static_cast<int>(state.range(0));
@@ -128,26 +153,17 @@ void BM_MeltCycle(benchmark::State& state) {
   const sim::MeltParams p = bench_params(input_mesh(id));
   const sim::TriMesh<Real>& start = warm_state<Real>(id);
   const auto exec = parallel ? sim::Execution::kParallel : sim::Execution::kSerial;
-  auto sim = std::make_unique<sim::MeltSimulator<Real>>(start, p, sim::make_constant_kl(1.0), exec);
-  int since_restart = 0;
   double triangles = 0, deform_ms = 0, collapse_ms = 0, glued_ms = 0, repair_ms = 0, remnant_ms = 0;
-  for (auto _ : state) {
-    if (since_restart == kCyclesPerRestart) {
-      state.PauseTiming();
-      sim = std::make_unique<sim::MeltSimulator<Real>>(start, p, sim::make_constant_kl(1.0), exec);
-      since_restart = 0;
-      state.ResumeTiming();
-    }
-    const sim::CycleReport r = sim->step();
-    benchmark::DoNotOptimize(r);
-    triangles += static_cast<double>(r.live_triangles);
-    deform_ms += r.deform_ms;
-    collapse_ms += r.collapse_ms;
-    glued_ms += r.glued_ms;
-    repair_ms += r.repair_ms;
-    remnant_ms += r.remnant_ms;
-    ++since_restart;
-  }
+  time_cycles(
+      state, [&] { return std::make_unique<sim::MeltSimulator<Real>>(start, p, sim::make_constant_kl(1.0), exec); },
+      [&](const sim::CycleReport& r) {
+        triangles += static_cast<double>(r.live_triangles);
+        deform_ms += r.deform_ms;
+        collapse_ms += r.collapse_ms;
+        glued_ms += r.glued_ms;
+        repair_ms += r.repair_ms;
+        remnant_ms += r.remnant_ms;
+      });
   state.counters["triangles"] = benchmark::Counter(triangles, benchmark::Counter::kAvgIterations);
   // Where a cycle's time goes (the simulator's own clocks, per cycle: the remnant check runs
   // every 16th cycle; the rest of the cycle is the live counts and the compaction).
@@ -157,8 +173,7 @@ void BM_MeltCycle(benchmark::State& state) {
   state.counters["repair_ms"] = benchmark::Counter(repair_ms, benchmark::Counter::kAvgIterations);
   state.counters["remnant_ms"] = benchmark::Counter(remnant_ms, benchmark::Counter::kAvgIterations);
   state.counters["threads"] = parallel ? tbb::info::default_concurrency() : 1;
-  state.SetLabel(std::string(mesh_label(id)) + (parallel ? " parallel " : " serial ") +
-                 (std::is_same_v<Real, float> ? "float" : "double"));
+  state.SetLabel(std::string(mesh_label(id)) + (parallel ? " parallel " : " serial ") + precision_name<Real>());
 }
 
 // The parallel cycle's work on one thread: the sweep in `parts` parts (interior groups, the
@@ -178,24 +193,10 @@ void BM_MeltCycleInParts(benchmark::State& state) {
     s->set_sweep_parts(parts);
     return s;
   };
-  auto sim = make();
-  int since_restart = 0;
   double deform_ms = 0;
-  for (auto _ : state) {
-    if (since_restart == kCyclesPerRestart) {
-      state.PauseTiming();
-      sim = make();
-      since_restart = 0;
-      state.ResumeTiming();
-    }
-    const sim::CycleReport r = sim->step();
-    benchmark::DoNotOptimize(r);
-    deform_ms += r.deform_ms;
-    ++since_restart;
-  }
+  time_cycles(state, make, [&](const sim::CycleReport& r) { deform_ms += r.deform_ms; });
   state.counters["deform_ms"] = benchmark::Counter(deform_ms, benchmark::Counter::kAvgIterations);
-  state.SetLabel(std::string(mesh_label(id)) + " " + std::to_string(parts) + " parts serial " +
-                 (std::is_same_v<Real, float> ? "float" : "double"));
+  state.SetLabel(std::string(mesh_label(id)) + " " + std::to_string(parts) + " parts serial " + precision_name<Real>());
 }
 
 // The same cycle on OpenMesh's half-edge mesh with its own collapse operations (serial).
@@ -204,24 +205,12 @@ void BM_OpenMeshPeer(benchmark::State& state) {
   const int id = static_cast<int>(state.range(0));
   const sim::IndexedMesh start = warm_state<Real>(id).to_indexed();
   const sim::MeltParams p = bench_params(input_mesh(id));
-  auto peer = std::make_unique<bench::OpenMeshMeltPeerT<Real>>(start, p);
-  int since_restart = 0;
   double triangles = 0;
-  for (auto _ : state) {
-    if (since_restart == kCyclesPerRestart) {
-      state.PauseTiming();
-      peer = std::make_unique<bench::OpenMeshMeltPeerT<Real>>(start, p);
-      since_restart = 0;
-      state.ResumeTiming();
-    }
-    const sim::CycleReport r = peer->step();
-    benchmark::DoNotOptimize(r);
-    triangles += static_cast<double>(r.live_triangles);
-    ++since_restart;
-  }
+  time_cycles(
+      state, [&] { return std::make_unique<bench::OpenMeshMeltPeerT<Real>>(start, p); },
+      [&](const sim::CycleReport& r) { triangles += static_cast<double>(r.live_triangles); });
   state.counters["triangles"] = benchmark::Counter(triangles, benchmark::Counter::kAvgIterations);
-  state.SetLabel(std::string(mesh_label(id)) + " openmesh-peer serial " +
-                 (std::is_same_v<Real, float> ? "float" : "double"));
+  state.SetLabel(std::string(mesh_label(id)) + " openmesh-peer serial " + precision_name<Real>());
 }
 
 // One row of `meltlab simulate`'s per-cycle statistics (Euler counts and quality measures) on
@@ -237,8 +226,7 @@ void BM_MeshStatistics(benchmark::State& state) {
   sim::MeshStatistics stats;
   for (auto _ : state) benchmark::DoNotOptimize(stats.compute(mesh).quality.Qd);
   state.counters["triangles"] = static_cast<double>(mesh.live_triangle_count());
-  state.SetLabel(std::string(mesh_label(id)) + (parallel ? " parallel " : " serial ") +
-                 (std::is_same_v<Real, float> ? "float" : "double"));
+  state.SetLabel(std::string(mesh_label(id)) + (parallel ? " parallel " : " serial ") + precision_name<Real>());
 }
 
 // `copies` serial cycles at once, each on its own copy of the warm state, made and melted by
@@ -279,7 +267,7 @@ void BM_IndependentCopies(benchmark::State& state) {
   }
   state.counters["ms_per_cycle"] = 1.0 / cycles_per_ms;
   state.SetLabel(std::string(mesh_label(id)) + " " + std::to_string(copies) + (copies == 1 ? " copy " : " copies ") +
-                 (std::is_same_v<Real, float> ? "float" : "double"));
+                 precision_name<Real>());
 }
 
 void meshes_and_modes(benchmark::internal::Benchmark* b) {

@@ -61,8 +61,8 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
   }
   ws.reindex_changed.clear();
   ws.reindex_tracked = true;
-  ws.marked.clear();
-  std::mutex marked_mutex;
+  ws.merged.clear();
+  std::mutex merged_mutex;
   // The keys were computed in Real from the positions before the moves (relative error a few
   // eps of Real, as the exact test's) and rounded down to float; the margin of 64 float eps
   // covers these and the rounding of the bound. Below the smallest normal float the rounding
@@ -129,8 +129,8 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
     std::vector<Index> newly;
     auto publish = [&] {
       if (newly.empty()) return;
-      const std::lock_guard<std::mutex> lock(marked_mutex);
-      ws.marked.insert(ws.marked.end(), newly.begin(), newly.end());
+      const std::lock_guard<std::mutex> lock(merged_mutex);
+      ws.merged.insert(ws.merged.end(), newly.begin(), newly.end());
     };
     if (!key) {
       for (std::size_t t = begin; t < end; ++t)
@@ -170,12 +170,12 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
     publish();
   };
   for_range(exec, nt, mark_range);
-  std::sort(ws.marked.begin(), ws.marked.end());
-  return !ws.marked.empty();
+  std::sort(ws.merged.begin(), ws.merged.end());
+  return !ws.merged.empty();
 }
 
-// Flatten chains (ws.root, and m.reindex = the monograph's i after flattening) and list the
-// merged vertices (ws.merged, ascending): the marked ones. Their targets are smaller indices,
+// Flatten chains (ws.root, and m.reindex = the monograph's i after flattening) of the merged
+// vertices (ws.merged, ascending: those the short-edge test marked). Their targets are smaller indices,
 // so in ascending order each one's target already has its final root (Fig. 3.11), and every
 // unmarked vertex is its own root (ws.root is the identity outside them). The same roots as
 // flatten_merge_targets over every vertex.
@@ -183,7 +183,6 @@ template <class Real>
 void flatten_and_list_merged(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report) {
   std::vector<Index>& target = m.reindex;
   std::vector<Index>& root = ws.root;
-  ws.merged.swap(ws.marked);
   for (Index v : ws.merged) {
     const auto vs = static_cast<std::size_t>(v);
     root[vs] = root[static_cast<std::size_t>(target[vs])];
@@ -234,36 +233,36 @@ void repoint_triangles(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report)
   std::vector<Index>& affected = ws.affected;
   affected.clear();
   const VertexTriangles& adj = ws.adj;
-  prefetched_for_each(ws.merged,
-                      std::tuple{[&](Index k) { adj.prefetch_record(k); }, [&](Index k) { adj.prefetch_list(k); }},
-                      [&](Index k) {
-                        for (Index t : adj.of(k)) affected.push_back(t);
-                      });
+  prefetched_for_each(
+      ws.merged, [&](Index k) { adj.prefetch_record(k); }, [&](Index k) { adj.prefetch_list(k); },
+      [&](Index k) {
+        for (Index t : adj.of(k)) affected.push_back(t);
+      });
   std::sort(affected.begin(), affected.end());
   affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
   std::int64_t degenerate = 0;
-  prefetched_for_each(affected,
-                      std::tuple{[&](Index t) { __builtin_prefetch(&m.triangle[static_cast<std::size_t>(t)]); },
-                                 [&](Index t) {
-                                   for (Index v : m.triangle[static_cast<std::size_t>(t)]) {
-                                     __builtin_prefetch(&root[static_cast<std::size_t>(v)]);
-                                     __builtin_prefetch(&ws.dirty[static_cast<std::size_t>(v)]);
-                                   }
-                                 }},
-                      [&](Index t) {
-                        const auto ts = static_cast<std::size_t>(t);
-                        Triangle& tri = m.triangle[ts];
-                        for (Index& v : tri) {
-                          v = root[static_cast<std::size_t>(v)];
-                          ws.mark_dirty(v);
-                        }
-                        if (is_degenerate(tri)) {
-                          m.triangle_alive[ts] = 0;
-                          ++degenerate;
-                        } else {
-                          tri = rotate_min_first(tri);
-                        }
-                      });
+  prefetched_for_each(
+      affected, [&](Index t) { __builtin_prefetch(&m.triangle[static_cast<std::size_t>(t)]); },
+      [&](Index t) {
+        for (Index v : m.triangle[static_cast<std::size_t>(t)]) {
+          __builtin_prefetch(&root[static_cast<std::size_t>(v)]);
+          __builtin_prefetch(&ws.dirty[static_cast<std::size_t>(v)]);
+        }
+      },
+      [&](Index t) {
+        const auto ts = static_cast<std::size_t>(t);
+        Triangle& tri = m.triangle[ts];
+        for (Index& v : tri) {
+          v = root[static_cast<std::size_t>(v)];
+          ws.mark_dirty(v);
+        }
+        if (is_degenerate(tri)) {
+          m.triangle_alive[ts] = 0;
+          ++degenerate;
+        } else {
+          tri = rotate_min_first(tri);
+        }
+      });
   report.degenerate_triangles += degenerate;
 }
 
@@ -278,38 +277,39 @@ template <class Real>
 void update_triangle_lists(TriMesh<Real>& m, MeltWorkspace& ws) {
   VertexTriangles& adj = ws.adj;
   const std::vector<Index>& root = ws.root;
-  prefetched_for_each(ws.merged,
-                      std::tuple{[&](Index k) {
-                                   adj.prefetch_record(k);
-                                   adj.prefetch_record(root[static_cast<std::size_t>(k)]);
-                                 },
-                                 [&](Index k) {
-                                   adj.prefetch_list(k);
-                                   adj.prefetch_list(root[static_cast<std::size_t>(k)]);
-                                 }},
-                      [&](Index k) {
-                        const Index r = root[static_cast<std::size_t>(k)];
-                        // Append k's triangles to r's list (sorted merge, duplicates removed), then drop k's.
-                        std::vector<Index>& merged_list = ws.scratch;
-                        merged_list.clear();
-                        const auto a = adj.of(r);
-                        const auto b = adj.of(k);
-                        std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged_list));
-                        adj.assign(r, merged_list);
-                        adj.assign(k, {});
-                      });
+  prefetched_for_each(
+      ws.merged,
+      [&](Index k) {
+        adj.prefetch_record(k);
+        adj.prefetch_record(root[static_cast<std::size_t>(k)]);
+      },
+      [&](Index k) {
+        adj.prefetch_list(k);
+        adj.prefetch_list(root[static_cast<std::size_t>(k)]);
+      },
+      [&](Index k) {
+        const Index r = root[static_cast<std::size_t>(k)];
+        // Append k's triangles to r's list (sorted merge, duplicates removed), then drop k's.
+        std::vector<Index>& merged_list = ws.scratch;
+        merged_list.clear();
+        const auto a = adj.of(r);
+        const auto b = adj.of(k);
+        std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged_list));
+        adj.assign(r, merged_list);
+        adj.assign(k, {});
+      });
   const std::uint8_t* const alive = m.triangle_alive.data();
-  prefetched_for_each(ws.affected,
-                      std::tuple{[&](Index t) { __builtin_prefetch(alive + t); },
-                                 [&](Index t) {
-                                   if (!alive[t])
-                                     for (Index v : m.triangle[static_cast<std::size_t>(t)]) adj.prefetch_record(v);
-                                 }},
-                      [&](Index t) {
-                        if (alive[t]) return;
-                        for (Index v : m.triangle[static_cast<std::size_t>(t)])
-                          adj.erase(v, t);  // a repeated corner: the second finds nothing
-                      });
+  prefetched_for_each(
+      ws.affected, [&](Index t) { __builtin_prefetch(alive + t); },
+      [&](Index t) {
+        if (!alive[t])
+          for (Index v : m.triangle[static_cast<std::size_t>(t)]) adj.prefetch_record(v);
+      },
+      [&](Index t) {
+        if (alive[t]) return;
+        for (Index v : m.triangle[static_cast<std::size_t>(t)])
+          adj.erase(v, t);  // a repeated corner: the second finds nothing
+      });
 }
 
 }  // namespace

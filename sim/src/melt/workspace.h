@@ -16,8 +16,6 @@
 #include <algorithm>
 #include <atomic>
 #include <iterator>
-#include <tuple>
-#include <utility>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -113,7 +111,6 @@ struct MeltWorkspace {
   /// Flattened merge target of every vertex: the identity between collapse passes (a pass
   /// sets the merged vertices' entries and puts them back), so a pass visits only those.
   std::vector<Index> root;
-  std::vector<Index> marked;  ///< short-edge test: the vertices it gave a merge target
   /// The entries of m.reindex that may differ from their index (the last collapse's merged
   /// vertices, the repair's collapsed ones): the next short-edge test resets only these.
   /// `reindex_tracked` says the list is complete (else it resets every entry).
@@ -122,7 +119,7 @@ struct MeltWorkspace {
   UnionFind remnant_parts;                ///< remnant check: the connected parts
   std::vector<double> part_six_volume;    ///< remnant check: 6 x volume per part (at its root)
   std::vector<std::uint8_t> part_doomed;  ///< remnant check: the part is removed
-  std::vector<Index> merged;              ///< vertices merged this cycle (ascending)
+  std::vector<Index> merged;              ///< vertices merged this cycle (ascending): those the short-edge test marked
   std::vector<std::int32_t> cluster_size;
   std::vector<Index> touched_roots;
 
@@ -178,32 +175,20 @@ inline void for_range(Execution exec, std::size_t n, const Body& body, std::size
                     [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
 }
 
-/// Runs body(item) for every item in order, having called the prefetch stages on the items
-/// ahead of it: the last stage kAhead items ahead, the one before it 2 kAhead ahead, and so
-/// on, so that each stage finds in the cache what it reads to prefetch for the next (e.g. a
-/// vertex's list record, then its list). The passes after the deformation
-/// visit a few scattered elements of a large mesh, mostly out of the cache; without this, each
-/// element's misses were waited for one element at a time.
-template <class Items, class Body, class... Stages>
-inline void prefetched_for_each(const Items& items, const std::tuple<Stages...>& stages, const Body& body) {
-  constexpr std::size_t kAhead = 8, kStages = sizeof...(Stages);
+/// Runs body(item) for every item in order, having called stage1 on the item 2 kAhead ahead
+/// and stage2 on the item kAhead ahead: stage1 prefetches what stage2 reads to prefetch what
+/// the body reads (e.g. a vertex's list record, then its list). The passes after the
+/// deformation visit a few scattered elements of a large mesh, mostly out of the cache; without
+/// this, each element's misses were waited for one element at a time.
+template <class Items, class Stage1, class Stage2, class Body>
+inline void prefetched_for_each(const Items& items, const Stage1& stage1, const Stage2& stage2, const Body& body) {
+  constexpr std::size_t kAhead = 8;
   const std::size_t n = std::size(items);
-  auto run_stages = [&]<std::size_t... S>(std::index_sequence<S...>, std::size_t i, bool warm_up) {
-    // Stage S runs (kStages - S) kAhead items ahead of the body.
-    (
-        [&] {
-          constexpr std::size_t ahead = (kStages - S) * kAhead;
-          if (warm_up) {
-            for (std::size_t k = 0; k < std::min(n, ahead); ++k) std::get<S>(stages)(items[k]);
-          } else if (i + ahead < n) {
-            std::get<S>(stages)(items[i + ahead]);
-          }
-        }(),
-        ...);
-  };
-  run_stages(std::index_sequence_for<Stages...>{}, 0, true);
+  for (std::size_t i = 0; i < std::min(n, 2 * kAhead); ++i) stage1(items[i]);
+  for (std::size_t i = 0; i < std::min(n, kAhead); ++i) stage2(items[i]);
   for (std::size_t i = 0; i < n; ++i) {
-    run_stages(std::index_sequence_for<Stages...>{}, i, false);
+    if (i + 2 * kAhead < n) stage1(items[i + 2 * kAhead]);
+    if (i + kAhead < n) stage2(items[i + kAhead]);
     body(items[i]);
   }
 }
