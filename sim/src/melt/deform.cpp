@@ -33,6 +33,7 @@
 #include <cstring>
 #include <span>
 #include <stdexcept>
+#include <type_traits>
 
 namespace meltlab::sim {
 
@@ -225,25 +226,33 @@ void sweep_block(const Sweep<Real, ScaleAt>& w, std::size_t b, std::size_t part,
     }
   std::memcpy(w.min_edge2 + first, terms.min_edge2, count * sizeof(float));
   const std::uint16_t* const owner = w.plan.owners();
-  for (std::size_t i = 0; i < count; ++i) {
-    const std::size_t t = first + i;
-    if (!alive[t]) continue;
-    const Triangle& tri = m.triangle[t];
-    bool store = false;
-    for (std::size_t k = 0; k < 3; ++k) {
-      if (kHalo && owner[static_cast<std::size_t>(tri[k])] != part) {
-        store = true;
-        continue;
+  // kTest: some corner may be owned by another part (DeformSchedule::block_mixed).
+  auto add = [&](auto test_c) {
+    constexpr bool kTest = decltype(test_c)::value;
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::size_t t = first + i;
+      if (!alive[t]) continue;
+      const Triangle& tri = m.triangle[t];
+      bool store = false;
+      for (std::size_t k = 0; k < 3; ++k) {
+        if (kTest && owner[static_cast<std::size_t>(tri[k])] != part) {
+          store = true;
+          continue;
+        }
+        w.sums[static_cast<std::size_t>(tri[k])].lane +=
+            Lanes<Real>{terms.nx[i], terms.ny[i], terms.nz[i], terms.ex[k][i], terms.ey[k][i], terms.ez[k][i], 0, 0};
       }
-      w.sums[static_cast<std::size_t>(tri[k])].lane +=
-          Lanes<Real>{terms.nx[i], terms.ny[i], terms.nz[i], terms.ex[k][i], terms.ey[k][i], terms.ez[k][i], 0, 0};
+      if (kTest && store) {
+        TriangleTerms<Real>& out = w.stored_terms[t];
+        out.normal = Vec3<Real>(terms.nx[i], terms.ny[i], terms.nz[i]);
+        for (std::size_t k = 0; k < 3; ++k) out.edge[k] = Vec3<Real>(terms.ex[k][i], terms.ey[k][i], terms.ez[k][i]);
+      }
     }
-    if (kHalo && store) {
-      TriangleTerms<Real>& out = w.stored_terms[t];
-      out.normal = Vec3<Real>(terms.nx[i], terms.ny[i], terms.nz[i]);
-      for (std::size_t k = 0; k < 3; ++k) out.edge[k] = Vec3<Real>(terms.ex[k][i], terms.ey[k][i], terms.ez[k][i]);
-    }
-  }
+  };
+  if (kHalo && w.plan.block_mixed(b))
+    add(std::true_type{});
+  else
+    add(std::false_type{});
 }
 
 // Part p of the sweep: its blocks in ascending order, then its interior groups in ascending

@@ -1,6 +1,7 @@
 #include "deform_schedule.h"
 
 #include <algorithm>
+#include <cstdint>
 
 namespace meltlab::sim {
 
@@ -18,13 +19,35 @@ void DeformSchedule::update(const TriMesh<Real>& m, const VertexTriangles& adj, 
     return;
   }
   if (touched_.empty()) return;
+  touched_vertices_.assign(touched_.begin(), touched_.end());
   // Each touched group once (sorting also keeps the updates in a fixed order).
   for (Index& v : touched_) v = static_cast<Index>(static_cast<std::size_t>(v) / kGroup);
   std::sort(touched_.begin(), touched_.end());
   touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
   for (Index g : touched_) classify(m, adj, static_cast<std::size_t>(g));
+  // Whether a triangle has a corner owned by another part changes only where its corners
+  // change or the owner of a corner does: either changes a vertex's triangle list (the owner is
+  // the part of the first triangle), so the triangle is in the (new) list of a touched vertex.
+  // (A triangle that died keeps its flag until the next rebuild: its block only stays tested.)
+  for (Index v : touched_vertices_)
+    for (Index t : adj.of(v)) find_foreign(m, static_cast<std::size_t>(t));
   touched_.clear();
   build_buckets();
+}
+
+template <class Real>
+void DeformSchedule::find_foreign(const TriMesh<Real>& m, std::size_t t) {
+  const std::uint16_t part = block_part_[t / kTriangleBlock];
+  bool foreign = false;
+  if (m.triangle_alive[t])
+    for (Index v : m.triangle[t]) foreign = foreign || owner_[static_cast<std::size_t>(v)] != part;
+  if (foreign != (foreign_[t] != 0)) {
+    foreign_[t] = foreign ? 1 : 0;
+    if (foreign)
+      ++block_foreign_[t / kTriangleBlock];
+    else
+      --block_foreign_[t / kTriangleBlock];
+  }
 }
 
 template <class Real>
@@ -43,6 +66,9 @@ void DeformSchedule::rebuild(const TriMesh<Real>& m, const VertexTriangles& adj,
   owner_.assign(vertices_, 0);
   group_part_.assign((vertices_ + kGroup - 1) / kGroup, 0);
   for (std::size_t g = 0; g < group_part_.size(); ++g) classify(m, adj, g);
+  foreign_.assign(triangles_, 0);
+  block_foreign_.assign(blocks_, 0);
+  for (std::size_t t = 0; t < triangles_; ++t) find_foreign(m, t);
   touched_.clear();
   build_buckets();
   valid_ = true;
