@@ -104,10 +104,12 @@ Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
         interrupt.flag());
     line.finish();
     const auto& t = result.run_json["timing"];
-    std::fprintf(stderr, "meltlab: %s after %lld cycles (%lld triangles left); median %.3f ms/cycle; wrote %s\n",
+    std::fprintf(stderr,
+                 "meltlab: %s after %lld cycles (%lld triangles left); median %.3f ms/cycle, %.3f ms per statistics "
+                 "row; wrote %s\n",
                  result.status.c_str(), static_cast<long long>(result.cycles_run),
                  result.run_json["final"]["triangles"].get<long long>(), t["cycle_ms_median"].get<double>(),
-                 o->out_dir.string().c_str());
+                 t["stats_row_ms_median"].get<double>(), o->out_dir.string().c_str());
     if (result.status == "failed") {
       std::fprintf(stderr, "meltlab: internal error: %s\n", result.error.c_str());
       return kExitInternal;

@@ -215,7 +215,8 @@ namespace {
 struct StatsWriter {
   fs::path target, tmp;
   std::ofstream out;
-  sim::MeshStatistics stats;  // its buffers are reused by every row
+  sim::MeshStatistics stats;       // its buffers are reused by every row
+  std::vector<double> compute_ms;  ///< the statistics' time per row (not the CSV formatting)
   explicit StatsWriter(const fs::path& file) : target(file), tmp(temporary_path_for(file)) {
     out.open(tmp, std::ios::trunc);
     if (!out) throw InputError(fmt::format("{}: cannot open for writing", target.string()));
@@ -224,7 +225,9 @@ struct StatsWriter {
   }
   template <class Real>
   void row(std::int64_t cycle, const sim::TriMesh<Real>& m, const sim::CycleReport& r, double ms) {
+    const auto t0 = std::chrono::steady_clock::now();
     const sim::MeshStats& st = stats.compute(m);
+    compute_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     const sim::EulerCounts& topo = st.topology;
     const sim::QualityReport& q = st.quality;
     out << fmt::format(
@@ -284,6 +287,9 @@ struct RunChecks {
 struct CycleTimes {
   std::vector<double> cycle_ms;
   double pass_ms[4] = {0, 0, 0, 0};  ///< sums: deform, collapse, glued, repair
+  /// The statistics' time of each row: a run spends it beside the cycles (with a row every
+  /// cycle, several times the cycle's own time).
+  std::vector<double> stats_ms;
 
   void add(const sim::CycleReport& r, double ms) {
     cycle_ms.push_back(ms);
@@ -301,7 +307,12 @@ struct CycleTimes {
               {"collapse", pass_ms[1] / n},
               {"glued", pass_ms[2] / n},
               {"repair", pass_ms[3] / n}}},
-            {"note", "cycle times exclude statistics, checks and snapshots"}};
+            {"stats_rows", stats_ms.size()},
+            {"stats_row_ms_median", percentile(stats_ms, 0.5)},
+            {"stats_ms_total", std::accumulate(stats_ms.begin(), stats_ms.end(), 0.0)},
+            {"note",
+             "cycle times exclude statistics, checks and snapshots; stats_row_ms is the time of "
+             "one statistics row (MeshStatistics), stats_ms_total of all of them"}};
   }
 };
 
@@ -454,6 +465,7 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
     stats.row(c, simulator.mesh(), last, times.cycle_ms.empty() ? 0.0 : times.cycle_ms.back());
   if (!last_snapshot_written) snapshot(c);
   stats.finish();
+  times.stats_ms = stats.compute_ms;
   if (progress) progress({c, o.cycles, last.live_triangles, 0.0});
   const double total_s = std::chrono::duration<double>(Clock::now() - t_start).count();
   provenance.timings_s.emplace_back("cycles", total_s);

@@ -67,7 +67,9 @@ def cycle_time(exp: Path, args):
         t = run["timing"]
         beyond.append([what, run["mesh"]["triangles"], run["cycles_run"], t["cycle_ms_mean"], t["cycle_ms_median"],
                        f"{run['threads']} thread{'' if run['threads'] == 1 else 's'}; Alg. 1 {t['pass_ms_mean']['deform']:.3f} ms, "
-                       f"Alg. 2 {t['pass_ms_mean']['collapse']:.3f} ms (means)"])
+                       f"Alg. 2 {t['pass_ms_mean']['collapse']:.3f} ms (means)"
+                       + (f"; a statistics row {t['stats_row_ms_median']:.3f} ms ({t['stats_rows']} rows, not in the cycle time)"
+                          if "stats_row_ms_median" in t else "")])
     write_csv(exp / "cycle_time_threads.csv",
               ["run", "initial triangles", "cycles", "mean ms", "median ms", "note"], beyond)
     write_fragment(exp, {

@@ -35,6 +35,10 @@ case "$CASE" in
     [ "$(json run/run.json "d['cycles_run']")" = 120 ] || fail "cycles_run"
     for s in $(json run/run.json "' '.join(d['outputs']['snapshots'])"); do [ -s "run/$s" ] || fail "snapshot $s"; done
     [ "$(json run/run.json "len(d['outputs']['snapshots'])")" = 4 ] || fail "snapshots 0,50,100,120"
+    # the statistics' own time is recorded, one entry per row
+    [ "$(json run/run.json "d['timing']['stats_rows']")" = 121 ] || fail "timing.stats_rows"
+    [ "$(json run/run.json "int(d['timing']['stats_row_ms_median'] > 0 and d['timing']['stats_ms_total'] >= d['timing']['stats_row_ms_median'])")" = 1 ] || fail "timing.stats_row_ms"
+    grep -q "ms per statistics row" err.txt || fail "the last line lacks the statistics row time"
     [ -z "$(find run -name '.*partial*')" ] || fail "temporary files left"
     # volume never grows along the run
     python3 - <<'PY' || fail "volume grew"
