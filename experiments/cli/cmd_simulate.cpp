@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <map>
 
@@ -110,6 +111,10 @@ Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
                  result.status.c_str(), static_cast<long long>(result.cycles_run),
                  result.run_json["final"]["triangles"].get<long long>(), t["cycle_ms_median"].get<double>(),
                  t["stats_row_ms_median"].get<double>(), o->out_dir.string().c_str());
+    const double stats_share = t["stats_ms_total"].get<double>() / std::max(1e-9, 1e3 * t["total_s"].get<double>());
+    if (stats_share > 0.5 && o->stats_every == 1)
+      std::fprintf(stderr, "meltlab: the statistics rows took %.0f %% of the run; --stats-every K writes every K-th\n",
+                   100.0 * stats_share);
     if (result.status == "failed") {
       std::fprintf(stderr, "meltlab: internal error: %s\n", result.error.c_str());
       return kExitInternal;

@@ -39,6 +39,11 @@ case "$CASE" in
     [ "$(json run/run.json "d['timing']['stats_rows']")" = 121 ] || fail "timing.stats_rows"
     [ "$(json run/run.json "int(d['timing']['stats_row_ms_median'] > 0 and d['timing']['stats_ms_total'] >= d['timing']['stats_row_ms_median'])")" = 1 ] || fail "timing.stats_row_ms"
     grep -q "ms per statistics row" err.txt || fail "the last line lacks the statistics row time"
+    # a row every 10th cycle: 13 rows (0, 10, ..., 120), and no hint to thin them
+    expect_exit 0 "$M" simulate --mesh dumbbell --cycles 120 --stats-every 10 --out run10
+    [ "$(json run10/run.json "d['timing']['stats_rows']")" = 13 ] || fail "--stats-every 10: timing.stats_rows"
+    [ "$(($(wc -l < run10/stats.csv) - 1))" -eq 13 ] || fail "--stats-every 10: stats.csv rows"
+    ! grep -q "stats-every K" err.txt || fail "hint to thin the rows although they are thinned"
     [ -z "$(find run -name '.*partial*')" ] || fail "temporary files left"
     # volume never grows along the run
     python3 - <<'PY' || fail "volume grew"
