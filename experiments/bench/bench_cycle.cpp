@@ -139,6 +139,12 @@ void time_cycles(benchmark::State& state, const Make& make, const Seen& seen) {
   }
 }
 
+/// TBB limited to one thread, or left all of them.
+tbb::global_control thread_limit(bool parallel) {
+  return tbb::global_control(tbb::global_control::max_allowed_parallelism,
+                             parallel ? static_cast<std::size_t>(tbb::info::default_concurrency()) : 1);
+}
+
 template <class Real>
 const char* precision_name() {
   return std::is_same_v<Real, float> ? "float" : "double";
@@ -148,8 +154,7 @@ template <class Real>
 void BM_MeltCycle(benchmark::State& state) {
   const int id = static_cast<int>(state.range(0));
   const bool parallel = state.range(1) != 0;
-  tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
-                              parallel ? static_cast<std::size_t>(tbb::info::default_concurrency()) : 1);
+  const tbb::global_control threads = thread_limit(parallel);
   const sim::MeltParams p = bench_params(input_mesh(id));
   const sim::TriMesh<Real>& start = warm_state<Real>(id);
   const auto exec = parallel ? sim::Execution::kParallel : sim::Execution::kSerial;
@@ -185,7 +190,7 @@ template <class Real>
 void BM_MeltCycleInParts(benchmark::State& state) {
   const int id = static_cast<int>(state.range(0));
   const auto parts = static_cast<std::size_t>(state.range(1));
-  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 1);
+  const tbb::global_control threads = thread_limit(false);
   const sim::MeltParams p = bench_params(input_mesh(id));
   const sim::TriMesh<Real>& start = warm_state<Real>(id);
   auto make = [&] {
@@ -220,8 +225,7 @@ template <class Real>
 void BM_MeshStatistics(benchmark::State& state) {
   const int id = static_cast<int>(state.range(0));
   const bool parallel = state.range(1) != 0;
-  tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
-                              parallel ? static_cast<std::size_t>(tbb::info::default_concurrency()) : 1);
+  const tbb::global_control threads = thread_limit(parallel);
   const sim::TriMesh<Real>& mesh = warm_state<Real>(id);
   sim::MeshStatistics stats;
   for (auto _ : state) benchmark::DoNotOptimize(stats.compute(mesh).quality.Qd);

@@ -215,19 +215,19 @@ namespace {
 struct StatsWriter {
   fs::path target, tmp;
   std::ofstream out;
-  sim::MeshStatistics stats;       // its buffers are reused by every row
-  std::vector<double> compute_ms;  ///< the statistics' time per row (not the CSV formatting)
+  sim::MeshStatistics stats;  // its buffers are reused by every row
   explicit StatsWriter(const fs::path& file) : target(file), tmp(temporary_path_for(file)) {
     out.open(tmp, std::ios::trunc);
     if (!out) throw InputError(fmt::format("{}: cannot open for writing", target.string()));
     out << "cycle,vertices,triangles,components,euler,genus,volume,area,Qs,Qd,Qq,max_d,ms,"
            "merged,glued,repair_splits,repair_collapses,inverted_removed,deform_ms,collapse_ms,glued_ms,repair_ms\n";
   }
+  /// Writes the row; returns the statistics' time in ms (not the CSV formatting).
   template <class Real>
-  void row(std::int64_t cycle, const sim::TriMesh<Real>& m, const sim::CycleReport& r, double ms) {
+  double row(std::int64_t cycle, const sim::TriMesh<Real>& m, const sim::CycleReport& r, double ms) {
     const auto t0 = std::chrono::steady_clock::now();
     const sim::MeshStats& st = stats.compute(m);
-    compute_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    const double stats_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     const sim::EulerCounts& topo = st.topology;
     const sim::QualityReport& q = st.quality;
     out << fmt::format(
@@ -236,6 +236,7 @@ struct StatsWriter {
         cycle, topo.V, topo.F, topo.S, topo.chi, topo.G, q.volume, q.area, q.Qs, q.Qd, q.Qq, q.max_d, ms,
         r.merged_vertices, r.glued_triangles, r.repair_vertex_splits, r.repair_edge_collapses, r.inverted_parts_removed,
         r.deform_ms, r.collapse_ms, r.glued_ms, r.repair_ms);
+    return stats_ms;
   }
   void finish() {
     out.flush();
@@ -404,7 +405,7 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
   if (o.intersect_every > 0)
     checks.check_intersections(0, simulator.mesh(), static_cast<std::int64_t>(simulator.mesh().live_triangle_count()));
   sim::CycleReport last;
-  stats.row(0, simulator.mesh(), last, 0.0);
+  times.stats_ms.push_back(stats.row(0, simulator.mesh(), last, 0.0));
   snapshot(0);
 
   // ---- the cycles: step, statistics, checks, snapshots, progress ----
@@ -428,7 +429,7 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
       const bool empty = last.live_triangles == 0;
       last_row_written = last_snapshot_written = false;
       if (c % o.stats_every == 0 || empty) {
-        stats.row(c, simulator.mesh(), last, ms);
+        times.stats_ms.push_back(stats.row(c, simulator.mesh(), last, ms));
         last_row_written = true;
       }
       if (o.check_every > 0 && (c % o.check_every == 0 || empty)) checks.check_topology(c, simulator.mesh());
@@ -462,10 +463,10 @@ SimulateResult run_typed(PreparedSimulation& p, const std::function<void(const S
   // ---- the last row and snapshot, run.json ----
   result.cycles_run = c;
   if (!last_row_written && c > 0)
-    stats.row(c, simulator.mesh(), last, times.cycle_ms.empty() ? 0.0 : times.cycle_ms.back());
+    times.stats_ms.push_back(
+        stats.row(c, simulator.mesh(), last, times.cycle_ms.empty() ? 0.0 : times.cycle_ms.back()));
   if (!last_snapshot_written) snapshot(c);
   stats.finish();
-  times.stats_ms = stats.compute_ms;
   if (progress) progress({c, o.cycles, last.live_triangles, 0.0});
   const double total_s = std::chrono::duration<double>(Clock::now() - t_start).count();
   provenance.timings_s.emplace_back("cycles", total_s);

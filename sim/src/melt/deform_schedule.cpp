@@ -19,17 +19,17 @@ void DeformSchedule::update(const TriMesh<Real>& m, const VertexTriangles& adj, 
     return;
   }
   if (touched_.empty()) return;
-  touched_vertices_.assign(touched_.begin(), touched_.end());
   // Each touched group once (sorting also keeps the updates in a fixed order).
-  for (Index& v : touched_) v = static_cast<Index>(static_cast<std::size_t>(v) / kGroup);
-  std::sort(touched_.begin(), touched_.end());
-  touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
-  for (Index g : touched_) classify(m, adj, static_cast<std::size_t>(g));
+  touched_groups_.clear();
+  for (Index v : touched_) touched_groups_.push_back(static_cast<Index>(static_cast<std::size_t>(v) / kGroup));
+  std::sort(touched_groups_.begin(), touched_groups_.end());
+  touched_groups_.erase(std::unique(touched_groups_.begin(), touched_groups_.end()), touched_groups_.end());
+  for (Index g : touched_groups_) classify(m, adj, static_cast<std::size_t>(g));
   // Whether a triangle has a corner owned by another part changes only where its corners
   // change or the owner of a corner does: either changes a vertex's triangle list (the owner is
   // the part of the first triangle), so the triangle is in the (new) list of a touched vertex.
   // (A triangle that died keeps its flag until the next rebuild: its block only stays tested.)
-  for (Index v : touched_vertices_)
+  for (Index v : touched_)
     for (Index t : adj.of(v)) find_foreign(m, static_cast<std::size_t>(t));
   touched_.clear();
   build_buckets();

@@ -100,7 +100,7 @@ class DeformSchedule {
   std::vector<std::int32_t> halo_;            ///< halo groups, ascending
   std::vector<std::uint8_t> foreign_;         ///< per triangle slot: 1 if live with a corner owned by another part
   std::vector<std::uint32_t> block_foreign_;  ///< per block: its triangles with foreign_ set
-  std::vector<Index> touched_vertices_;       ///< update() scratch
+  std::vector<Index> touched_groups_;         ///< update() scratch: the groups of touched_
   std::vector<double> block_work_;            ///< rebuild() scratch
   std::vector<Index> touched_;
 };
