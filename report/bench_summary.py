@@ -4,7 +4,9 @@ precision, the speed-up of the parallel cycle, the ratio to the OpenMesh peer me
 in the same run, the share of the serial cycle spent in Alg. 1 / Alg. 2, the parallel cycle's work on one
 thread (its sweep in two parts, BM_MeltCycleInParts, ms), the two-thread
 ceiling (two serial cycles at once on their own copies: BM_IndependentCopies' throughput
-ratio, where measured) and the serial cost of one statistics row; writes
+ratio, where measured) and the serial cost of one statistics row; the cycle after a gap
+(BM_MeltCycleAfterGap: a statistics row, a busy wait or a sleep before each timed cycle, against
+no gap); writes
 bench_cycle.png (time per cycle against triangles) beside the JSON.
 
 Usage: report/bench_summary.py bench_cycle.json
@@ -37,10 +39,17 @@ def main(argv):
     path = Path(argv[1])
     doc = json.loads(path.read_text())
     rows = {}
+    gaps = []  # (mesh, gap, cycle ms, gap ms) of BM_MeltCycleAfterGap, in run order
     for b in doc["benchmarks"]:
         if b.get("aggregate_name", "median") != "median":
             continue
         label = b.get("label", "")
+        if b.get("run_name", b["name"]).startswith("BM_MeltCycleAfterGap"):
+            g = re.match(r"(\S+) parallel double after (.+)", label)
+            if g:
+                ms = b["real_time"] if b.get("time_unit") == "ms" else b["real_time"] / 1e6
+                gaps.append((g.group(1), g.group(2), ms, b.get("gap_ms", 0.0)))
+            continue
         m = re.match(r"(\S+) (\S+) (\S+) ?(\S+)?(?: (\S+))?", label)
         if not m:
             continue
@@ -89,6 +98,12 @@ def main(argv):
                   f"{(o[0] if o else float('nan')):>10.3f}{(o[0] / s[0] if o else float('nan')):>10.2f}"
                   f"{share(s):>10}{(st[0] if st else float('nan')):>10.3f}"
                   f"  {mono[0]:>5} / {mono[1]}")
+    if gaps:
+        print("\nthe parallel double cycle after a gap (median ms of the cycle alone; the gap's own length)")
+        print(f"{'mesh':<14}{'gap':<16}{'gap ms':>8}{'cycle ms':>10}{'vs none':>9}")
+        for mesh, gap, ms, gap_ms in gaps:
+            none = next((x[2] for x in gaps if x[0] == mesh and x[1] == "no gap"), float("nan"))
+            print(f"{mesh:<14}{gap:<16}{gap_ms:>8.2f}{ms:>10.3f}{ms / none:>9.2f}")
     fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
     for mode, style in (("serial", "o-"), ("parallel", "s-"), ("openmesh", "^--")):
         for prec in ("float", "double"):

@@ -4,7 +4,8 @@
 // extended with uniform geodesic spheres of 32k, 100k and 1M triangles and two real scanned
 // meshes (the 75k bunny, the 871k refined dragon; both also in breadth-first order) — and the
 // OpenMesh half-edge peer in the same run;
-// and the cost of one row of the per-cycle statistics beside it; and the ceiling of two threads
+// and the cost of one row of the per-cycle statistics beside it, and what the time between two
+// cycles (a row, a busy wait, a sleep) costs the next one (BM_MeltCycleAfterGap); and the ceiling of two threads
 // on this machine: two serial cycles at once on their own copies of the mesh, pinned to CPU 0
 // and CPU 1, sharing no data (BM_IndependentCopies).
 //
@@ -233,6 +234,80 @@ void BM_MeshStatistics(benchmark::State& state) {
   state.SetLabel(std::string(mesh_label(id)) + (parallel ? " parallel " : " serial ") + precision_name<Real>());
 }
 
+// What the time between cycles costs the next cycle: `meltlab simulate` writes a statistics row
+// after every cycle by default, and its median cycle (step() alone) is then much slower than with
+// rare rows. Each iteration here first spends a gap outside the timing, then times one step() of
+// the parallel double cycle (the CLI's defaults). Gaps: none; one statistics row (as the CLI);
+// a busy wait of 1 or 4 ms (one CPU spins on the clock, no memory traffic); a sleep of 1 or 4 ms.
+// If a busy wait slows the next cycle about as much as a row of the same length, the row's cost
+// to the cycle is its time away from the mesh (during which the host's other tenants evict the
+// cycle's data from the shared caches), not its own memory traffic. Counter: gap_ms, the gap's
+// measured length.
+enum class Gap { kNone, kStatisticsRow, kBusy1ms, kBusy4ms, kSleep1ms, kSleep4ms };
+
+void spend_gap(Gap gap, sim::MeshStatistics& stats, const sim::TriMesh<double>& mesh) {
+  using Clock = std::chrono::steady_clock;
+  const auto busy = [](std::chrono::microseconds d) {
+    const auto end = Clock::now() + d;
+    while (Clock::now() < end) {
+    }
+  };
+  switch (gap) {
+    case Gap::kNone:
+      break;
+    case Gap::kStatisticsRow:
+      benchmark::DoNotOptimize(stats.compute(mesh).quality.Qd);
+      break;
+    case Gap::kBusy1ms:
+      busy(std::chrono::microseconds(1000));
+      break;
+    case Gap::kBusy4ms:
+      busy(std::chrono::microseconds(4000));
+      break;
+    case Gap::kSleep1ms:
+      std::this_thread::sleep_for(std::chrono::microseconds(1000));
+      break;
+    case Gap::kSleep4ms:
+      std::this_thread::sleep_for(std::chrono::microseconds(4000));
+      break;
+  }
+}
+
+const char* gap_label(Gap gap) {
+  static const char* labels[] = {"no gap", "statistics row", "busy 1 ms", "busy 4 ms", "sleep 1 ms", "sleep 4 ms"};
+  return labels[static_cast<int>(gap)];
+}
+
+void BM_MeltCycleAfterGap(benchmark::State& state) {
+  using Clock = std::chrono::steady_clock;
+  const int id = static_cast<int>(state.range(0));
+  const auto gap = static_cast<Gap>(state.range(1));
+  const tbb::global_control threads = thread_limit(true);
+  const sim::MeltParams p = bench_params(input_mesh(id));
+  const sim::TriMesh<double>& start = warm_state<double>(id);
+  auto make = [&] {
+    return std::make_unique<sim::MeltSimulator<double>>(start, p, sim::make_constant_kl(1.0),
+                                                        sim::Execution::kParallel);
+  };
+  auto cycle = make();
+  sim::MeshStatistics stats;
+  int since_restart = 0;
+  double gap_s = 0;
+  for (auto _ : state) {
+    if (since_restart == kCyclesPerRestart) cycle = make(), since_restart = 0;
+    const auto g0 = Clock::now();
+    spend_gap(gap, stats, cycle->mesh());
+    const auto t0 = Clock::now();
+    benchmark::DoNotOptimize(cycle->step());
+    const auto t1 = Clock::now();
+    state.SetIterationTime(std::chrono::duration<double>(t1 - t0).count());
+    gap_s += std::chrono::duration<double>(t0 - g0).count();
+    ++since_restart;
+  }
+  state.counters["gap_ms"] = benchmark::Counter(gap_s * 1e3, benchmark::Counter::kAvgIterations);
+  state.SetLabel(std::string(mesh_label(id)) + " parallel double after " + gap_label(gap));
+}
+
 // `copies` serial cycles at once, each on its own copy of the warm state, made and melted by
 // a thread pinned to CPU k: no data is shared between them, so their summed throughput is the
 // most that `copies` threads can give on this machine, the ceiling of
@@ -297,6 +372,15 @@ void meshes_with_one_and_two(benchmark::internal::Benchmark* b, const char* what
   b->Unit(benchmark::kMillisecond);
   b->MinTime(0.5);
 }
+// The bunny as the CLI loads it and object C, after each kind of gap.
+void gap_meshes(benchmark::internal::Benchmark* b) {
+  for (int id : {5, 2})
+    for (int gap = 0; gap <= static_cast<int>(Gap::kSleep4ms); ++gap) b->Args({id, gap});
+  b->ArgNames({"mesh", "gap"});
+  b->Unit(benchmark::kMillisecond);
+  b->MinTime(0.5);
+  b->UseManualTime();
+}
 void parts_meshes(benchmark::internal::Benchmark* b) { meshes_with_one_and_two(b, "parts"); }
 void copies_meshes(benchmark::internal::Benchmark* b) {
   meshes_with_one_and_two(b, "copies");
@@ -314,5 +398,6 @@ BENCHMARK(BM_MeltCycleInParts<float>)->Apply(parts_meshes);
 BENCHMARK(BM_MeltCycleInParts<double>)->Apply(parts_meshes);
 BENCHMARK(BM_IndependentCopies<float>)->Apply(copies_meshes);
 BENCHMARK(BM_IndependentCopies<double>)->Apply(copies_meshes);
+BENCHMARK(BM_MeltCycleAfterGap)->Apply(gap_meshes);
 
 BENCHMARK_MAIN();
