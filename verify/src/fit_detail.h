@@ -113,6 +113,12 @@ class Evaluator {
 
   std::shared_ptr<const Renders> renders(const std::map<std::string, double>& model_values, double K,
                                          std::optional<double> seconds_per_cycle);
+  /// renders() for the model values and time scale among `values` (all parameters by name).
+  std::shared_ptr<const Renders> renders_at(const std::map<std::string, double>& values);
+  /// Per target: its photo's residuals against each render it needs, placed by `reg`, summed
+  /// with the needs' weights.
+  std::vector<std::vector<double>> weighted_frame_residuals(const Renders& rs, const std::vector<PhotoTarget>& targets,
+                                                            const Similarity2D& reg) const;
   Evaluation compute(const std::vector<double>& x);
   Region render_region(std::size_t target, const sim::TriMesh<double>& mesh, cv::Mat& coverage);
   std::vector<double> frame_residuals(const PhotoTarget& t, const Region& region) const;

@@ -98,23 +98,32 @@ std::shared_ptr<const Evaluator::Renders> Evaluator::renders(const std::map<std:
   return r;
 }
 
-Evaluation Evaluator::compute(const std::vector<double>& x) {
-  const std::map<std::string, double> values = values_of(x);
+std::shared_ptr<const Evaluator::Renders> Evaluator::renders_at(const std::map<std::string, double>& values) {
   std::map<std::string, double> model_values;
   for (const auto& [k, v] : values)
     if (is_model_parameter(k)) model_values[k] = v;
   const double K = values.count("cycles_per_photo") ? values.at("cycles_per_photo") : kDefaultCyclesPerPhoto;
   const std::optional<double> S =
       values.count("seconds_per_cycle") ? std::optional<double>(values.at("seconds_per_cycle")) : std::nullopt;
-  const Similarity2D reg = registration_of(values, pivot_);
-  const auto rs = renders(model_values, K, S);
-  Evaluation e;
-  e.frame_residuals.assign(targets_.size(), std::vector<double>(residuals_per_frame(), 0.0));
-  for (const auto& n : rs->needs) {
-    const std::vector<double> r = frame_residuals(targets_[n.target], transform_region(n.region, reg));
-    auto& acc = e.frame_residuals[n.target];
-    for (std::size_t i = 0; i < r.size(); ++i) acc[i] += n.weight * r[i];
+  return renders(model_values, K, S);
+}
+
+std::vector<std::vector<double>> Evaluator::weighted_frame_residuals(const Renders& rs,
+                                                                     const std::vector<PhotoTarget>& targets,
+                                                                     const Similarity2D& reg) const {
+  std::vector<std::vector<double>> out(targets.size(), std::vector<double>(residuals_per_frame(), 0.0));
+  for (const auto& n : rs.needs) {
+    const std::vector<double> r = frame_residuals(targets[n.target], transform_region(n.region, reg));
+    for (std::size_t i = 0; i < r.size(); ++i) out[n.target][i] += n.weight * r[i];
   }
+  return out;
+}
+
+Evaluation Evaluator::compute(const std::vector<double>& x) {
+  const std::map<std::string, double> values = values_of(x);
+  const auto rs = renders_at(values);
+  Evaluation e;
+  e.frame_residuals = weighted_frame_residuals(*rs, targets_, registration_of(values, pivot_));
   if (!rs->volume_model.empty()) {
     const double v0 = std::max(volume_->initial_volume_m3.value_or(volume_->volume_m3.front()), 1e-30);
     for (std::size_t s = 0; s < rs->volume_model.size(); ++s)
@@ -128,31 +137,11 @@ std::vector<std::vector<double>> Evaluator::residuals_against(const std::vector<
                                                               const std::vector<PhotoTarget>& others) {
   if (others.size() != targets_.size()) throw InvariantError("residuals_against: one target per fitted photo");
   const std::map<std::string, double> values = values_of(x);
-  std::map<std::string, double> model_values;
-  for (const auto& [k, v] : values)
-    if (is_model_parameter(k)) model_values[k] = v;
-  const double K = values.count("cycles_per_photo") ? values.at("cycles_per_photo") : kDefaultCyclesPerPhoto;
-  const std::optional<double> S =
-      values.count("seconds_per_cycle") ? std::optional<double>(values.at("seconds_per_cycle")) : std::nullopt;
-  const Similarity2D reg = registration_of(values, pivot_);
-  const auto rs = renders(model_values, K, S);
-  std::vector<std::vector<double>> out(others.size(), std::vector<double>(residuals_per_frame(), 0.0));
-  for (const auto& n : rs->needs) {
-    const std::vector<double> r = frame_residuals(others[n.target], transform_region(n.region, reg));
-    for (std::size_t i = 0; i < r.size(); ++i) out[n.target][i] += n.weight * r[i];
-  }
-  return out;
+  return weighted_frame_residuals(*renders_at(values), others, registration_of(values, pivot_));
 }
 
 std::vector<int> Evaluator::rendered_pieces(const std::vector<double>& x, double min_area_px) {
-  const std::map<std::string, double> values = values_of(x);
-  std::map<std::string, double> model_values;
-  for (const auto& [k, v] : values)
-    if (is_model_parameter(k)) model_values[k] = v;
-  const double K = values.count("cycles_per_photo") ? values.at("cycles_per_photo") : kDefaultCyclesPerPhoto;
-  const std::optional<double> S =
-      values.count("seconds_per_cycle") ? std::optional<double>(values.at("seconds_per_cycle")) : std::nullopt;
-  const auto rs = renders(model_values, K, S);
+  const auto rs = renders_at(values_of(x));
   std::vector<int> pieces(targets_.size(), 0);
   std::vector<double> weight(targets_.size(), -1.0);
   for (const auto& n : rs->needs) {
