@@ -5,6 +5,8 @@
 #include <meltlab/core/error.h>
 #include <meltlab/core/limits.h>
 
+#include "sample_storage.h"
+
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -12,17 +14,6 @@
 #include <vector>
 
 namespace meltlab::render {
-
-namespace {
-
-template <class T>
-std::shared_ptr<void> make_storage(std::int64_t n, void*& data) {
-  auto v = std::make_shared<std::vector<T>>(static_cast<std::size_t>(n), T{});
-  data = v->data();
-  return v;
-}
-
-}  // namespace
 
 int BrickedVolume::blocks_per_axis(int n, int side) { return std::max(1, (n - 1 + side - 2) / (side - 1)); }
 
@@ -47,18 +38,7 @@ BrickedVolume BrickedVolume::allocate(const std::array<int, 3>& dims, int side, 
   const std::int64_t stored = stored_samples(dims, side);
   if (stored < 0) throw InputError(fmt::format("{}: the blocked layout's sample count overflows", what));
   void* data = nullptr;
-  std::shared_ptr<void> owner;
-  switch (type) {
-    case SampleType::kUint8:
-      owner = make_storage<std::uint8_t>(stored, data);
-      break;
-    case SampleType::kUint16:
-      owner = make_storage<std::uint16_t>(stored, data);
-      break;
-    case SampleType::kFloat32:
-      owner = make_storage<float>(stored, data);
-      break;
-  }
+  const std::shared_ptr<void> owner = detail::zeroed_samples(type, stored, data);
   BrickedVolume v = wrap(owner, data, type, dims, side);
   v.mutable_ = data;
   return v;

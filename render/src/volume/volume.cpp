@@ -5,6 +5,8 @@
 #include <meltlab/core/error.h>
 #include <meltlab/core/limits.h>
 
+#include "sample_storage.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -50,13 +52,6 @@ double max_stored(SampleType type) {
   return 1.0;
 }
 
-template <class T>
-std::shared_ptr<void> make_storage(std::int64_t n, void*& data) {
-  auto v = std::make_shared<std::vector<T>>(static_cast<std::size_t>(n), T{});
-  data = v->data();
-  return v;
-}
-
 }  // namespace
 
 Volume Volume::allocate(int nx, int ny, int nz, SampleType type, const std::string& what) {
@@ -67,17 +62,7 @@ Volume Volume::allocate(int nx, int ny, int nz, SampleType type, const std::stri
   check_count(what, "samples", n, input_limits().volume_samples, "volume_samples");
   Volume v;
   void* data = nullptr;
-  switch (type) {
-    case SampleType::kUint8:
-      v.owner_ = make_storage<std::uint8_t>(n, data);
-      break;
-    case SampleType::kUint16:
-      v.owner_ = make_storage<std::uint16_t>(n, data);
-      break;
-    case SampleType::kFloat32:
-      v.owner_ = make_storage<float>(n, data);
-      break;
-  }
+  v.owner_ = detail::zeroed_samples(type, n, data);
   v.data_ = data;
   v.mutable_ = data;
   v.type_ = type;

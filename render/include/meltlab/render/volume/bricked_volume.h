@@ -105,18 +105,4 @@ class BrickedVolume : public PlacedGrid {
   int side_ = 0;
 };
 
-/// Calls fn(samples) with the typed view of the bricked volume's stored type.
-template <class Fn>
-decltype(auto) visit_samples(const BrickedVolume& v, Fn&& fn) {
-  switch (v.type()) {
-    case SampleType::kUint8:
-      return fn(v.samples<std::uint8_t>());
-    case SampleType::kUint16:
-      return fn(v.samples<std::uint16_t>());
-    case SampleType::kFloat32:
-      break;
-  }
-  return fn(v.samples<float>());
-}
-
 }  // namespace meltlab::render

@@ -235,19 +235,24 @@ class Volume : public PlacedGrid {
   std::array<std::int64_t, 3> stride_{1, 0, 0};
 };
 
-/// Calls fn(samples) with the typed view of the volume's stored type (one dispatch per call,
-/// outside any inner loop).
-template <class Fn>
-decltype(auto) visit_samples(const Volume& v, Fn&& fn) {
+/// Calls fn(samples) with the typed view of a volume's stored type (one dispatch per call,
+/// outside any inner loop): a Volume, or any volume type with type() and samples<T>()
+/// (BrickedVolume).
+template <class V, class Fn>
+requires requires(const V& v) {
+  v.type();
+  v.template samples<float>();
+}
+decltype(auto) visit_samples(const V& v, Fn&& fn) {
   switch (v.type()) {
     case SampleType::kUint8:
-      return fn(v.samples<std::uint8_t>());
+      return fn(v.template samples<std::uint8_t>());
     case SampleType::kUint16:
-      return fn(v.samples<std::uint16_t>());
+      return fn(v.template samples<std::uint16_t>());
     case SampleType::kFloat32:
       break;
   }
-  return fn(v.samples<float>());
+  return fn(v.template samples<float>());
 }
 
 }  // namespace meltlab::render
