@@ -174,15 +174,25 @@ std::string FogTable::describe() const {
       axis_warp_name(y.warp), interp_space_name(y.space));
 }
 
-FogTable f_table(const TableOptions& o) {
+namespace {
+
+// The empty F or H table over (v, u) (the two share their axes, fsa.table.F.u_max included).
+FogTable empty_vu_table(const char* name, const TableOptions& o) {
   if (o.n < 2) throw InputError(fmt::format("fsa.table.N = {}: at least 2 nodes per axis", o.n));
   if (!(o.u_max > 0)) throw InputError(fmt::format("fsa.table.F.u_max = {}: must be > 0", o.u_max));
   FogTable t;
-  t.name = fmt::format("{}", "F");  // (not = "F": a false -Wrestrict of GCC 12)
+  t.name = fmt::format("{}", name);  // (not = name: a false -Wrestrict of GCC 12)
   t.x = make_axis("v", 0.0, 0.5 * kPi, o.n, o.v_warp);
   t.y = make_axis("u", 0.0, o.u_max, o.n, o.u_warp);
   t.x.space = o.v_interp;
   t.values = ImageF(o.n, o.n, 1);
+  return t;
+}
+
+}  // namespace
+
+FogTable f_table(const TableOptions& o) {
+  FogTable t = empty_vu_table("F", o);
   tbb::parallel_for(0, o.n, [&](int j) {
     const double u = t.y.node(j);
     // Along a row, F accumulates interval by interval (each interval integrated directly).
@@ -197,14 +207,7 @@ FogTable f_table(const TableOptions& o) {
 }
 
 FogTable h_table(const TableOptions& o) {
-  if (o.n < 2) throw InputError(fmt::format("fsa.table.N = {}: at least 2 nodes per axis", o.n));
-  if (!(o.u_max > 0)) throw InputError(fmt::format("fsa.table.F.u_max = {}: must be > 0", o.u_max));
-  FogTable t;
-  t.name = fmt::format("{}", "H");
-  t.x = make_axis("v", 0.0, 0.5 * kPi, o.n, o.v_warp);
-  t.y = make_axis("u", 0.0, o.u_max, o.n, o.u_warp);
-  t.x.space = o.v_interp;
-  t.values = ImageF(o.n, o.n, 1);
+  FogTable t = empty_vu_table("H", o);
   tbb::parallel_for(0, o.n, [&](int j) {
     const double u = t.y.node(j);
     for (int i = 0; i < o.n; ++i) {

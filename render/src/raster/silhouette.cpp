@@ -536,9 +536,11 @@ void SilhouetteRenderer::render(const sim::IndexedMesh& mesh, cv::Mat& out) {
 template void SilhouetteRenderer::render<float>(const sim::TriMesh<float>&, cv::Mat&);
 template void SilhouetteRenderer::render<double>(const sim::TriMesh<double>&, cv::Mat&);
 
-template <class Real>
-cv::Mat silhouette_mask(const sim::TriMesh<Real>& mesh, const Camera& camera, const SilhouetteOptions& options) {
-  SilhouetteOptions o = options;
+namespace {
+
+// The mask of any mesh SilhouetteRenderer::render takes, at one sample per pixel.
+template <class Mesh>
+cv::Mat one_sample_mask(const Mesh& mesh, const Camera& camera, SilhouetteOptions o) {
   o.supersample = 1;
   SilhouetteRenderer r(camera, o);
   cv::Mat out;
@@ -546,13 +548,15 @@ cv::Mat silhouette_mask(const sim::TriMesh<Real>& mesh, const Camera& camera, co
   return out;
 }
 
+}  // namespace
+
+template <class Real>
+cv::Mat silhouette_mask(const sim::TriMesh<Real>& mesh, const Camera& camera, const SilhouetteOptions& options) {
+  return one_sample_mask(mesh, camera, options);
+}
+
 cv::Mat silhouette_mask(const sim::IndexedMesh& mesh, const Camera& camera, const SilhouetteOptions& options) {
-  SilhouetteOptions o = options;
-  o.supersample = 1;
-  SilhouetteRenderer r(camera, o);
-  cv::Mat out;
-  r.render(mesh, out);
-  return out;
+  return one_sample_mask(mesh, camera, options);
 }
 
 template <class Real>
