@@ -273,6 +273,20 @@ json estimates_json(const verify::FitResult& fit, bool photos) {
 }
 
 /// What the errors of "estimates" mean (fit.json "uncertainty"; verify/fit.h).
+/// What the solver did (fit.json and the mass fit's JSON): iterations, simulations, time,
+/// convergence, and the kg scan of the start.
+void add_solver_json(json& j, const verify::FitResult& fit) {
+  j["iterations"] = fit.iterations;
+  j["simulations"] = fit.simulations;
+  j["uncertainty_simulations"] = fit.uncertainty_evaluations;
+  j["time_s"] = fit.time_s;
+  j["converged"] = fit.converged;
+  j["message"] = fit.message;
+  json scan = json::array();
+  for (const auto& [kg, cost] : fit.kg_scan) scan.push_back({{"kg", kg}, {"cost", cost}});
+  j["kg_scan"] = scan;
+}
+
 json uncertainty_json(const verify::FitResult& fit, bool photos) {
   json u;
   u["standard_error"] =
@@ -323,15 +337,7 @@ json fit_json(const verify::ObservationSequence& obs, const FitRunOptions& o, co
   j["cost"] = {{"initial", fit.initial_cost}, {"final", fit.final_cost}, {"residual_sigma_px", fit.residual_sigma_px}};
   j["uncertainty"] = uncertainty_json(fit, true);
   j["warnings"] = fit.warnings;
-  j["iterations"] = fit.iterations;
-  j["simulations"] = fit.simulations;
-  j["uncertainty_simulations"] = fit.uncertainty_evaluations;
-  j["time_s"] = fit.time_s;
-  j["converged"] = fit.converged;
-  j["message"] = fit.message;
-  json scan = json::array();
-  for (const auto& [kg, c] : fit.kg_scan) scan.push_back({{"kg", kg}, {"cost", c}});
-  j["kg_scan"] = scan;
+  add_solver_json(j, fit);
   j["frames_used"] = fit.frames_used.size();
   j["frames_refused"] = fit.frames_refused;
   j["frame_rms_px"] = fit.frame_rms_px;
@@ -485,15 +491,7 @@ json run_series_fit(const FitRunOptions& o, const verify::ObservationSequence& o
   // What a mass curve fixes: the melt per second of the experiment.
   const double kg = fit.value("kg"), sec = fit.value("seconds_per_cycle");
   j["kg_per_second_per_cycle"] = kg / sec;
-  j["iterations"] = fit.iterations;
-  j["simulations"] = fit.simulations;
-  j["uncertainty_simulations"] = fit.uncertainty_evaluations;
-  j["time_s"] = fit.time_s;
-  j["converged"] = fit.converged;
-  j["message"] = fit.message;
-  json scan = json::array();
-  for (const auto& [k, c] : fit.kg_scan) scan.push_back({{"kg", k}, {"cost", c}});
-  j["kg_scan"] = scan;
+  add_solver_json(j, fit);
   j["series_comparison"] = series_comparison_json(cmp, "fitted");
   j["outputs"] = {{"curve", "mass_curve.csv"}, {"chart", "mass_curve.png"}};
   return j;

@@ -87,6 +87,34 @@ json vsi_data_json(const render::VolumeScene& scene, const std::optional<render:
   return j;
 }
 
+/// A describe_* list (seed settings by name) as one JSON object.
+json pairs_json(const std::vector<std::pair<std::string, std::string>>& pairs) {
+  json j = json::object();
+  for (const auto& [k, v] : pairs) j[k] = v;
+  return j;
+}
+
+/// The head of a transfer-function render's run.json: the scene file, the optical model, the
+/// seed's settings under `key` (clv, vlr), and seed 003's data choices where the data has them.
+json tf_run_head(const fs::path& scene_file, const render::VolumeScene& scene, const char* key,
+                 const std::vector<std::pair<std::string, std::string>>& settings,
+                 const std::optional<render::Normalisation>& normalisation) {
+  json j;
+  j["scene_file"] = scene_file.string();
+  j["model"] = render::optical_model_name(scene.settings.model);
+  j[key] = pairs_json(settings);
+  if (const json vsi = vsi_data_json(scene, normalisation); !vsi.empty()) j["vsi"] = vsi;
+  return j;
+}
+
+/// volume_json of a dense volume with where the scene got it (its generator or its file).
+json scene_volume_json(const render::VolumeScene& scene, const render::Volume& volume) {
+  json j = volume_json(volume);
+  if (scene.volume.generate) j["generator"] = generator_record(*scene.volume.generate);
+  if (!scene.volume.file.empty()) j["file"] = scene.volume.file.string();
+  return j;
+}
+
 std::string order_name(render::ClvOrder o) { return o == render::ClvOrder::kBlocked ? "blocked" : "linear"; }
 
 json clv_header_json(const render::ClvHeader& h) {
@@ -319,13 +347,7 @@ VolumeRenderRunResult run_tf_render(const VolumeRenderRunOptions& o, render::Vol
     write_image(dir / "samples.png", counts, PixelFormat::kUint16);
   }
 
-  json j;
-  j["scene_file"] = o.scene_file.string();
-  j["model"] = render::optical_model_name(scene.settings.model);
-  json clv = json::object();
-  for (const auto& [k, v] : render::describe_clv(scene, volume)) clv[k] = v;
-  j["clv"] = clv;
-  if (const json vsi = vsi_data_json(scene, volume.normalisation); !vsi.empty()) j["vsi"] = vsi;
+  json j = tf_run_head(o.scene_file, scene, "clv", render::describe_clv(scene, volume), volume.normalisation);
   const render::Box3 d = volume.domain();
   const auto dims = volume.is_bricked() ? volume.bricked.dims() : volume.dense.dims();
   j["volume"] = {
@@ -430,14 +452,11 @@ VolumeRenderRunResult run_slicing_render(const VolumeRenderRunOptions& o, render
   json j;
   j["scene_file"] = o.scene_file.string();
   j["method"] = "slicing";
-  json vsi = json::object();
-  for (const auto& [k, v] : render::describe_vsi(s, volume, scene.camera)) vsi[k] = v;
+  json vsi = pairs_json(render::describe_vsi(s, volume, scene.camera));
   const auto [lo, hi] = renderer.value_range();
   vsi["vsi.data.value_range"] = fmt::format("[{:.17g}, {:.17g}]", lo, hi);
   j["vsi"] = vsi;
-  j["volume"] = volume_json(volume);
-  if (scene.volume.generate) j["volume"]["generator"] = generator_record(*scene.volume.generate);
-  if (!scene.volume.file.empty()) j["volume"]["file"] = scene.volume.file.string();
+  j["volume"] = scene_volume_json(scene, volume);
   j["camera"] = camera_json(scene.camera);
   j["stats"] = {{"rays", frame.stats.rays},
                 {"samples", frame.stats.samples},
@@ -571,16 +590,8 @@ VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
     }
   write_image(dir / "image.exr", rgba, PixelFormat::kFloat);
 
-  json j;
-  j["scene_file"] = o.scene_file.string();
-  j["model"] = render::optical_model_name(scene.settings.model);
-  json vlr = json::object();
-  for (const auto& [k, v] : render::describe_vlr(scene, volume)) vlr[k] = v;
-  j["vlr"] = vlr;
-  if (const json vsi = vsi_data_json(scene, loaded.normalisation); !vsi.empty()) j["vsi"] = vsi;
-  j["volume"] = volume_json(volume);
-  if (scene.volume.generate) j["volume"]["generator"] = generator_record(*scene.volume.generate);
-  if (!scene.volume.file.empty()) j["volume"]["file"] = scene.volume.file.string();
+  json j = tf_run_head(o.scene_file, scene, "vlr", render::describe_vlr(scene, volume), loaded.normalisation);
+  j["volume"] = scene_volume_json(scene, volume);
   j["camera"] = camera_json(scene.camera);
   const auto& st = frame.stats;
   j["stats"] = {{"rays", st.rays},
