@@ -4,10 +4,10 @@
 // extended with uniform geodesic spheres of 32k, 100k and 1M triangles and two real scanned
 // meshes (the 75k bunny, the 871k refined dragon; both also in breadth-first order) — and the
 // OpenMesh half-edge peer in the same run;
-// and the cost of one row of the per-cycle statistics beside it, and what the time between two
-// cycles (a row, a busy wait, a sleep) costs the next one (BM_MeltCycleAfterGap); and the ceiling of two threads
-// on this machine: two serial cycles at once on their own copies of the mesh, pinned to CPU 0
-// and CPU 1, sharing no data (BM_IndependentCopies).
+// and the cost of one row of the per-cycle statistics beside it; what the time between two
+// cycles (a row, a busy wait, a sleep) costs the next one (BM_MeltCycleAfterGap); and the
+// ceiling of two threads on this machine: two serial cycles at once on their own copies of the
+// mesh, pinned to CPU 0 and CPU 1, sharing no data (BM_IndependentCopies).
 //
 // Every benchmark melts its mesh for a warm-up (the UV spheres' pole regions collapse in the
 // first cycles), then times cycles from that state, restarting from it every
