@@ -6,26 +6,40 @@
 
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 
 namespace meltlab::render {
 
-ImageF adjust_colours(const ImageF& image, const ColorAdjust& a) {
-  ImageF out = image;
+void adjust_colours(const ImageF& image, const ColorAdjust& a, ImageF& out) {
+  if (&out == &image) throw InvariantError("adjust_colours: the output must be another image");
+  if (out.width() != image.width() || out.height() != image.height() || out.channels() != image.channels())
+    out = ImageF(image.width(), image.height(), image.channels());
   const bool identity = a.contrast == 1 && a.brightness == 0 && a.gamma == 1;
-  for (int y = 0; y < out.height(); ++y)
-    for (int x = 0; x < out.width(); ++x)
-      for (int c = 0; c < std::min(3, out.channels()); ++c) {
-        float& v = out.at(x, y, c);
-        if (identity) {
-          v = std::clamp(v, 0.0f, 1.0f);
-          continue;
-        }
-        const double t = std::clamp((double(v) - 0.5) * a.contrast + 0.5 + a.brightness, 0.0, 1.0);
-        v = float(a.gamma == 1 ? t : std::pow(t, 1.0 / a.gamma));
+  const int nc = image.channels(), adjusted = std::min(3, nc);
+  auto adjust = [&](float v) {
+    if (identity) return std::clamp(v, 0.0f, 1.0f);
+    const double t = std::clamp((double(v) - 0.5) * a.contrast + 0.5 + a.brightness, 0.0, 1.0);
+    return float(a.gamma == 1 ? t : std::pow(t, 1.0 / a.gamma));
+  };
+  tbb::parallel_for(tbb::blocked_range<int>(0, image.height(), 16), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      const float* in = image.row(y);
+      float* o = out.row(y);
+      for (int x = 0; x < image.width(); ++x, in += nc, o += nc) {
+        for (int c = 0; c < adjusted; ++c) o[c] = adjust(in[c]);
+        for (int c = adjusted; c < nc; ++c) o[c] = in[c];
       }
+    }
+  });
+}
+
+ImageF adjust_colours(const ImageF& image, const ColorAdjust& a) {
+  ImageF out;
+  adjust_colours(image, a, out);
   return out;
 }
 
@@ -88,7 +102,7 @@ ImageF add_upsampled(const ImageF& base, const ImageF& half, double gain) {
   return out;
 }
 
-ImageF apply_bloom(const ImageF& image, const BloomSettings& s) {
+void apply_bloom(const ImageF& image, const BloomSettings& s, ImageF& out) {
   if (!(s.adjust.gamma > 0 && std::isfinite(s.adjust.gamma) && std::isfinite(s.adjust.contrast) &&
         std::isfinite(s.adjust.brightness)))
     throw InputError("slicing: bloom: gamma must be > 0 and contrast, brightness finite");
@@ -97,11 +111,17 @@ ImageF apply_bloom(const ImageF& image, const BloomSettings& s) {
   if (!(s.gain >= 0 && std::isfinite(s.gain) && std::isfinite(s.threshold)))
     throw InputError("slicing: bloom: gain must be >= 0 and the threshold finite");
   if (image.channels() < 3) throw InvariantError("apply_bloom: an RGB image is needed");
-  const ImageF adjusted = adjust_colours(image, s.adjust);
-  if (!s.enabled) return adjusted;
-  ImageF half = downsample_2x2(adjusted);
+  adjust_colours(image, s.adjust, out);
+  if (!s.enabled) return;
+  ImageF half = downsample_2x2(out);
   threshold_luminance(half, s.threshold);
-  return add_upsampled(adjusted, gaussian_blur(half, s.sigma), s.gain);
+  out = add_upsampled(out, gaussian_blur(half, s.sigma), s.gain);
+}
+
+ImageF apply_bloom(const ImageF& image, const BloomSettings& s) {
+  ImageF out;
+  apply_bloom(image, s, out);
+  return out;
 }
 
 }  // namespace meltlab::render

@@ -350,6 +350,12 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
 }
 
 SlicingFrame SlicingRenderer::render(const Camera& camera) const {
+  SlicingFrame frame;
+  render_into(camera, frame);
+  return frame;
+}
+
+void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) const {
   const auto* pin = std::get_if<Pinhole>(&camera);
   if (!pin) throw InputError("slicing: the slicing renderer needs a pinhole camera");
   const RayGenerator rays(camera);
@@ -361,9 +367,14 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
   const SliceStack stack = slice_stack(box, eye, slice_spacing(s_.quality_class, volume_.spacing()), s_.d_range);
   const Eigen::Vector3d light_pos = eye + world_from_camera.linear() * (s_.light.light_camera * box.diagonal());
   const int W = pin->width, H = pin->height;
-  SlicingFrame frame;
-  frame.raw = ImageF(W, H, 3);
-  frame.alpha = ImageF(W, H, 1);
+  // Every pixel of raw and alpha is written below, so images of the right size are reused as
+  // they are.
+  auto sized = [W, H](ImageF& im, int channels) {
+    if (im.width() != W || im.height() != H || im.channels() != channels) im = ImageF(W, H, channels);
+  };
+  sized(frame.raw, 3);
+  sized(frame.alpha, 1);
+  frame.stats = SlicingStats{};
   frame.stats.slices = stack.count;
   frame.stats.slice_spacing = stack.spacing;
   const bool lit = slicing_needs_gradients(s_);
@@ -1085,9 +1096,8 @@ SlicingFrame SlicingRenderer::render(const Camera& camera) const {
     frame.stats.cell_tests += c.cell_tests;
   }
   const auto t1 = std::chrono::steady_clock::now();
-  frame.rgb = apply_bloom(frame.raw, s_.post);
+  apply_bloom(frame.raw, s_.post, frame.rgb);
   frame.stats.post_ms = ms_since(t1);
-  return frame;
 }
 
 double slicing_pow(double x, double y) { return lane_math::pow(x, y); }

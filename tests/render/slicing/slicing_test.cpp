@@ -342,6 +342,41 @@ TEST(SlicingRender, SerialAndParallelFramesAreBitwiseEqualInEveryMode) {
   }
 }
 
+// render_into reuses a frame's images: the same bits as render() into a fresh frame, whether the
+// frame held this camera's last image (of another mode, with bloom), another size, or nothing;
+// and the stats start from zero each frame.
+TEST(SlicingRender, FramesRenderedIntoUsedImagesEqualFreshFrames) {
+  const Volume v = make_test_field(TestField::kSphere, 40);
+  const Camera cam = camera_30deg(40, 30, v.domain(), Eigen::Vector3d(1.5, -2.0, 1.0));
+  const Camera small = camera_30deg(17, 11, v.domain(), Eigen::Vector3d(1.5, -2.0, 1.0));
+  SlicingSettings s;
+  s.value_range = std::make_pair(0.0, 1.0);
+  s.tfs[0] = linear_tf(1.0, 0.8, 0.6, 0.4);
+  SlicingSettings bloom = s;
+  bloom.mode = SlicingMode::kCombined;
+  bloom.post.enabled = true;
+  bloom.post.adjust = ColorAdjust{1.2, 0.05, 1.5};
+  const SlicingRenderer other(v, bloom);
+  for (SlicingMode m : {SlicingMode::kBlend, SlicingMode::kMip, SlicingMode::kCombined}) {
+    s.mode = m;
+    const SlicingRenderer r(v, s);
+    const SlicingFrame fresh = r.render(cam);
+    SlicingFrame used;
+    other.render_into(cam, used);  // this size, other pixels
+    r.render_into(cam, used);
+    SlicingFrame resized = other.render(small);  // another size
+    r.render_into(cam, resized);
+    for (const SlicingFrame* f : {&used, &resized}) {
+      EXPECT_EQ(f->raw, fresh.raw) << slicing_mode_name(m);
+      EXPECT_EQ(f->alpha, fresh.alpha) << slicing_mode_name(m);
+      EXPECT_EQ(f->rgb, fresh.rgb) << slicing_mode_name(m);
+      EXPECT_EQ(f->stats.samples, fresh.stats.samples) << slicing_mode_name(m);
+      EXPECT_EQ(f->stats.rays, fresh.stats.rays) << slicing_mode_name(m);
+    }
+    EXPECT_NE(other.render(cam).rgb, fresh.rgb) << "the first image must differ for the test to mean anything";
+  }
+}
+
 // ---------------------------------------------------------------- the mask
 
 TEST(SlicingMask, AllOnesEqualsUnmaskedAndIndexZeroEqualsZeroAlpha) {
@@ -446,6 +481,33 @@ TEST(SlicingBloom, BelowThresholdIsTheAdjustedImage) {
   EXPECT_EQ(apply_bloom(im, b), dim);
   b.enabled = false;
   EXPECT_EQ(apply_bloom(im, BloomSettings{}), im);  // identity adjustment, values in [0, 1]
+}
+
+// The chain into a used image (another size, or this size with other values) equals the chain
+// into a fresh one, with and without bloom; a fourth channel is copied, not adjusted.
+TEST(SlicingBloom, IntoAUsedImageEqualsIntoAFreshOne) {
+  const ImageF im = random_image(40, 30, 1.3, 2);  // values above 1: the clamp matters
+  for (const bool enabled : {false, true})
+    for (const ColorAdjust& a : {ColorAdjust{}, ColorAdjust{1.2, 0.05, 1.5}}) {
+      BloomSettings b;
+      b.enabled = enabled;
+      b.adjust = a;
+      const ImageF fresh = apply_bloom(im, b);
+      ImageF same_size = random_image(40, 30, 1.0, 3), other_size = random_image(7, 5, 1.0, 4);
+      apply_bloom(im, b, same_size);
+      apply_bloom(im, b, other_size);
+      EXPECT_EQ(same_size, fresh) << enabled;
+      EXPECT_EQ(other_size, fresh) << enabled;
+    }
+  ImageF rgba(6, 4, 4);
+  for (std::size_t i = 0; i < rgba.size(); ++i) rgba.values()[i] = 0.5f * float(i % 5);
+  ImageF out;
+  adjust_colours(rgba, ColorAdjust{}, out);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 6; ++x) {
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(out.at(x, y, c), std::clamp(rgba.at(x, y, c), 0.0f, 1.0f));
+      EXPECT_EQ(out.at(x, y, 3), rgba.at(x, y, 3));
+    }
 }
 
 TEST(SlicingBloom, WeightsSumToOneAndDownsampleKeepsTheMean) {

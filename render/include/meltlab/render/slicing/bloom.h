@@ -32,6 +32,9 @@ struct BloomSettings {
 
 /// Step 1 (3-channel or more: channels 0-2 adjusted, others copied).
 ImageF adjust_colours(const ImageF& image, const ColorAdjust& adjust);
+/// Step 1 into `out` (another image than `image`), reusing its storage when it has the size
+/// already (a frame loop then touches no new memory); rows in parallel, the same values.
+void adjust_colours(const ImageF& image, const ColorAdjust& adjust, ImageF& out);
 /// Step 2 without the threshold: the 2x2 block means (width and height rounded up).
 ImageF downsample_2x2(const ImageF& image);
 /// Step 2's threshold in place: pixels with luminance < threshold set to 0.
@@ -46,5 +49,7 @@ ImageF add_upsampled(const ImageF& base, const ImageF& half, double gain);
 /// The whole chain (steps 1-4; with bloom disabled, step 1 only). Throws InputError for σ <= 0,
 /// γ <= 0 or a non-finite parameter.
 ImageF apply_bloom(const ImageF& image, const BloomSettings& settings);
+/// The chain into `out` (another image than `image`; its storage reused as by adjust_colours).
+void apply_bloom(const ImageF& image, const BloomSettings& settings, ImageF& out);
 
 }  // namespace meltlab::render

@@ -187,6 +187,10 @@ class SlicingRenderer {
                   std::optional<GradientVolume> gradients = std::nullopt);
   /// A frame seen by a pinhole camera (InputError for another camera, or an eye inside the box).
   SlicingFrame render(const Camera& camera) const;
+  /// The same frame into `frame`, reusing its images' storage when they have the camera's size
+  /// already (every pixel is written): a loop of frames then touches no new memory, whose page
+  /// faults cost a fresh 1000 x 730 frame tens of milliseconds here. The same bits as render().
+  void render_into(const Camera& camera, SlicingFrame& frame) const;
   const GradientVolume* gradients() const { return grad_ ? &*grad_ : nullptr; }
   std::pair<double, double> value_range() const { return {lo_, hi_}; }
 
