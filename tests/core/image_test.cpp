@@ -36,6 +36,23 @@ Image<T> pattern(int w, int h, int channels, F f) {
 
 // ---- round trips ----
 
+// reshape keeps an image of the asked shape as it is (storage and values) and makes any other
+// shape a fresh zeroed image.
+TEST(ImageShape, ReshapeKeepsTheSameShapeAndRenewsAnother) {
+  ImageF im(4, 3, 2, 0.5f);
+  const float* storage = im.data();
+  im.reshape(4, 3, 2);
+  EXPECT_EQ(im.data(), storage);
+  EXPECT_EQ(im.at(3, 2, 1), 0.5f);
+  im.reshape(3, 4, 2);  // the same number of values, another shape
+  EXPECT_EQ(im.width(), 3);
+  EXPECT_EQ(im.height(), 4);
+  EXPECT_EQ(im.at(2, 3, 1), 0.0f);
+  im.reshape(3, 4, 1);
+  EXPECT_EQ(im.channels(), 1);
+  EXPECT_EQ(im.size(), 12u);
+}
+
 TEST(ImageFiles, FloatExrRoundTripsHalfValuesExactly) {
   const TempFolder dir;
   // Multiples of 1/16 below 2048 are exact in half floats.

@@ -16,8 +16,7 @@ namespace meltlab::render {
 
 void adjust_colours(const ImageF& image, const ColorAdjust& a, ImageF& out) {
   if (&out == &image) throw InvariantError("adjust_colours: the output must be another image");
-  if (out.width() != image.width() || out.height() != image.height() || out.channels() != image.channels())
-    out = ImageF(image.width(), image.height(), image.channels());
+  out.reshape(image.width(), image.height(), image.channels());  // every value is written below
   const bool identity = a.contrast == 1 && a.brightness == 0 && a.gamma == 1;
   const int nc = image.channels(), adjusted = std::min(3, nc);
   auto adjust = [&](float v) {

@@ -369,11 +369,8 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   const int W = pin->width, H = pin->height;
   // Every pixel of raw and alpha is written below, so images of the right size are reused as
   // they are.
-  auto sized = [W, H](ImageF& im, int channels) {
-    if (im.width() != W || im.height() != H || im.channels() != channels) im = ImageF(W, H, channels);
-  };
-  sized(frame.raw, 3);
-  sized(frame.alpha, 1);
+  frame.raw.reshape(W, H, 3);
+  frame.alpha.reshape(W, H, 1);
   frame.stats = SlicingStats{};
   frame.stats.slices = stack.count;
   frame.stats.slice_spacing = stack.spacing;

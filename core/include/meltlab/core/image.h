@@ -34,6 +34,12 @@ class Image {
         data_(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * static_cast<std::size_t>(channels),
               fill) {}
 
+  /// Makes this a width x height x channels image. An image of that shape already keeps its
+  /// storage and values (a caller that writes every value reuses it without new memory).
+  void reshape(int width, int height, int channels) {
+    if (width != width_ || height != height_ || channels != channels_) *this = Image(width, height, channels);
+  }
+
   int width() const { return width_; }
   int height() const { return height_; }
   int channels() const { return channels_; }
