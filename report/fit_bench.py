@@ -16,29 +16,20 @@ Usage: report/fit_bench.py MELTLAB_BINARY DIR [--quick | --full]   (--full: the 
 import csv
 import json
 import os
-import subprocess
 import sys
 import time
+
+from script_args import meltlab_out_quick, run
 
 TRUE_KG = 0.8
 K = 7.0
 
 
-def run(cmd, log):
-    with open(log, "w") as fh:
-        subprocess.run(cmd, check=True, stdout=fh, stderr=subprocess.STDOUT)
-
-
 def main(argv):
-    if len(argv) < 3:
-        print(__doc__, file=sys.stderr)
+    args = meltlab_out_quick(argv, __doc__)
+    if args is None:
         return 2
-    meltlab, out = argv[1], argv[2]
-    unknown = [a for a in argv[3:] if a not in ("--quick", "--full")]
-    if unknown:
-        print(f"fit_bench.py: unknown argument {unknown[0]}", file=sys.stderr)
-        return 2
-    quick = "--quick" in argv[3:]
+    meltlab, out, quick = args
     photos = 30 if quick else 100
     os.makedirs(out, exist_ok=True)
     sizes = [(2048, 1536), (1024, 768), (640, 480), (320, 240)]

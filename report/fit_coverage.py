@@ -20,9 +20,10 @@ import csv
 import json
 import math
 import os
-import subprocess
 import sys
 import time
+
+from script_args import meltlab_out_quick, run
 
 # mesh, cycles simulated over the photos at kg = 0.8 (about half of its melt: icosphere_3
 # melts in 1057 cycles at kg 0.8, torus 466, benchmark_a 146, dumbbell 1368, airplane 2216,
@@ -58,25 +59,16 @@ def cases(n):
     return out
 
 
-def run(cmd, log):
-    with open(log, "w") as fh:
-        subprocess.run(cmd, check=True, stdout=fh, stderr=subprocess.STDOUT)
-
-
 def covered(err, se):
     return None if se is None or not se > 0 else abs(err) <= 1.96 * se
 
 
 def main(argv):
-    if len(argv) < 3:
-        print(__doc__, file=sys.stderr)
+    args = meltlab_out_quick(argv, __doc__)
+    if args is None:
         return 2
-    meltlab, out = argv[1], argv[2]
-    unknown = [a for a in argv[3:] if a not in ("--quick", "--full")]
-    if unknown:
-        print(f"fit_coverage.py: unknown argument {unknown[0]}", file=sys.stderr)
-        return 2
-    n = 4 if "--quick" in argv[3:] else 24
+    meltlab, out, quick = args
+    n = 4 if quick else 24
     os.makedirs(out, exist_ok=True)
     rows = []
     for c in cases(n):

@@ -284,6 +284,18 @@ void run_naming_scene(const std::string& scene_name, const Call& call) {
   }
 }
 
+/// A pinhole eye inside the volume's box is refused unless the scene lets rays start at the eye
+/// (vlr.camera.inside).
+void check_eye_outside(const render::VolumeScene& scene, const render::Box3& domain, const std::string& scene_name) {
+  const auto* pin = std::get_if<render::Pinhole>(&scene.camera);
+  if (!pin || scene.settings.camera_inside != render::CameraInside::kReject) return;
+  if (domain.contains(pin->camera_from_world.inverse().translation()))
+    throw InputError(
+        fmt::format("{}: the camera is inside the volume's box (vlr.camera.inside: reject); move it "
+                    "out or set rays: {{camera_inside: start_at_eye}}",
+                    scene_name));
+}
+
 /// Seed 001's transfer-function model: the volume in its layout, the empty-space index built once
 /// (timed apart), then warm-up and timed frames through one tracer.
 VolumeRenderRunResult run_tf_render(const VolumeRenderRunOptions& o, render::VolumeScene& scene) {
@@ -293,14 +305,7 @@ VolumeRenderRunResult run_tf_render(const VolumeRenderRunOptions& o, render::Vol
   const auto t_load = std::chrono::steady_clock::now();
   const render::SceneVolume volume = render::load_scene_volumes(scene);
   const double load_ms = ms_since(t_load);
-  if (const auto* pin = std::get_if<render::Pinhole>(&scene.camera)) {
-    const Eigen::Vector3d eye = pin->camera_from_world.inverse().translation();
-    if (volume.domain().contains(eye) && scene.settings.camera_inside == render::CameraInside::kReject)
-      throw InputError(
-          fmt::format("{}: the camera is inside the volume's box (vlr.camera.inside: reject); move it "
-                      "out or set rays: {{camera_inside: start_at_eye}}",
-                      scene_name));
-  }
+  check_eye_outside(scene, volume.domain(), scene_name);
   std::unique_ptr<render::VolumeTracer> tracer;
   named([&] {
     if (volume.is_bricked())
@@ -538,14 +543,7 @@ VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
   // Settings the integrator refuses (an eye inside the box, ...) are problems of the scene file.
   const std::string scene_name = o.scene_file.string();
   auto named = [&](const auto& call) { run_naming_scene(scene_name, call); };
-  if (const auto* pin = std::get_if<render::Pinhole>(&scene.camera)) {
-    const Eigen::Vector3d eye = pin->camera_from_world.inverse().translation();
-    if (volume.domain().contains(eye) && scene.settings.camera_inside == render::CameraInside::kReject)
-      throw InputError(
-          fmt::format("{}: the camera is inside the volume's box (vlr.camera.inside: reject); move it "
-                      "out or set rays: {{camera_inside: start_at_eye}}",
-                      scene_name));
-  }
+  check_eye_outside(scene, volume.domain(), scene_name);
   named([&] { render::check_volume_render_settings(volume, scene.settings); });
   RunFolder folder(o.out_dir, RunFolderOptions{"--out", "render.json", "volume render", o.overwrite});
   Provenance provenance = start_provenance("volume render", o.command_line);

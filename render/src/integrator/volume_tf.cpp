@@ -707,6 +707,22 @@ class TfState final : public TracerState {
     }
   }
 
+  /// What both traversals start a frame with: the eye checked, a blank frame, the rays, the
+  /// canvas, and the clock.
+  struct FrameStart {
+    FrameStart(const TfState& tracer, const Camera& camera)
+        : frame((tracer.check_eye(camera), tracer.blank_frame(camera))),
+          width(camera_width(camera)),
+          gen(camera),
+          win(tracer.canvas(camera, gen)),
+          t_render(std::chrono::steady_clock::now()) {}
+    VolumeFrame frame;
+    int width;
+    RayGenerator gen;
+    PixelWindow win;
+    std::chrono::steady_clock::time_point t_render;
+  };
+
   VolumeFrame blank_frame(const Camera& camera) const {
     VolumeFrame f;
     const int W = camera_width(camera), H = camera_height(camera);
@@ -727,12 +743,12 @@ class TfState final : public TracerState {
   // ---- image order ----
 
   VolumeFrame render_image_order(const Camera& camera) const {
-    check_eye(camera);
-    VolumeFrame frame = blank_frame(camera);
-    const int W = camera_width(camera);
-    const RayGenerator gen(camera);
-    const PixelWindow win = canvas(camera, gen);
-    const auto t_render = std::chrono::steady_clock::now();
+    FrameStart start(*this, camera);
+    VolumeFrame& frame = start.frame;
+    const int W = start.width;
+    const RayGenerator& gen = start.gen;
+    const PixelWindow win = start.win;
+    const auto t_render = start.t_render;
     tbb::combinable<VolumeRenderStats> stats;
     auto rows = [&](int y0, int y1, int x0, int x1) {
       VolumeRenderStats& st = stats.local();
@@ -770,7 +786,7 @@ class TfState final : public TracerState {
       frame.stats.terminated += st.terminated;
     });
     frame.stats.render_ms = ms_since(t_render);
-    return frame;
+    return std::move(frame);  // (a member of start: moved, not copied)
   }
 
   // ---- object order (seed 001 §2.8) ----
@@ -837,12 +853,12 @@ class TfState final : public TracerState {
   }
 
   VolumeFrame render_object_order(const Camera& camera) const {
-    check_eye(camera);
-    VolumeFrame frame = blank_frame(camera);
-    const int W = camera_width(camera);
-    const RayGenerator gen(camera);
-    const PixelWindow win = canvas(camera, gen);
-    const auto t_render = std::chrono::steady_clock::now();
+    FrameStart start(*this, camera);
+    VolumeFrame& frame = start.frame;
+    const int W = start.width;
+    const RayGenerator& gen = start.gen;
+    const PixelWindow win = start.win;
+    const auto t_render = start.t_render;
     const int side = s_.tile;
     const int n[3] = {bricked_.nx(), bricked_.ny(), bricked_.nz()};
     const auto nb = bricked_.blocks();
@@ -1020,7 +1036,7 @@ class TfState final : public TracerState {
     }
     frame.stats.queue_empty = queue_empty.load();
     frame.stats.render_ms = ms_since(t_render);
-    return frame;
+    return std::move(frame);  // (a member of start: moved, not copied)
   }
 
   VolumeRenderSettings s_;

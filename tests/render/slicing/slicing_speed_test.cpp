@@ -77,25 +77,37 @@ std::vector<Camera> cameras(const Box3& box) {
           camera_30deg(36, 28, box, Eigen::Vector3d(-0.5, 0.4, -0.3).normalized() * 0.75 * d)};
 }
 
-TEST(SlicingSpeed, JumpingEmptyRunsChangesNoPixelForAnyCellSizeModeOrMask) {
-  const Volume& v = phantom();
+/// The mask of the identity tests: the top cut away, a sphere with the second TF.
+MaskVolume test_mask(const Volume& v) {
   MaskVolume mask({12, 11, 9}, v.domain(), 1);
-  MaskEdit cut;  // the top cut away
+  MaskEdit cut;
   cut.centre = Eigen::Vector3d(0.5, 0.5, 0.9), cut.half_size = Eigen::Vector3d(0.6, 0.6, 0.2), cut.index = 0;
   mask.apply(cut);
-  MaskEdit hl;  // a region with the second TF
+  MaskEdit hl;
   hl.shape = MaskShape::kSphere, hl.centre = Eigen::Vector3d(0.4, 0.45, 0.5), hl.half_size.setConstant(0.2);
   hl.index = 2;
   mask.apply(hl);
+  return mask;
+}
+
+/// Variant 0 Blend over, 1 additive, 2 MIP, 3 combined, 4 masked lit Blend, 5 front to back (0.99).
+SlicingSettings variant_settings(const Volume& v, int variant) {
+  SlicingSettings s;
+  s.tfs[0] = skin_bone();
+  s.tfs[1] = highlight();
+  s.quality_class = 0.7;
+  s.mode = variant == 2 ? SlicingMode::kMip : variant == 3 ? SlicingMode::kCombined : SlicingMode::kBlend;
+  s.blend = variant == 1 ? BlendOperator::kAdditive : BlendOperator::kOver;
+  if (variant == 4) s.mask = test_mask(v), s.lit_blend = true;
+  if (variant == 5) s.early_termination = 0.99;
+  return s;
+}
+
+TEST(SlicingSpeed, JumpingEmptyRunsChangesNoPixelForAnyCellSizeModeOrMask) {
+  const Volume& v = phantom();
   for (const Camera& cam : cameras(v.domain()))
     for (int variant = 0; variant < 5; ++variant) {
-      SlicingSettings s;
-      s.tfs[0] = skin_bone();
-      s.tfs[1] = highlight();
-      s.quality_class = 0.7;
-      s.mode = variant == 2 ? SlicingMode::kMip : variant == 3 ? SlicingMode::kCombined : SlicingMode::kBlend;
-      s.blend = variant == 1 ? BlendOperator::kAdditive : BlendOperator::kOver;
-      if (variant == 4) s.mask = mask, s.lit_blend = true;
+      SlicingSettings s = variant_settings(v, variant);
       s.skip_empty = false;
       const SlicingRenderer plain_renderer(v, s);
       const SlicingFrame plain = plain_renderer.render(cam);
@@ -165,32 +177,6 @@ TEST(SlicingSpeed, FrontToBackEqualsBackToFrontUpToRoundOffAndStopsWithinItsBoun
         EXPECT_GE(stopped.alpha.values()[i], 0.99f - 1e-6f);
       }
   }
-}
-
-/// The mask of the identity tests: the top cut away, a sphere with the second TF.
-MaskVolume test_mask(const Volume& v) {
-  MaskVolume mask({12, 11, 9}, v.domain(), 1);
-  MaskEdit cut;
-  cut.centre = Eigen::Vector3d(0.5, 0.5, 0.9), cut.half_size = Eigen::Vector3d(0.6, 0.6, 0.2), cut.index = 0;
-  mask.apply(cut);
-  MaskEdit hl;
-  hl.shape = MaskShape::kSphere, hl.centre = Eigen::Vector3d(0.4, 0.45, 0.5), hl.half_size.setConstant(0.2);
-  hl.index = 2;
-  mask.apply(hl);
-  return mask;
-}
-
-/// Variant 0 Blend over, 1 additive, 2 MIP, 3 combined, 4 masked lit Blend, 5 front to back (0.99).
-SlicingSettings variant_settings(const Volume& v, int variant) {
-  SlicingSettings s;
-  s.tfs[0] = skin_bone();
-  s.tfs[1] = highlight();
-  s.quality_class = 0.7;
-  s.mode = variant == 2 ? SlicingMode::kMip : variant == 3 ? SlicingMode::kCombined : SlicingMode::kBlend;
-  s.blend = variant == 1 ? BlendOperator::kAdditive : BlendOperator::kOver;
-  if (variant == 4) s.mask = test_mask(v), s.lit_blend = true;
-  if (variant == 5) s.early_termination = 0.99;
-  return s;
 }
 
 TEST(SlicingSpeed, LiveRunsChangeNoPixelOrCountAndSaveCellLookups) {
