@@ -744,11 +744,7 @@ class TfState final : public TracerState {
 
   VolumeFrame render_image_order(const Camera& camera) const {
     FrameStart start(*this, camera);
-    VolumeFrame& frame = start.frame;
-    const int W = start.width;
-    const RayGenerator& gen = start.gen;
-    const PixelWindow win = start.win;
-    const auto t_render = start.t_render;
+    auto& [frame, W, gen, win, t_render] = start;
     tbb::combinable<VolumeRenderStats> stats;
     auto rows = [&](int y0, int y1, int x0, int x1) {
       VolumeRenderStats& st = stats.local();
@@ -854,11 +850,7 @@ class TfState final : public TracerState {
 
   VolumeFrame render_object_order(const Camera& camera) const {
     FrameStart start(*this, camera);
-    VolumeFrame& frame = start.frame;
-    const int W = start.width;
-    const RayGenerator& gen = start.gen;
-    const PixelWindow win = start.win;
-    const auto t_render = start.t_render;
+    auto& [frame, W, gen, win, t_render] = start;
     const int side = s_.tile;
     const int n[3] = {bricked_.nx(), bricked_.ny(), bricked_.nz()};
     const auto nb = bricked_.blocks();
