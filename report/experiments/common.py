@@ -77,6 +77,19 @@ def load_text(loads):
     return " ".join(f"{x:.2f}" for x in loads)
 
 
+def cache_text(hardware):
+    """A provenance's cache sizes as "L1d 48K, L2 1024K, ..." with where they came from: Linux sysfs,
+    or CPUID where the machine has no sysfs entries (a VM's CPUID L3 is the whole package's, of which
+    the guest shares a part)."""
+    caches = hardware.get("caches", {})
+    if not caches:
+        return "unknown"
+    text = ", ".join(f"{k} {v}" for k, v in caches.items())
+    if hardware.get("caches_source") == "cpuid":
+        text += " (as CPUID reports them: under a VM the L3 is the package's, shared with other guests)"
+    return text
+
+
 def fmt_bool(b):
     return "yes" if b else "no"
 

@@ -10,7 +10,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from .common import write_csv, write_fragment, read, linfit, yes, load_text
+from .common import cache_text, write_csv, write_fragment, read, linfit, yes, load_text
 
 SOURCE_HW = ("AMD Athlon 64 3000+, 512 MB, GeForce 6600GT 128 MB, FX Composer 1.6 (fps after 30 s); "
              "the harness: median of timed frames after warm-up on this CPU")
@@ -29,7 +29,7 @@ MODELS = ["emission", "hg", "hg_attenuated", "hg_attenuated_cache"]
 def vlr_seed000(exp: Path, args):
     bench = exp / "bench"
     record = json.loads((bench / "bench.json").read_text())
-    caches = record["provenance"]["hardware"].get("caches", {})
+    caches = cache_text(record["provenance"]["hardware"])
     verdicts, ok = [], True
 
     # ---- Tables 5.1-5.3 ----
@@ -99,7 +99,7 @@ def vlr_seed000(exp: Path, args):
                     f"{'yes' if pix_ok else 'NO'}; source 4.06-4.5)")
     if vol_rows:
         verdicts.append(f"T11 128³/64³ at n=50, 512² ({basis}): " + ", ".join(f"{r[0].split()[3]} {r[1]:.2f}" for r in vol_rows)
-                        + f" (caches {caches or 'unknown'}; source fps drops 5-23 %)")
+                        + f" (caches {caches}; source fps drops 5-23 %)")
     if hg_512:
         goal = hg_512 <= 50
         line = f"goal: HG 512², 64³, n=100 {hg_512:.0f} ms per frame wall (<= 50 ms: {yes(goal)})"

@@ -18,7 +18,7 @@ import tempfile
 
 KEYS = {"subcommand", "meltlab", "hardware", "command_line", "started_utc", "finished_utc", "timings_s", "batch_job"}
 HARDWARE_KEYS = {"cpu", "threads", "host", "tbb_default_concurrency"}
-OPTIONAL_HARDWARE_KEYS = {"caches"}  # where the machine tells (Linux sysfs)
+OPTIONAL_HARDWARE_KEYS = {"caches", "caches_source"}  # where the machine tells (Linux sysfs, else CPUID)
 OLD_TOP_LEVEL = {"meltlab", "meltlab_version", "git_revision", "command", "command_line", "hardware",
                  "started_utc", "finished_utc"}
 STAMP = re.compile(r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ$")
