@@ -53,7 +53,8 @@ def fit_inverse(qcs, ts):
 def slicing_seed003(exp: Path, args):
     bench = exp / "bench"
     record = json.loads((bench / "bench.json").read_text())
-    caches = record["provenance"]["hardware"].get("caches", {})
+    hardware = record["provenance"]["hardware"]
+    caches = hardware.get("caches", {})
     load = record.get("load_average_start", [None])[0], record.get("load_average_end", [None])[0]
     verdicts, tables, figures, notes, ok = [], [], [], [], True
 
@@ -172,12 +173,12 @@ def slicing_seed003(exp: Path, args):
     t4 = read(bench / "slicing_table4.csv")
     levels = sorted(((parse_size(v), k) for k, v in caches.items() if not k.endswith("i")), key=lambda x: x[0])
 
+    l3_of_package = hardware.get("caches_source") == "cpuid"  # CPUID's L3 under a VM: the package's, not ours
+
     def fits_in(nbytes):
         for size, name in levels:
             if nbytes <= size:
-                # CPUID's L3 under a VM is the package's, not this guest's share of it.
-                package = name == "L3" and record["provenance"]["hardware"].get("caches_source") == "cpuid"
-                return "within " + name + (" (the package's)" if package else "")
+                return "within " + name + (" (the package's)" if name == "L3" and l3_of_package else "")
         return "beyond " + (levels[-1][1] if levels else "the caches")
     ns0 = float(t4[0]["cpu_ns_per_sample"])
     src0 = SOURCE_T4[0][2]
@@ -192,7 +193,7 @@ def slicing_seed003(exp: Path, args):
     write_csv(exp / "table_4.csv", ["data", "voxels", "MiB (float32)", "cache level", "CPU ns/sample", "relative",
                                     "samples", "slices", "source fps", "source relative frame time",
                                     "wall ns/sample"], rows)
-    caches_named = cache_text(record["provenance"]["hardware"])
+    caches_named = cache_text(hardware)
     tables.append({"caption": f"Table 4: time per sample against data size at a constant slice count (Blend, a TF "
                               f"visible everywhere, no skipping; {record['seed003_table4']['image']}); caches of cpu0: "
                               f"{caches_named}; the source's 1³ texture is 2³ here (node samples)", "csv": "table_4.csv"})

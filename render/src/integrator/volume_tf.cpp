@@ -707,11 +707,11 @@ class TfState final : public TracerState {
     }
   }
 
-  /// What both traversals start a frame with: the eye checked, a blank frame, the rays, the
+  /// What both traversals start a frame with: a blank frame (the eye checked), the rays, the
   /// canvas, and the clock.
   struct FrameStart {
     FrameStart(const TfState& tracer, const Camera& camera)
-        : frame((tracer.check_eye(camera), tracer.blank_frame(camera))),
+        : frame(tracer.blank_frame(camera)),
           width(camera_width(camera)),
           gen(camera),
           win(tracer.canvas(camera, gen)),
@@ -723,7 +723,9 @@ class TfState final : public TracerState {
     std::chrono::steady_clock::time_point t_render;
   };
 
+  /// A frame of no light yet, for a camera whose eye check_eye accepts.
   VolumeFrame blank_frame(const Camera& camera) const {
+    check_eye(camera);
     VolumeFrame f;
     const int W = camera_width(camera), H = camera_height(camera);
     f.radiance = ImageF(W, H, 3, 0.0f);
