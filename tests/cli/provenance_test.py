@@ -85,6 +85,13 @@ def main():
             if not HARDWARE_KEYS <= set(p["hardware"]) <= HARDWARE_KEYS | OPTIONAL_HARDWARE_KEYS:
                 fail(f"{record}: hardware keys {sorted(p['hardware'])}: want {sorted(HARDWARE_KEYS)} "
                      f"(and optionally {sorted(OPTIONAL_HARDWARE_KEYS)})")
+            hw = p["hardware"]
+            if ("caches" in hw) != ("caches_source" in hw) or hw.get("caches_source", "sysfs") not in ("sysfs", "cpuid"):
+                fail(f"{record}: caches {hw.get('caches')!r} from {hw.get('caches_source')!r}: both or neither, "
+                     "from sysfs or cpuid")
+            for level, size in hw.get("caches", {}).items():
+                if not re.fullmatch(r"L[1-4][di]?", level) or not re.fullmatch(r"[1-9][0-9]*K", str(size)):
+                    fail(f"{record}: cache {level} {size!r}: want a level L1d..L4 and a size like 1024K")
             if not isinstance(p["hardware"]["threads"], int) or p["hardware"]["threads"] < 1:
                 fail(f"{record}: hardware.threads {p['hardware']['threads']!r}")
             if p["subcommand"] != subcommand:
