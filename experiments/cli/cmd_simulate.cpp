@@ -59,6 +59,11 @@ Run add_simulate(CLI::App& app, const std::vector<std::string>& command_line) {
          "--compact-below", o->compact_below,
          "Compact the arrays when fewer than this fraction of triangle slots is live (0 = never, as the monograph)")
       ->default_val(0.5);
+  sub->add_option("--compact-after", o->compact_after,
+                  "Also compact once the dead fraction of the triangle slots, summed over the cycles since the last "
+                  "compaction, reaches this (about what the dead slots cost against one compaction; 0 = by "
+                  "--compact-below only). Compaction never changes the melt")
+      ->default_val(1.0);
   sub->add_flag("--no-repair", *no_repair,
                 "Do not run the topology repair after Alg. 3 (the monograph's algorithms only)");
   sub->add_option("--order", *order,

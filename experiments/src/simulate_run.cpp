@@ -80,6 +80,7 @@ json options_to_json(const SimulateOptions& o) {
             {"repair_topology", o.repair_topology},
             {"remnant_check_every", o.remnant_check_every},
             {"compact_below", o.compact_below},
+            {"compact_after", o.compact_after},
             {"kl_file", o.kl_file.string()},
             {"double_precision", o.double_precision},
             {"order", o.order},
@@ -107,6 +108,8 @@ SimulateOptions options_from_json(const json& j, const std::string& source) {
     o.repair_topology = j.at("repair_topology").get<bool>();
     o.remnant_check_every = j.at("remnant_check_every").get<int>();
     o.compact_below = j.at("compact_below").get<double>();
+    // Run folders before compact_after compacted by compact_below only (the melt is the same).
+    o.compact_after = j.value("compact_after", 0.0);
     o.kl_file = j.at("kl_file").get<std::string>();
     o.double_precision = j.at("double_precision").get<bool>();
     // Run folders before the breadth-first order stored a flag.
@@ -174,6 +177,7 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o,
   p->params.repair = o.repair_topology;
   p->params.remnant_check_every = o.remnant_check_every;
   p->params.compact_below = o.compact_below;
+  p->params.compact_after = o.compact_after;
   try {
     p->params.validate();
   } catch (const InputError& e) {
@@ -287,7 +291,8 @@ struct RunChecks {
 // The time of each cycle and of each pass (excluding statistics, checks and snapshots).
 struct CycleTimes {
   std::vector<double> cycle_ms;
-  double pass_ms[4] = {0, 0, 0, 0};  ///< sums: deform, collapse, glued, repair
+  double pass_ms[6] = {0, 0, 0, 0, 0, 0};  ///< sums: deform, collapse, glued, repair, remnant check, compaction
+  std::int64_t compactions = 0;
   /// The statistics' time of each row: a run spends it beside the cycles (with a row every
   /// cycle, several times the cycle's own time).
   std::vector<double> stats_ms;
@@ -295,6 +300,8 @@ struct CycleTimes {
   void add(const sim::CycleReport& r, double ms) {
     cycle_ms.push_back(ms);
     pass_ms[0] += r.deform_ms, pass_ms[1] += r.collapse_ms, pass_ms[2] += r.glued_ms, pass_ms[3] += r.repair_ms;
+    pass_ms[4] += r.remnant_ms, pass_ms[5] += r.compact_ms;
+    compactions += r.compacted ? 1 : 0;
   }
   json to_json(double total_s) const {
     const auto n = static_cast<double>(std::max<std::size_t>(1, cycle_ms.size()));
@@ -307,7 +314,10 @@ struct CycleTimes {
              {{"deform", pass_ms[0] / n},
               {"collapse", pass_ms[1] / n},
               {"glued", pass_ms[2] / n},
-              {"repair", pass_ms[3] / n}}},
+              {"repair", pass_ms[3] / n},
+              {"remnant_check", pass_ms[4] / n},
+              {"compaction", pass_ms[5] / n}}},
+            {"compactions", compactions},
             {"stats_rows", stats_ms.size()},
             {"stats_row_ms_median", percentile(stats_ms, 0.5)},
             {"stats_ms_total", std::accumulate(stats_ms.begin(), stats_ms.end(), 0.0)},
@@ -339,6 +349,7 @@ json parameters_json(const PreparedSimulation& p) {
       {"topology_repair", o.repair_topology},
       {"remnant_check_every", p.params.remnant_check_every},
       {"compact_below", p.params.compact_below},
+      {"compact_after", p.params.compact_after},
       {"initial_sort", "rotate min-index first before cycle 1"},
       {"glued_detection", "vertex count 2 (Alg. 3) + link test in the repair"},
       {"kl", json::parse(p.kl->describe_json())},

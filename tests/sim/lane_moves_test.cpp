@@ -195,6 +195,7 @@ template <class Real>
 TriMesh<Real> melted_with_dead_slots(const IndexedMesh& input, int cycles) {
   MeltParams p = relative_melt_params(input, 0.1, 0.6);
   p.compact_below = 0.0;
+  p.compact_after = 0.0;
   MeltSimulator<Real> sim(TriMesh<Real>::from_indexed(input), p, make_constant_kl(1.0));
   for (int c = 0; c < cycles; ++c) sim.step();
   return sim.mesh();

@@ -1,6 +1,7 @@
 // Properties of the whole melt cycle on real shapes: serial == parallel bitwise, validity
 // every cycle, volume monotone, float close to double, the dumbbell split, kl effects.
 
+#include <meltlab/core/error.h>
 #include <meltlab/datasets/molds.h>
 #include <meltlab/datasets/procedural.h>
 #include <meltlab/sim/melt.h>
@@ -12,6 +13,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <numeric>
 #include <random>
@@ -368,16 +370,17 @@ TEST(Simulator, ReindexHoldsOnlyThisCyclesMerges) {
   struct Case {
     const char* name;
     IndexedMesh mesh;
-    double compact_below;
+    double compact_below, compact_after;
   };
-  const Case cases[] = {{"dumbbell", datasets::dumbbell(), 0.9},
-                        {"object C, compacting often", datasets::benchmark_object('C'), 0.97},
+  const Case cases[] = {{"dumbbell, compacting by the dead slots' cost", datasets::dumbbell(), 0.0, 1.0},
+                        {"object C, compacting often", datasets::benchmark_object('C'), 0.97, 0.0},
                         {"airplane mold (the repair collapses an edge at cycle 1035), no compaction",
-                         datasets::mold_mesh(datasets::Mold::kAirplane), 0.0}};
+                         datasets::mold_mesh(datasets::Mold::kAirplane), 0.0, 0.0}};
   std::int64_t repair_collapses = 0;
   for (const Case& c : cases) {
     MeltParams p = relative_params(c.mesh, 0.05, 0.5);
     p.compact_below = c.compact_below;
+    p.compact_after = c.compact_after;
     for (const Execution exec : {Execution::kSerial, Execution::kParallel}) {
       MeltSimulator<double> s(TriMesh<double>::from_indexed(c.mesh), p, make_constant_kl(1.0), exec);
       std::int64_t merges = 0, compactions = 0;
@@ -399,12 +402,70 @@ TEST(Simulator, ReindexHoldsOnlyThisCyclesMerges) {
         ASSERT_EQ(changed, expected) << c.name << " cycle " << cycle;
       }
       EXPECT_GT(merges, 100) << c.name;
-      if (c.compact_below > 0) {
+      if (c.compact_below > 0 || c.compact_after > 0) {
         EXPECT_GT(compactions, 0) << c.name;
+      } else {
+        EXPECT_EQ(compactions, 0) << c.name;
       }
     }
   }
   EXPECT_GT(repair_collapses, 0) << "the repair's edge collapses write m.reindex too: they must be covered";
+}
+
+// compact_after: the arrays are compacted exactly in the cycles where the dead fraction of the
+// triangle slots, summed since the last compaction, reaches compact_after (counted here from the
+// reports: a cycle never adds triangle slots), and compacting changes nothing of the melt: the
+// live mesh equals, bit for bit and in order, that of a run that never compacts, whose slots stay.
+TEST(Simulator, CompactsWhenTheDeadSlotsHaveCostACompaction) {
+  const IndexedMesh c = datasets::benchmark_object('C');
+  MeltParams p = relative_params(c, 0.05, 0.5);
+  p.compact_below = 0.0;
+  p.compact_after = 1.0;
+  MeltParams never = p;
+  never.compact_after = 0.0;
+  for (const Execution exec : {Execution::kSerial, Execution::kParallel}) {
+    MeltSimulator<float> s(TriMesh<float>::from_indexed(c), p, make_constant_kl(1.0), exec);
+    MeltSimulator<float> reference(TriMesh<float>::from_indexed(c), never, make_constant_kl(1.0), exec);
+    double sum = 0;
+    int compactions = 0, quiet_compactions = 0;
+    for (int cycle = 1; cycle <= 400; ++cycle) {
+      const auto slots = static_cast<double>(s.mesh().triangle_slots());
+      const CycleReport r = s.step();
+      const CycleReport rr = reference.step();
+      ASSERT_EQ(r.live_triangles, rr.live_triangles) << "cycle " << cycle;
+      ASSERT_FALSE(rr.compacted) << "cycle " << cycle << ": compact_below = compact_after = 0 never compacts";
+      sum += 1.0 - static_cast<double>(r.live_triangles) / slots;
+      ASSERT_EQ(r.compacted, sum >= 1.0) << "cycle " << cycle << ": dead share summed " << sum;
+      if (r.compacted) {
+        ++compactions;
+        // Late compactions come after many cycles with few deaths, not after one with many.
+        quiet_compactions += 1.0 - static_cast<double>(r.live_triangles) / slots < 0.5 ? 1 : 0;
+        sum = 0;
+        EXPECT_EQ(s.mesh().triangle_slots(), static_cast<std::size_t>(r.live_triangles)) << "cycle " << cycle;
+        EXPECT_GT(r.compact_ms, 0.0) << "cycle " << cycle;
+      } else {
+        ASSERT_EQ(static_cast<double>(s.mesh().triangle_slots()), slots) << "cycle " << cycle;
+        EXPECT_EQ(r.compact_ms, 0.0) << "cycle " << cycle;
+      }
+      if (cycle % 50 == 0) {
+        expect_same_live_mesh(s.mesh(), reference.mesh(), "cycle " + std::to_string(cycle));
+        if (::testing::Test::HasFailure()) return;
+      }
+    }
+    EXPECT_GE(compactions, 2);
+    EXPECT_GE(quiet_compactions, 1);
+    EXPECT_EQ(reference.mesh().triangle_slots(), c.F.size());
+  }
+  MeltParams bad = p;
+  for (const double x : {-1.0, std::nan("")}) {
+    bad.compact_after = x;
+    try {
+      bad.validate();
+      ADD_FAILURE() << "compact_after = " << x << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("compact_after"), std::string::npos) << e.what();
+    }
+  }
 }
 
 // Spheres of 1280 triangles, every third one inside out, their vertices shuffled in index

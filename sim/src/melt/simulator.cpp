@@ -23,6 +23,7 @@ void MeltParams::validate() const {
   finite_nonneg(kE, "kE");
   finite_nonneg(kN, "kN");
   finite_nonneg(kr, "kr");
+  finite_nonneg(compact_after, "compact_after");
   if (remnant_check_every < 0) throw InputError("remnant_check_every: must be >= 0");
   if (!(compact_below >= 0.0 && compact_below <= 1.0))
     throw InputError(fmt::format("compact_below: must lie in [0, 1] (got {})", compact_below));
@@ -115,10 +116,18 @@ CycleReport MeltSimulator<Real>::step() {
   }
   r.live_vertices = static_cast<std::int64_t>(mesh_.live_vertex_count());
   r.live_triangles = static_cast<std::int64_t>(mesh_.live_triangle_count());
-  if (params_.compact_below > 0.0 && mesh_.triangle_slots() > 0 &&
-      static_cast<double>(r.live_triangles) < params_.compact_below * static_cast<double>(mesh_.triangle_slots())) {
-    compact_workspace(mesh_, ws);
-    r.compacted = true;
+  const auto slots = static_cast<double>(mesh_.triangle_slots());
+  if (slots > 0) {
+    const auto live = static_cast<double>(r.live_triangles);
+    dead_share_sum_ += 1.0 - live / slots;
+    if ((params_.compact_below > 0.0 && live < params_.compact_below * slots) ||
+        (params_.compact_after > 0.0 && dead_share_sum_ >= params_.compact_after)) {
+      t = Clock::now();
+      compact_workspace(mesh_, ws);
+      r.compact_ms = ms_since(t);
+      r.compacted = true;
+      dead_share_sum_ = 0;
+    }
   }
   ++cycle_;
   return r;

@@ -39,6 +39,7 @@ struct SimulateOptions {
   bool repair_topology = true;
   int remnant_check_every = 16;   ///< see sim::MeltParams::remnant_check_every
   double compact_below = 0.5;     ///< see sim::MeltParams::compact_below
+  double compact_after = 1.0;     ///< see sim::MeltParams::compact_after
   std::filesystem::path kl_file;  ///< YAML with a top-level `kl:`; empty = constant 1
   bool double_precision = true;
   int threads = 0;               ///< 0 = all cores; 1 = serial execution

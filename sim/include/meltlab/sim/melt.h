@@ -79,6 +79,13 @@ struct MeltParams {
   /// only, fixed length). Keeping the order keeps every "smaller index wins" decision of
   /// Alg. 2 the same, so the melt is identical; only indices shift and sweeps get shorter.
   double compact_below = 0.5;
+  /// Also compact once the dead slots have cost about what a compaction costs: when the dead
+  /// fraction of the triangle slots, summed over the cycles since the last compaction, reaches
+  /// this (0 = by compact_below only). Every sweep of a cycle pays for a dead slot about as for
+  /// a live one, and a compaction costs about one cycle (docs/melt-core.md, issue 20 step 13),
+  /// so at 1 the compactions cost at most about what the dead slots did (the ski-rental
+  /// rule). Counts only, no clocks: the same cycles compact in every run.
+  double compact_after = 1.0;
 
   /// Throws InputError naming the parameter if a value is not finite or out of range.
   void validate() const;
@@ -105,6 +112,7 @@ struct CycleReport {
   /// Wall time of each pass, milliseconds: Alg. 1, Alg. 2, Alg. 3, repair, and the remnant
   /// check (0 in the cycles without one).
   double deform_ms = 0, collapse_ms = 0, glued_ms = 0, repair_ms = 0, remnant_ms = 0;
+  double compact_ms = 0;   ///< the compaction's wall time (0 in the cycles without one)
   bool compacted = false;  ///< the arrays were compacted at the end of this cycle
   bool topology_changed() const {
     return repair_vertex_splits > 0 || repair_edge_collapses > 0 || repair_glued_pairs > 0 ||
@@ -154,6 +162,7 @@ class MeltSimulator {
   KlFieldPtr kl_;
   Execution exec_;
   std::int64_t cycle_ = 0;
+  double dead_share_sum_ = 0;  ///< dead fraction of the triangle slots summed since the last compaction
   std::unique_ptr<MeltWorkspace> ws_;
 };
 
