@@ -15,6 +15,7 @@
 #include <tbb/info.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -181,7 +182,12 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o,
   try {
     p->params.validate();
   } catch (const InputError& e) {
-    throw InputError(fmt::format("--{}", e.what()));
+    // "compact_after: ..." names the parameter; the option is --compact-after (kE: --ke).
+    std::string what = e.what();
+    const std::size_t colon = what.find(':');
+    for (std::size_t i = 0; i < colon && i < what.size(); ++i)
+      what[i] = what[i] == '_' ? '-' : static_cast<char>(std::tolower(static_cast<unsigned char>(what[i])));
+    throw InputError("--" + what);
   }
 
   sim::KlContext ctx;

@@ -108,6 +108,10 @@ PY
     expect_exit 2 "$M" simulate --mesh dumbbell --kg nan --out run; expect_err "--kg"; expect_no_dir run
     expect_exit 2 "$M" simulate --mesh dumbbell --kr -1 --out run; expect_err "--kr"; expect_no_dir run
     expect_exit 2 "$M" simulate --mesh dumbbell --ke abc --out run; expect_err "--ke"; expect_no_dir run
+    # The simulator's parameter names come back as the options' names (kE: --ke, compact_after: --compact-after).
+    expect_exit 2 "$M" simulate --mesh dumbbell --ke nan --out run; expect_err "--ke: must"; expect_no_dir run
+    expect_exit 2 "$M" simulate --mesh dumbbell --compact-after -1 --out run; expect_err "--compact-after: must"; expect_no_dir run
+    expect_exit 2 "$M" simulate --mesh dumbbell --compact-below 2 --out run; expect_err "--compact-below: must"; expect_no_dir run
     expect_exit 2 "$M" simulate --mesh dumbbell --cycles -5 --out run; expect_err "--cycles"; expect_no_dir run
     expect_exit 2 "$M" simulate --mesh dumbbell --precision half --out run; expect_err "--precision"; expect_no_dir run
     expect_exit 2 "$M" simulate --mesh dumbbell --deform sideways --out run; expect_err "--deform"; expect_no_dir run
