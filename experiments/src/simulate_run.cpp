@@ -185,7 +185,8 @@ std::unique_ptr<PreparedSimulation> prepare_simulation(const SimulateOptions& o,
     // "compact_after: ..." names the parameter; the option is --compact-after (kE: --ke).
     std::string what = e.what();
     const std::size_t colon = what.find(':');
-    for (std::size_t i = 0; i < colon && i < what.size(); ++i)
+    if (colon == std::string::npos) throw InputError("--" + what);  // no name to map: as it is
+    for (std::size_t i = 0; i < colon; ++i)
       what[i] = what[i] == '_' ? '-' : static_cast<char>(std::tolower(static_cast<unsigned char>(what[i])));
     throw InputError("--" + what);
   }
