@@ -216,6 +216,26 @@ void BM_PhantomBlendMasked(benchmark::State& state) {
   time_phantom(state, s);
 }
 
+// The voxel bits' effect (SlicingSettings::skip_voxels; the same image either way); args: QC x 100,
+// voxel bits (0/1), TF (0: the bench's constant TF, 1: the scene's linear TF)
+void BM_PhantomVoxelBits(benchmark::State& state) {
+  render::SlicingSettings s;
+  s.quality_class = double(state.range(0)) / 100;
+  s.skip_voxels = state.range(1) != 0;
+  s.tfs[0] = state.range(2) != 0 ? phantom_linear_tf() : phantom_tf();
+  time_phantom(state, s);
+}
+
+// The packets against one ray at a time on this machine (SlicingSettings::simd; the same image
+// either way); args: QC x 100, packets (0/1)
+void BM_PhantomPackets(benchmark::State& state) {
+  render::SlicingSettings s;
+  s.quality_class = double(state.range(0)) / 100;
+  s.simd = state.range(1) != 0;
+  s.tfs[0] = phantom_tf();
+  time_phantom(state, s);
+}
+
 // args: QC x 100, empty-space cell edge (voxels)
 void BM_PhantomCombined(benchmark::State& state) {
   render::SlicingSettings s;
@@ -255,6 +275,13 @@ BENCHMARK(BM_PhantomBlend)
     ->Apply(frame_timing);
 BENCHMARK(BM_PhantomBlendLinear)->Arg(100)->Apply(frame_timing);
 BENCHMARK(BM_PhantomBlendMasked)->Args({100, 0})->Args({100, 1})->Apply(frame_timing);
+BENCHMARK(BM_PhantomVoxelBits)
+    ->Args({100, 0, 0})
+    ->Args({100, 1, 0})
+    ->Args({100, 0, 1})
+    ->Args({100, 1, 1})
+    ->Apply(frame_timing);
+BENCHMARK(BM_PhantomPackets)->Args({100, 0})->Args({100, 1})->Apply(frame_timing);
 BENCHMARK(BM_PhantomCombined)->Args({100, 8})->Args({100, 4})->Apply(frame_timing);
 BENCHMARK(BM_PhantomRayCast)->Args({100, 0})->Args({100, 1})->Apply(frame_timing);
 

@@ -346,6 +346,48 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
     cell_info_.resize(live_.size());
     for (std::size_t i = 0; i < live_.size(); ++i)
       cell_info_[i] = std::int32_t(dist_[i]) | std::int32_t(live_reach_[i]) << 8;
+    // The voxel bits (SlicingSettings::skip_voxels): a voxel's stencil lies in its cell's padded
+    // range, so only voxels of live cells can be set. Bytes per z slice in parallel, then packed.
+    const std::array<int, 3> nd = volume.dims();
+    const std::int64_t voxels = std::int64_t(nd[0]) * nd[1] * nd[2];
+    if (s_.skip_voxels && voxels < (std::int64_t(1) << 31)) {
+      std::vector<std::uint8_t> on(std::size_t(voxels), 0);
+      visit_samples(volume, [&](const auto v) {
+        tbb::parallel_for(0, nd[2], [&](int k) {
+          const int k1 = std::min(k + 1, nd[2] - 1);
+          for (int j = 0; j < nd[1]; ++j) {
+            const int j1 = std::min(j + 1, nd[1] - 1);
+            const std::size_t row = std::size_t(cells_[0]) * (std::size_t(j >> kCellShift) +
+                                                              std::size_t(cells_[1]) * std::size_t(k >> kCellShift));
+            for (int i = 0; i < nd[0]; ++i) {
+              if (live_[row + std::size_t(i >> kCellShift)] == 0) continue;
+              const int i1 = std::min(i + 1, nd[0] - 1);
+              double mn = 1e300, mx = -1e300;
+              for (const int kk : {k, k1})
+                for (const int jj : {j, j1})
+                  for (const int ii : {i, i1}) {
+                    const double x = double(v.at(ii, jj, kk));
+                    mn = std::min(mn, x);
+                    mx = std::max(mx, x);
+                  }
+              const double pad = 1e-5 * std::max({std::abs(mn), std::abs(mx), 1.0});
+              const double a = (mn - pad - lo_) * inv, b = (mx + pad - lo_) * inv;
+              bool visible = false;
+              for (int t = 0; t < 4 && !visible; ++t)
+                visible = used[std::size_t(t)] && s_.tfs[std::size_t(t)].visible_in(a, b);
+              on[std::size_t(i) + std::size_t(nd[0]) * (std::size_t(j) + std::size_t(nd[1]) * std::size_t(k))] =
+                  visible ? 1 : 0;
+            }
+          }
+        });
+      });
+      voxel_bits_.assign(std::size_t((voxels + 31) / 32), 0);
+      tbb::parallel_for(std::size_t(0), voxel_bits_.size(), [&](std::size_t w) {
+        std::uint32_t word = 0;
+        for (std::size_t b = 0; b < 32 && 32 * w + b < on.size(); ++b) word |= std::uint32_t(on[32 * w + b]) << b;
+        voxel_bits_[w] = std::int32_t(word);
+      });
+    }
   }
 }
 
@@ -414,6 +456,8 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   for (std::size_t t = 0; t < 4; ++t)
     if (tfs[t].linear()) lane_tfs[t].emplace(s_.tfs[t]);
   const std::int32_t* const cell_info = cell_info_.data();
+  // The voxel bits (SlicingSettings::skip_voxels), null when off.
+  const std::int32_t* const voxel_bits = voxel_bits_.empty() ? nullptr : voxel_bits_.data();
   // The gradient for the packets' lighting: the three encoded channels of a voxel in one word.
   const std::int32_t* const grad_words = grad_words_.empty() ? nullptr : grad_words_.data();
   const float grad_channel_scale = lit ? grad_->channel(0).scale : 1.0f;
@@ -558,6 +602,16 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 if (live_runs) {
                   const double run = cube_run(cc, live_reach[cell], g, double(n_samples - 1 - step));
                   live_until = step + 1 + (run >= 1 ? int(run) : 0);
+                }
+              }
+              // The voxel bits: no TF in use can see this sample's stencil (α = 0), so it is not fetched.
+              if (voxel_bits != nullptr) {
+                const std::int64_t v = std::int64_t(std::clamp(int(fx), 0, dims[0] - 1)) +
+                                       dims[0] * (std::int64_t(std::clamp(int(fy), 0, dims[1] - 1)) +
+                                                  std::int64_t(dims[1]) * std::clamp(int(fz), 0, dims[2] - 1));
+                if (((voxel_bits[v >> 5] >> (v & 31)) & 1) == 0) {
+                  ++n_skipped;
+                  continue;
                 }
               }
               int m = 1;
@@ -866,6 +920,12 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               }
             }
             VI sample = inr & live;
+            if (voxel_bits != nullptr) {  // the scalar loop's voxel bits, lane by lane
+              const VI vox = clampv(ii[0], cell_max[0]) +
+                             dims[0] * (clampv(ii[1], cell_max[1]) + dims[1] * clampv(ii[2], cell_max[2]));
+              const VI word = gather_i32(voxel_bits, select(sample, vox >> 5, zero));
+              sample &= ((word >> (vox & 31)) & 1) != 0;
+            }
             n_fetched -= sample;
             if (!any(sample)) continue;
             const int k = kFrontToBack ? -K : K;  // the plane (the same for every lane)
@@ -1170,8 +1230,9 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
   add("post.sigma/radius", fmt::format("{} half-res px, radius ceil(3 sigma)", num(s.post.sigma)));
   add("post.bloom_blend", fmt::format("additive, gain {}", num(s.post.gain)));
   add("post.render_target", "float32");
-  add("skip_empty", s.skip_empty ? fmt::format("{}^3 cells, runs of empty planes jumped{}, exact (same image)",
-                                               s.skip_cell, s.live_runs ? " and of live planes run" : "")
+  add("skip_empty", s.skip_empty ? fmt::format("{}^3 cells, runs of empty planes jumped{}{}, exact (same image)",
+                                               s.skip_cell, s.live_runs ? " and of live planes run" : "",
+                                               s.skip_voxels ? ", voxel stencils no TF sees not fetched" : "")
                                  : "off");
   add("blend.early_termination",
       s.early_termination > 0

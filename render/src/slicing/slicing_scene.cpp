@@ -137,6 +137,7 @@ SlicingScene parse_slicing_scene(const ConfigSection& c) {
   s.skip_cell = c.get_in_range<int>("skip_cell", 4, 2, 16);
   if (s.skip_cell != 2 && s.skip_cell != 4 && s.skip_cell != 8 && s.skip_cell != 16)
     c.fail_at("skip_cell", "'skip_cell' must be 2, 4, 8 or 16");
+  s.skip_voxels = c.get<bool>("skip_voxels", true);
   s.early_termination = c.get_in_range<double>("early_termination", 0.0, 0.0, 1.0);
   s.exact_positions = c.get<bool>("exact_positions", false);
   s.simd = c.get<bool>("simd", true);

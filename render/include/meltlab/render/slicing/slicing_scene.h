@@ -29,6 +29,7 @@
 //     parallel: true
 //     skip_empty: true            # cells where no TF in use is visible are not fetched (same image)
 //     skip_cell: 4                # edge of those cells in voxels: 2, 4, 8 or 16 (same image)
+//     skip_voxels: true           # in live cells, samples whose voxel stencil no TF sees are not fetched (same image)
 //     early_termination: 0        # Blend over only: > 0 composites front to back and stops at A >= it
 //     exact_positions: false      # true: o + t_k v per sample (a division each) instead of g0 + j dg
 //                                 # per ray; equal to float round-off (tested within 1e-5 voxel)
