@@ -1,8 +1,10 @@
 #pragma once
-// Eight-lane packets for the slicing renderer's SIMD path (slicing_renderer.cpp,
-// SlicingSettings::simd): GCC vector extensions, which the compiler lowers to what the target has
-// (one AVX-512 register for eight doubles, two AVX2 registers, or scalar code), and the target's
-// gather and fused multiply-add instructions where it has them (a loop over the lanes otherwise).
+// Packets for the slicing renderer's SIMD path (slicing_renderer.cpp, SlicingSettings::simd): GCC
+// vector extensions of one register of doubles each — eight lanes where the target has AVX-512,
+// four where it has AVX (a 64-byte vector on an AVX2-only target is lowered lane by lane through
+// the stack: the packets ran 1.24x slower than one ray at a time on a Zen 3 host) — and the
+// target's gather and fused multiply-add instructions where it has them (a loop over the lanes
+// otherwise).
 // Every operation rounds as its scalar counterpart in the renderer does (-ffp-contract=off: no
 // fused multiply-add unless written as fma), so a lane computes the bits a scalar ray would.
 
@@ -22,7 +24,14 @@
 
 namespace meltlab::render::packet {
 
-constexpr int kLanes = 8;
+#if defined(__AVX512F__)
+#define MELTLAB_PACKET_LANES 8
+#else
+#define MELTLAB_PACKET_LANES 4
+#endif
+constexpr int kLanes = MELTLAB_PACKET_LANES;
+/// A packet's pixels: a block of kLanesX x 2 (lane l at x0 + l % kLanesX, y0 + l / kLanesX).
+constexpr int kLanesX = kLanes / 2;
 using VD = double __attribute__((vector_size(8 * kLanes)));        ///< eight doubles
 using VL = std::int64_t __attribute__((vector_size(8 * kLanes)));  ///< masks of VD (-1 true, 0 false)
 using VF = float __attribute__((vector_size(4 * kLanes)));         ///< eight floats
@@ -37,8 +46,10 @@ inline VL wide(VI m) { return __builtin_convertvector(m, VL); }
 inline VI narrow(VL m) { return __builtin_convertvector(m, VI); }
 /// Bit l set where lane l of a mask is true.
 inline unsigned bits(VI m) {
-#if defined(__AVX__)
+#if defined(__AVX__) && MELTLAB_PACKET_LANES == 8
   return unsigned(_mm256_movemask_ps(__m256(m)));
+#elif defined(__AVX__)
+  return unsigned(_mm_movemask_ps(__m128(m)));
 #else
   unsigned r = 0;
   for (int l = 0; l < kLanes; ++l) r |= (m[l] != 0 ? 1u : 0u) << l;
@@ -56,7 +67,11 @@ inline std::int32_t hsum(VI x) {
 /// The smallest lane.
 inline std::int32_t hmin(VI x) {
 #if defined(__AVX2__)
+#if MELTLAB_PACKET_LANES == 8
   __m128i m = _mm_min_epi32(_mm256_castsi256_si128(__m256i(x)), _mm256_extracti128_si256(__m256i(x), 1));
+#else
+  __m128i m = __m128i(x);
+#endif
   m = _mm_min_epi32(m, _mm_shuffle_epi32(m, 0x4E));
   m = _mm_min_epi32(m, _mm_shuffle_epi32(m, 0xB1));
   return _mm_cvtsi128_si32(m);
@@ -75,6 +90,8 @@ inline VF select(VI m, VF a, VF b) { return m ? a : b; }
 inline VD fma(VD a, VD b, VD c) {
 #if defined(__AVX512F__)
   return VD(_mm512_fmadd_pd(__m512d(a), __m512d(b), __m512d(c)));
+#elif defined(__FMA__)
+  return VD(_mm256_fmadd_pd(__m256d(a), __m256d(b), __m256d(c)));
 #else
   VD r;
   for (int l = 0; l < kLanes; ++l) r[l] = std::fma(a[l], b[l], c[l]);
@@ -93,6 +110,8 @@ inline VD floor(VD x) {
 #if defined(__AVX512F__)
   // (The masked form with x as the source: GCC 12 flags the unmasked one's undefined source.)
   return VD(_mm512_mask_roundscale_pd(__m512d(x), 0xFF, __m512d(x), _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC));
+#elif defined(__AVX__)
+  return VD(_mm256_round_pd(__m256d(x), _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC));
 #else
   VD r;
   for (int l = 0; l < kLanes; ++l) r[l] = std::floor(x[l]);
@@ -104,6 +123,8 @@ inline VD floor(VD x) {
 inline VD sqrt(VD x) {
 #if defined(__AVX512F__)
   return VD(_mm512_mask_sqrt_pd(__m512d(x), 0xFF, __m512d(x)));  // (masked: see floor)
+#elif defined(__AVX__)
+  return VD(_mm256_sqrt_pd(__m256d(x)));
 #else
   VD r;
   for (int l = 0; l < kLanes; ++l) r[l] = std::sqrt(x[l]);
@@ -116,7 +137,11 @@ template <class T>
 inline VF gather(const T* data, VI offset) {
 #if defined(__AVX2__)
   if constexpr (std::is_same_v<T, float>) {
+#if MELTLAB_PACKET_LANES == 8
     return VF(_mm256_i32gather_ps(reinterpret_cast<const float*>(data), __m256i(offset), 4));
+#else
+    return VF(_mm_i32gather_ps(reinterpret_cast<const float*>(data), __m128i(offset), 4));
+#endif
   }
 #endif
   VF r;
@@ -132,6 +157,10 @@ inline void gather_pairs(const float* data, VI offset, VF& first, VF& second) {
   const VL p = VL(_mm512_mask_i32gather_epi64(_mm512_setzero_si512(), 0xFF, __m256i(offset), data, 4));
   first = VF(__builtin_convertvector(p, VI));  // the low halves' bits: data[offset]
   second = VF(__builtin_convertvector(p >> 32, VI));
+#elif defined(__AVX2__)
+  const VL p = VL(_mm256_i32gather_epi64(reinterpret_cast<const long long*>(data), __m128i(offset), 4));
+  first = VF(__builtin_convertvector(p, VI));
+  second = VF(__builtin_convertvector(p >> 32, VI));
 #else
   for (int l = 0; l < kLanes; ++l) first[l] = data[offset[l]], second[l] = data[offset[l] + 1];
 #endif
@@ -139,8 +168,10 @@ inline void gather_pairs(const float* data, VI offset, VF& first, VF& second) {
 
 /// data[offset] per lane (int32 table).
 inline VI gather_i32(const std::int32_t* data, VI offset) {
-#if defined(__AVX2__)
+#if defined(__AVX2__) && MELTLAB_PACKET_LANES == 8
   return VI(_mm256_i32gather_epi32(reinterpret_cast<const int*>(data), __m256i(offset), 4));
+#elif defined(__AVX2__)
+  return VI(_mm_i32gather_epi32(reinterpret_cast<const int*>(data), __m128i(offset), 4));
 #else
   VI r;
   for (int l = 0; l < kLanes; ++l) r[l] = data[offset[l]];

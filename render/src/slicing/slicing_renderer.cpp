@@ -714,10 +714,11 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
       const VI zero = splati(0), one = splati(1);
       const VI gstr[3] = {splati(1), splati(dims[0]), splati(dims[0] * dims[1])};  // grad_words_ (voxels)
       auto clampv = [](VI i, VI hi) { return select(i < 0, splati(0), select(i > hi, hi, i)); };
-      // Packets of 4 x 2 pixels (lane l at x0 + l % 4, y0 + l / 4): neighbours closer than in a row.
+      // Packets of kLanesX x 2 pixels (lane l at x0 + l % kLanesX, y0 + l / kLanesX; 4 x 2 with
+      // AVX-512, 2 x 2 otherwise): neighbours closer than in a row.
       const int x_end = std::min(W, (tx + 1) * T), y_end = std::min(H, (ty + 1) * T);
       for (int y0 = ty * T; y0 < y_end; y0 += 2)
-        for (int x0 = tx * T; x0 < x_end; x0 += 4) {
+        for (int x0 = tx * T; x0 < x_end; x0 += kLanesX) {
           std::array<CameraRay, kLanes> lray;
           std::array<RaySlices, kLanes> lrs;
           VD G[3] = {}, D[3] = {}, ID[3] = {}, ex = splat(1);
@@ -732,7 +733,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
           VD last_a = splat(-1), last_ac = splat(0);
           VD O[3] = {}, V[3] = {}, TOFF = splat(0), COSPSI = splat(1);  // each lane's ray and RaySlices
           for (int l = 0; l < kLanes; ++l) {
-            const int x = x0 + l % 4, y = y0 + l / 4;
+            const int x = x0 + l % kLanesX, y = y0 + l / kLanesX;
             if (x >= x_end || y >= y_end) continue;
             lray[l] = rays.generate_ray(x, y);
             lrs[l] = ray_slices(stack, box, lray[l].origin, lray[l].direction);
@@ -1068,6 +1069,9 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 n_lane_samples = select(term, step + 1, n_lane_samples);
                 done |= term;
                 if (!any(alive & ~done)) break;
+                // Test again at the next plane: the lanes left may all be empty there (a jump), which
+                // the runs tested with the stopped lane would only find at their end.
+                if (skip) test_at = U + 1;
               }
               continue;
             }
@@ -1096,7 +1100,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
           cnt.classified += hsum(n_classified);
           cnt.cell_tests += hsum(n_cell_tests);
           for (int l = 0; l < kLanes; ++l) {
-            const int x = x0 + l % 4, y = y0 + l / 4;
+            const int x = x0 + l % kLanesX, y = y0 + l / kLanesX;
             if (x >= x_end || y >= y_end) continue;
             const Eigen::Vector3d C(Cr[l], Cg[l], Cb[l]);
             const Eigen::Vector3d out = mode == SlicingMode::kBlend ? Eigen::Vector3d(C + (1 - A[l]) * background)
