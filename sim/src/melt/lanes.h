@@ -23,6 +23,10 @@
 #include <limits>
 #include <type_traits>
 
+#if defined(__AVX2__) && !defined(__AVX512F__)
+#include <immintrin.h>
+#endif
+
 namespace meltlab::sim {
 
 inline constexpr std::size_t kLanes = 8;
@@ -130,5 +134,77 @@ inline void interleave3(Real* p, const Lanes<Real>& x, const Lanes<Real>& y, con
   store_lanes(p + 2 * kLanes, __builtin_shufflevector(__builtin_shufflevector(x, y, 13, 0, 6, 14, 0, 7, 15, 0), z, 0,
                                                       13, 2, 3, 14, 5, 6, 15));
 }
+
+#if defined(__AVX2__) && !defined(__AVX512F__)
+// Without AVX-512, eight doubles are two AVX registers, and GCC 12 lowers a 64-byte
+// __builtin_shufflevector lane by lane through the stack (on a Zen 3 host the vertex moves ran
+// 550 single-lane stores and reloads for 48 multiplications; docs/melt-core.md, issue 20 step 14).
+// So the double shuffles below work on the two 256-bit halves with AVX2's own shuffles. They move
+// the same numbers to the same lanes as the generic forms above (tests/sim/lane_moves_test.cpp
+// checks both precisions against index arithmetic).
+namespace lanes_detail {
+inline void split(const Lanes<double>& v, __m256d& lo, __m256d& hi) {
+  std::memcpy(&lo, &v, sizeof(lo));
+  std::memcpy(&hi, reinterpret_cast<const char*>(&v) + sizeof(lo), sizeof(hi));
+}
+inline Lanes<double> join(__m256d lo, __m256d hi) {
+  Lanes<double> v;
+  std::memcpy(&v, &lo, sizeof(lo));
+  std::memcpy(reinterpret_cast<char*>(&v) + sizeof(lo), &hi, sizeof(hi));
+  return v;
+}
+/// c[j][i] = r[i][j] for a 4×4 block.
+inline void transpose4(const __m256d (&r)[4], __m256d (&c)[4]) {
+  const __m256d t0 = _mm256_unpacklo_pd(r[0], r[1]), t1 = _mm256_unpackhi_pd(r[0], r[1]);
+  const __m256d t2 = _mm256_unpacklo_pd(r[2], r[3]), t3 = _mm256_unpackhi_pd(r[2], r[3]);
+  c[0] = _mm256_permute2f128_pd(t0, t2, 0x20), c[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+  c[2] = _mm256_permute2f128_pd(t0, t2, 0x31), c[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+}
+}  // namespace lanes_detail
+
+template <>
+inline void transpose8<double>(const Lanes<double> (&in)[kLanes], Lanes<double> (&out)[kLanes]) {
+  // Rows 0-3 and 4-7, columns 0-3 (lo) and 4-7 (hi): out[j] = (column j of rows 0-3, of rows 4-7).
+  __m256d lo[2][4], hi[2][4], a[4], b[4], c[4], d[4];
+  for (std::size_t i = 0; i < kLanes; ++i) lanes_detail::split(in[i], lo[i / 4][i % 4], hi[i / 4][i % 4]);
+  lanes_detail::transpose4(lo[0], a);
+  lanes_detail::transpose4(lo[1], b);
+  lanes_detail::transpose4(hi[0], c);
+  lanes_detail::transpose4(hi[1], d);
+  for (std::size_t j = 0; j < 4; ++j)
+    out[j] = lanes_detail::join(a[j], b[j]), out[j + 4] = lanes_detail::join(c[j], d[j]);
+}
+
+template <>
+inline void deinterleave3<double>(const double* p, Lanes<double>& x, Lanes<double>& y, Lanes<double>& z) {
+  // Four triples at a time: a = x0 y0 z0 x1, b = y1 z1 x2 y2, c = z2 x3 y3 z3; blends bring each
+  // coordinate's four values into one register, a permute puts them in order.
+  __m256d xs[2], ys[2], zs[2];
+  for (int h = 0; h < 2; ++h) {
+    const __m256d a = _mm256_loadu_pd(p + 12 * h), b = _mm256_loadu_pd(p + 12 * h + 4),
+                  c = _mm256_loadu_pd(p + 12 * h + 8);
+    xs[h] = _mm256_permute4x64_pd(_mm256_blend_pd(_mm256_blend_pd(a, b, 0b0100), c, 0b0010), 0x6C);  // a0 a3 b2 c1
+    ys[h] = _mm256_permute4x64_pd(_mm256_blend_pd(_mm256_blend_pd(a, b, 0b1001), c, 0b0100), 0xB1);  // a1 b0 b3 c2
+    zs[h] = _mm256_permute4x64_pd(_mm256_blend_pd(_mm256_blend_pd(a, b, 0b0010), c, 0b1001), 0xC6);  // a2 b1 c0 c3
+  }
+  x = lanes_detail::join(xs[0], xs[1]), y = lanes_detail::join(ys[0], ys[1]), z = lanes_detail::join(zs[0], zs[1]);
+}
+
+template <>
+inline void interleave3<double>(double* p, const Lanes<double>& x, const Lanes<double>& y, const Lanes<double>& z) {
+  // deinterleave3's steps backwards (its three permutes are their own inverses).
+  __m256d xs[2], ys[2], zs[2];
+  lanes_detail::split(x, xs[0], xs[1]);
+  lanes_detail::split(y, ys[0], ys[1]);
+  lanes_detail::split(z, zs[0], zs[1]);
+  for (int h = 0; h < 2; ++h) {
+    const __m256d X = _mm256_permute4x64_pd(xs[h], 0x6C), Y = _mm256_permute4x64_pd(ys[h], 0xB1),
+                  Z = _mm256_permute4x64_pd(zs[h], 0xC6);
+    _mm256_storeu_pd(p + 12 * h, _mm256_blend_pd(_mm256_blend_pd(X, Y, 0b0010), Z, 0b0100));
+    _mm256_storeu_pd(p + 12 * h + 4, _mm256_blend_pd(_mm256_blend_pd(Y, Z, 0b0010), X, 0b0100));
+    _mm256_storeu_pd(p + 12 * h + 8, _mm256_blend_pd(_mm256_blend_pd(Z, X, 0b0010), Y, 0b0100));
+  }
+}
+#endif
 
 }  // namespace meltlab::sim
