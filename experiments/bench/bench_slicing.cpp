@@ -226,6 +226,18 @@ void BM_PhantomVoxelBits(benchmark::State& state) {
   time_phantom(state, s);
 }
 
+// What a renderer costs to set up on the phantom (the empty-space cells, their distance maps and,
+// with arg 1, the voxel bits; no gradients): once per volume and settings, before any frame.
+void BM_PhantomSetUp(benchmark::State& state) {
+  render::SlicingSettings s;
+  s.skip_voxels = state.range(0) != 0;
+  s.tfs[0] = phantom_tf();
+  for (auto _ : state) {
+    render::SlicingRenderer r(phantom(), s);
+    benchmark::DoNotOptimize(&r);
+  }
+}
+
 // The packets against one ray at a time on this machine (SlicingSettings::simd; the same image
 // either way); args: QC x 100, packets (0/1)
 void BM_PhantomPackets(benchmark::State& state) {
@@ -281,6 +293,7 @@ BENCHMARK(BM_PhantomVoxelBits)
     ->Args({100, 0, 1})
     ->Args({100, 1, 1})
     ->Apply(frame_timing);
+BENCHMARK(BM_PhantomSetUp)->Arg(0)->Arg(1)->Apply(frame_timing);
 BENCHMARK(BM_PhantomPackets)->Args({100, 0})->Args({100, 1})->Apply(frame_timing);
 BENCHMARK(BM_PhantomCombined)->Args({100, 8})->Args({100, 4})->Apply(frame_timing);
 BENCHMARK(BM_PhantomRayCast)->Args({100, 0})->Args({100, 1})->Apply(frame_timing);

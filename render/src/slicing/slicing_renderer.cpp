@@ -12,6 +12,7 @@
 #include <meltlab/core/time.h>
 
 #include <fmt/format.h>
+#include <tbb/blocked_range.h>
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
 
@@ -347,45 +348,51 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
     for (std::size_t i = 0; i < live_.size(); ++i)
       cell_info_[i] = std::int32_t(dist_[i]) | std::int32_t(live_reach_[i]) << 8;
     // The voxel bits (SlicingSettings::skip_voxels): a voxel's stencil lies in its cell's padded
-    // range, so only voxels of live cells can be set. Bytes per z slice in parallel, then packed.
+    // range, so only voxels of live cells can be set. Word by word in parallel (32 voxels in x
+    // order, rows and slices continuing across words), with no scratch of a byte per voxel.
     const std::array<int, 3> nd = volume.dims();
     const std::int64_t voxels = std::int64_t(nd[0]) * nd[1] * nd[2];
     if (s_.skip_voxels && voxels < (std::int64_t(1) << 31)) {
-      std::vector<std::uint8_t> on(std::size_t(voxels), 0);
-      visit_samples(volume, [&](const auto v) {
-        tbb::parallel_for(0, nd[2], [&](int k) {
-          const int k1 = std::min(k + 1, nd[2] - 1);
-          for (int j = 0; j < nd[1]; ++j) {
-            const int j1 = std::min(j + 1, nd[1] - 1);
-            const std::size_t row = std::size_t(cells_[0]) * (std::size_t(j >> kCellShift) +
-                                                              std::size_t(cells_[1]) * std::size_t(k >> kCellShift));
-            for (int i = 0; i < nd[0]; ++i) {
-              if (live_[row + std::size_t(i >> kCellShift)] == 0) continue;
-              const int i1 = std::min(i + 1, nd[0] - 1);
-              double mn = 1e300, mx = -1e300;
-              for (const int kk : {k, k1})
-                for (const int jj : {j, j1})
-                  for (const int ii : {i, i1}) {
-                    const double x = double(v.at(ii, jj, kk));
-                    mn = std::min(mn, x);
-                    mx = std::max(mx, x);
-                  }
-              const double pad = 1e-5 * std::max({std::abs(mn), std::abs(mx), 1.0});
-              const double a = (mn - pad - lo_) * inv, b = (mx + pad - lo_) * inv;
-              bool visible = false;
-              for (int t = 0; t < 4 && !visible; ++t)
-                visible = used[std::size_t(t)] && s_.tfs[std::size_t(t)].visible_in(a, b);
-              on[std::size_t(i) + std::size_t(nd[0]) * (std::size_t(j) + std::size_t(nd[1]) * std::size_t(k))] =
-                  visible ? 1 : 0;
-            }
-          }
-        });
-      });
       voxel_bits_.assign(std::size_t((voxels + 31) / 32), 0);
-      tbb::parallel_for(std::size_t(0), voxel_bits_.size(), [&](std::size_t w) {
-        std::uint32_t word = 0;
-        for (std::size_t b = 0; b < 32 && 32 * w + b < on.size(); ++b) word |= std::uint32_t(on[32 * w + b]) << b;
-        voxel_bits_[w] = std::int32_t(word);
+      visit_samples(volume, [&](const auto v) {
+        tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, std::int64_t(voxel_bits_.size()), 1024),
+                          [&](const tbb::blocked_range<std::int64_t>& words) {
+                            const std::int64_t v0 = 32 * words.begin();
+                            int i = int(v0 % nd[0]), j = int((v0 / nd[0]) % nd[1]);
+                            int k = int(v0 / (std::int64_t(nd[0]) * nd[1]));
+                            for (std::int64_t w = words.begin(); w < words.end(); ++w) {
+                              std::uint32_t word = 0;
+                              for (int b = 0; b < 32 && 32 * w + b < voxels; ++b) {
+                                const std::size_t cell =
+                                    std::size_t(i >> kCellShift) +
+                                    std::size_t(cells_[0]) * (std::size_t(j >> kCellShift) +
+                                                              std::size_t(cells_[1]) * std::size_t(k >> kCellShift));
+                                if (live_[cell] != 0) {
+                                  const int i1 = std::min(i + 1, nd[0] - 1), j1 = std::min(j + 1, nd[1] - 1),
+                                            k1 = std::min(k + 1, nd[2] - 1);
+                                  double mn = 1e300, mx = -1e300;
+                                  for (const int kk : {k, k1})
+                                    for (const int jj : {j, j1})
+                                      for (const int ii : {i, i1}) {
+                                        const double x = double(v.at(ii, jj, kk));
+                                        mn = std::min(mn, x);
+                                        mx = std::max(mx, x);
+                                      }
+                                  const double pad = 1e-5 * std::max({std::abs(mn), std::abs(mx), 1.0});
+                                  const double a = (mn - pad - lo_) * inv, b_hi = (mx + pad - lo_) * inv;
+                                  bool visible = false;
+                                  for (int t = 0; t < 4 && !visible; ++t)
+                                    visible = used[std::size_t(t)] && s_.tfs[std::size_t(t)].visible_in(a, b_hi);
+                                  if (visible) word |= std::uint32_t(1) << b;
+                                }
+                                if (++i == nd[0]) {
+                                  i = 0;
+                                  if (++j == nd[1]) j = 0, ++k;
+                                }
+                              }
+                              voxel_bits_[std::size_t(w)] = std::int32_t(word);
+                            }
+                          });
       });
     }
   }
