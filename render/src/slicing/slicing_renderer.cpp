@@ -294,6 +294,16 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
       for (int i = 0; i < 4; ++i) used[std::size_t(i)] = h[std::size_t(i) + 1] > 0;
     }
     const double inv = 1.0 / (hi_ - lo_);
+    // Whether a TF in use can see some value in [mn, mx] (voxel values, padded by 1e-5 of their
+    // magnitude for the float round-off of a trilinear fetch): the test of the cells and of the
+    // voxel bits.
+    auto any_tf_sees = [&](double mn, double mx) {
+      const double pad = 1e-5 * std::max({std::abs(mn), std::abs(mx), 1.0});
+      const double a = (mn - pad - lo_) * inv, b = (mx + pad - lo_) * inv;
+      for (int t = 0; t < 4; ++t)
+        if (used[std::size_t(t)] && s_.tfs[std::size_t(t)].visible_in(a, b)) return true;
+      return false;
+    };
     visit_samples(volume, [&](const auto v) {
       tbb::parallel_for(0, cells_[2], [&](int ck) {
         for (int cj = 0; cj < cells_[1]; ++cj)
@@ -306,12 +316,8 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
                   mn = std::min(mn, x);
                   mx = std::max(mx, x);
                 }
-            const double pad = 1e-5 * std::max({std::abs(mn), std::abs(mx), 1.0});
-            const double a = (mn - pad - lo_) * inv, b = (mx + pad - lo_) * inv;
-            bool live = false;
-            for (int t = 0; t < 4; ++t)
-              live = live || (used[std::size_t(t)] && s_.tfs[std::size_t(t)].visible_in(a, b));
-            live_[std::size_t(ci) + std::size_t(cells_[0]) * (std::size_t(cj) + std::size_t(cells_[1]) * ck)] = live;
+            live_[std::size_t(ci) + std::size_t(cells_[0]) * (std::size_t(cj) + std::size_t(cells_[1]) * ck)] =
+                any_tf_sees(mn, mx);
           }
       });
     });
@@ -378,12 +384,7 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
                                         mn = std::min(mn, x);
                                         mx = std::max(mx, x);
                                       }
-                                  const double pad = 1e-5 * std::max({std::abs(mn), std::abs(mx), 1.0});
-                                  const double a = (mn - pad - lo_) * inv, b_hi = (mx + pad - lo_) * inv;
-                                  bool visible = false;
-                                  for (int t = 0; t < 4 && !visible; ++t)
-                                    visible = used[std::size_t(t)] && s_.tfs[std::size_t(t)].visible_in(a, b_hi);
-                                  if (visible) word |= std::uint32_t(1) << b;
+                                  if (any_tf_sees(mn, mx)) word |= std::uint32_t(1) << b;
                                 }
                                 if (++i == nd[0]) {
                                   i = 0;

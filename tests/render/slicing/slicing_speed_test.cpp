@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <utility>
 
 namespace meltlab::render {
 namespace {
@@ -25,6 +26,17 @@ SlicingFrame render_reusing_gradients(const Volume& v, const SlicingSettings& s,
                                       const Camera& cam) {
   return SlicingRenderer(v, s, other.gradients() ? std::optional<GradientVolume>(*other.gradients()) : std::nullopt)
       .render(cam);
+}
+
+/// Frames of `cam` with the switch `flag` of `s` off, then on (the second renderer reuses the
+/// gradients of the first): a speed path against the path without it.
+std::pair<SlicingFrame, SlicingFrame> off_then_on(const Volume& v, SlicingSettings s, bool SlicingSettings::*flag,
+                                                  const Camera& cam) {
+  s.*flag = false;
+  const SlicingRenderer off(v, s);
+  SlicingFrame without = off.render(cam);
+  s.*flag = true;
+  return {std::move(without), render_reusing_gradients(v, s, off, cam)};
 }
 
 Camera camera_30deg(int w, int h, const Box3& box, const Eigen::Vector3d& dir) {
@@ -186,11 +198,7 @@ TEST(SlicingSpeed, LiveRunsChangeNoPixelOrCountAndSaveCellLookups) {
       for (int cell : {2, 4, 8}) {
         SlicingSettings s = variant_settings(v, variant);
         s.skip_cell = cell;
-        s.live_runs = false;
-        const SlicingRenderer tested_renderer(v, s);
-        const SlicingFrame tested = tested_renderer.render(cam);
-        s.live_runs = true;
-        const SlicingFrame runs = render_reusing_gradients(v, s, tested_renderer, cam);
+        const auto [tested, runs] = off_then_on(v, s, &SlicingSettings::live_runs, cam);
         const std::string what = "variant " + std::to_string(variant) + ", cell " + std::to_string(cell);
         EXPECT_EQ(runs.raw, tested.raw) << what;
         EXPECT_EQ(runs.alpha, tested.alpha) << what;
@@ -216,11 +224,7 @@ TEST(SlicingSpeed, VoxelBitsChangeNoPixelAndFetchFewerSamples) {
       for (const bool simd : {true, false}) {
         SlicingSettings s = variant_settings(v, variant);
         s.simd = simd;
-        s.skip_voxels = false;
-        const SlicingRenderer plain_renderer(v, s);
-        const SlicingFrame plain = plain_renderer.render(cam);
-        s.skip_voxels = true;
-        const SlicingFrame f = render_reusing_gradients(v, s, plain_renderer, cam);
+        const auto [plain, f] = off_then_on(v, s, &SlicingSettings::skip_voxels, cam);
         const std::string what = "variant " + std::to_string(variant) + (simd ? ", packets" : ", rays");
         EXPECT_EQ(f.raw, plain.raw) << what;
         EXPECT_EQ(f.alpha, plain.alpha) << what;
