@@ -929,9 +929,11 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               }
             }
             VI sample = inr & live;
+            // The lanes' lower stencil corners clamped to the volume: the voxel bits' index and the
+            // fetch's first corners.
+            const VI ic[3] = {clampv(ii[0], cell_max[0]), clampv(ii[1], cell_max[1]), clampv(ii[2], cell_max[2])};
             if (voxel_bits != nullptr) {  // the scalar loop's voxel bits, lane by lane
-              const VI vox = clampv(ii[0], cell_max[0]) +
-                             dims[0] * (clampv(ii[1], cell_max[1]) + dims[1] * clampv(ii[2], cell_max[2]));
+              const VI vox = ic[0] + dims[0] * (ic[1] + dims[1] * ic[2]);
               const VI word = gather_i32(voxel_bits, select(sample, vox >> 5, zero));
               sample &= ((word >> (vox & 31)) & 1) != 0;
             }
@@ -968,7 +970,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             const VF w[3] = {gf[0] - fl[0], gf[1] - fl[1], gf[2] - fl[2]};
             VI o0[3], o1[3];
             for (int a = 0; a < 3; ++a) {
-              o0[a] = select(sample, clampv(ii[a], cell_max[a]) * str[a], zero);
+              o0[a] = select(sample, ic[a] * str[a], zero);
               o1[a] = select(sample, clampv(ii[a] + 1, cell_max[a]) * str[a], zero);
             }
             const VF one_f = splatf(1.0f);
