@@ -146,6 +146,7 @@ double coverage(const ImageF& alpha) {
 void slicing_counters(benchmark::State& state, const render::SlicingStats& st, double cover) {
   state.counters["samples"] = double(st.samples);
   state.counters["fetched"] = double(st.samples - st.skipped);
+  state.counters["terminated"] = double(st.terminated);
   state.counters["visited"] = double(st.visited);
   state.counters["cell_tests"] = double(st.cell_tests);
   state.counters["coverage"] = cover;

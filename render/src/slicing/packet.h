@@ -36,6 +36,9 @@ using VD = double __attribute__((vector_size(8 * kLanes)));        ///< eight do
 using VL = std::int64_t __attribute__((vector_size(8 * kLanes)));  ///< masks of VD (-1 true, 0 false)
 using VF = float __attribute__((vector_size(4 * kLanes)));         ///< eight floats
 using VI = std::int32_t __attribute__((vector_size(4 * kLanes)));  ///< eight ints, masks of VF
+/// Fixed-point positions (32.32 bits, wrapping adds and products: exact wherever the true value
+/// fits, as it does for a lane inside its planes) and 64-bit words.
+using VU = std::uint64_t __attribute__((vector_size(8 * kLanes)));
 
 inline VD splat(double x) { return VD{} + x; }
 inline VF splatf(float x) { return VF{} + x; }
@@ -81,6 +84,13 @@ inline std::int32_t hmin(VI x) {
   return r;
 #endif
 }
+/// Bit l in lane l.
+inline VI lane_bits() {
+  VI r;
+  for (int l = 0; l < kLanes; ++l) r[l] = 1 << l;
+  return r;
+}
+
 /// m ? a : b per lane.
 inline VD select(VL m, VD a, VD b) { return m ? a : b; }
 inline VI select(VI m, VI a, VI b) { return m ? a : b; }
@@ -115,6 +125,19 @@ inline VD floor(VD x) {
 #else
   VD r;
   for (int l = 0; l < kLanes; ++l) r[l] = std::floor(x[l]);
+  return r;
+#endif
+}
+
+/// std::ceil per lane (doubles).
+inline VD ceil(VD x) {
+#if defined(__AVX512F__)
+  return VD(_mm512_mask_roundscale_pd(__m512d(x), 0xFF, __m512d(x), _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC));
+#elif defined(__AVX__)
+  return VD(_mm256_round_pd(__m256d(x), _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC));
+#else
+  VD r;
+  for (int l = 0; l < kLanes; ++l) r[l] = std::ceil(x[l]);
   return r;
 #endif
 }
@@ -175,6 +198,20 @@ inline VI gather_i32(const std::int32_t* data, VI offset) {
 #else
   VI r;
   for (int l = 0; l < kLanes; ++l) r[l] = data[offset[l]];
+  return r;
+#endif
+}
+
+/// data[index] per lane (64-bit words).
+inline VU gather_u64(const std::uint64_t* data, VI index) {
+#if defined(__AVX512F__) && MELTLAB_PACKET_LANES == 8
+  // (The masked form with a zero source: see gather_pairs.)
+  return VU(_mm512_mask_i32gather_epi64(_mm512_setzero_si512(), 0xFF, __m256i(index), data, 8));
+#elif defined(__AVX2__)
+  return VU(_mm256_i32gather_epi64(reinterpret_cast<const long long*>(data), __m128i(index), 8));
+#else
+  VU r;
+  for (int l = 0; l < kLanes; ++l) r[l] = data[index[l]];
   return r;
 #endif
 }

@@ -2,6 +2,7 @@
 
 #include <meltlab/render/slicing/slicing_renderer.h>
 
+#include "fixed_position.h"
 #include "lane_math.h"
 #include "packet.h"
 
@@ -25,6 +26,14 @@
 namespace meltlab::render {
 
 namespace {
+
+/// The bit of voxel (i, j, k) in its brick's word of fetch bits (SlicingRenderer::fetch_bits_).
+constexpr int fetch_bit(int i, int j, int k) { return (i & 3) | (j & 3) << 2 | (k & 3) << 4; }
+
+/// A ray's first sample position and move per plane (fixed_position.h).
+struct FixedRay {
+  std::array<std::uint64_t, 3> g0{}, dg{};
+};
 
 /// Per-tile counters, summed after the frame.
 struct TileCounts {
@@ -226,6 +235,131 @@ class LaneLinearTf {
   std::array<Curve, 4> curves_;
 };
 
+/// What the packets' walk reads (per frame; SlicingRenderer's empty-space tables).
+struct WalkGrid {
+  const std::uint64_t* fetch_bits = nullptr;  ///< null: no empty-space skipping (every sample fetched)
+  const std::int32_t* cell_info = nullptr;
+  std::array<int, 3> dims{}, cells{};
+  int bricks_x = 0, bricks_y = 0, cell_shift = 2;
+};
+
+/// One packet's lanes as the walk keeps them (packet::kLanes rays of a pixel block).
+struct WalkLanes {
+  packet::VU g[3];         ///< positions at plane `u` (32.32 fixed point, fixed_position.h)
+  packet::VU dg[3];        ///< moves per plane
+  packet::VD inv_dg[3];    ///< 1 / dg as doubles (0 where dg = 0)
+  packet::VI u0, uend;     ///< each lane's planes [u0, uend)
+  packet::VI alive, done;  ///< lanes with planes; lanes stopped by early termination
+  packet::VI visited, cell_tests;
+  int u = 0, u_last = 0;  ///< the next plane to walk, the packet's last plane
+  int next_check = 0;     ///< the next plane whose cells are looked up
+};
+
+/// The walk of a packet (phase A of SlicingRenderer's packets): from plane w.u on, each plane's lane
+/// positions and fetch bits (one gather of the bricks' words), the planes where some lane fetches
+/// queued with the lanes' mask (bit l: lane l), until `max` are queued or the lanes' planes end
+/// (then w.u > w.u_last). Every kCheckEvery planes, and where no lane is in its planes, the lanes'
+/// empty-space cells are looked up: where every lane in its planes is at least two cells from a live
+/// cell (so at least a cell's width from any fetched sample), the packet jumps the planes while all
+/// stay in their empty cubes (exact fixed-point runs, conservative by 2⁻⁴⁰ of the quotient). Nearer
+/// to live cells it walks plane by plane, which costs less than the mispredicted jumps of a few
+/// planes that a lookup at every empty plane gave (the decision waits for two gathers). Returns the
+/// number queued; `visited` and `cell_tests` count the walk per lane; with `snapshots`, each queued
+/// plane's counters after it (early termination keeps a lane's counts up to its last plane).
+/// Not inlined: the walk keeps its state in registers apart from the fetch phase's.
+[[gnu::noinline]] int walk_planes(const WalkGrid& grid, WalkLanes& w, int max, int* queue_u, unsigned* queue_lanes,
+                                  packet::VI* snapshots) {
+  using namespace packet;
+  constexpr int kCheckEvery = 4;
+  // Jump only where every lane is at least this many cells from a live one: 8 voxels' worth (2
+  // cells of 4 voxels, the default), so that a jump passes several planes.
+  const int jump_dist = std::max(1, 8 >> grid.cell_shift);
+  const VI zero = splati(0);
+  const VI dmax[3] = {splati(grid.dims[0] - 1), splati(grid.dims[1] - 1), splati(grid.dims[2] - 1)};
+  const VI ncell_m1[3] = {splati(grid.cells[0] - 1), splati(grid.cells[1] - 1), splati(grid.cells[2] - 1)};
+  auto clampv = [](VI i, VI hi) { return select(i < 0, splati(0), select(i > hi, hi, i)); };
+  const std::uint64_t* const bits_data = grid.fetch_bits;
+  const int bx = grid.bricks_x, by = grid.bricks_y, cx = grid.cells[0], cy = grid.cells[1], shift = grid.cell_shift;
+  VU g[3] = {w.g[0], w.g[1], w.g[2]};
+  const VU dg[3] = {w.dg[0], w.dg[1], w.dg[2]};
+  const VI u0 = w.u0, uend = w.uend, live = w.alive & ~w.done;
+  VI visited = w.visited, cell_tests = w.cell_tests;
+  int u = w.u, next_check = w.next_check;
+  const int u_last = w.u_last;
+  // Whole further planes n for which every lane's position g + n dg stays in the cube of cells c ±
+  // r (a side at the volume's border is open: clamping keeps the cell there), at most `cap`: where
+  // g rises, g + n dg < side: n < (side - g) / dg; where it falls, n <= (g - side) / -dg. The
+  // quotients err by the rounding of 1 / dg and one product (2⁻⁵² relative) and are shrunk by 2⁻⁴⁰
+  // first, so a run never reaches past its cube (it may stop one plane short).
+  auto cube_runs = [&](const VI(&c)[3], VI r, const VI(&gi)[3], int cap) {
+    const double kShrink = 1.0 - 0x1p-40;
+    VD run = splat(double(cap));
+    for (int a = 0; a < 3; ++a) {
+      const VL closed_hi = wide(~((c[a] + r) >= ncell_m1[a])), closed_lo = wide(~((c[a] - r) <= 0));
+      const VD frac = fixed::fraction(g[a]);
+      const VD to_hi = __builtin_convertvector(((c[a] + r + 1) << shift) - gi[a], VD) * fixed::kOne - frac;
+      const VD to_lo = __builtin_convertvector(gi[a] - ((c[a] - r) << shift), VD) * fixed::kOne + frac;
+      const VD n_hi = ceil(to_hi * w.inv_dg[a] * kShrink) - 1.0, n_lo = floor(to_lo * -w.inv_dg[a] * kShrink);
+      run = select(VL(w.inv_dg[a] > 0.0) & closed_hi & (n_hi < run), n_hi, run);
+      run = select(VL(w.inv_dg[a] < 0.0) & closed_lo & (n_lo < run), n_lo, run);
+    }
+    return __builtin_convertvector(select(run > 0.0, run, splat(0)), VI);
+  };
+  auto advance = [&](int n) {
+    for (int a = 0; a < 3; ++a) g[a] += std::uint64_t(std::int64_t(n)) * dg[a];
+    u += n;
+  };
+  int queued = 0;
+  while (u <= u_last && queued < max) {
+    const VI inr = (u0 <= u) & (uend > u) & live;
+    const VI gi[3] = {fixed::floor_voxel(g[0]), fixed::floor_voxel(g[1]), fixed::floor_voxel(g[2])};
+    const VI ic[3] = {clampv(gi[0], dmax[0]), clampv(gi[1], dmax[1]), clampv(gi[2], dmax[2])};
+    if (bits_data != nullptr && u >= next_check) {
+      next_check = u + kCheckEvery;
+      const VI waiting = live & (u0 > u);
+      const int next_lane = hmin(select(waiting, u0, splati(std::numeric_limits<int>::max())));
+      if (!any(inr)) {  // between lanes' planes: on to the next lane's first plane
+        if (next_lane == std::numeric_limits<int>::max()) {
+          u = u_last + 1;
+          break;
+        }
+        advance(next_lane - u);
+        next_check = u;
+        continue;
+      }
+      cell_tests -= inr;
+      const VI c[3] = {ic[0] >> shift, ic[1] >> shift, ic[2] >> shift};
+      const VI info = gather_i32(grid.cell_info, select(inr, c[0] + cx * (c[1] + cy * c[2]), zero));
+      const VI dist = info & 255;
+      if (!any(inr & (dist < jump_dist))) {
+        const int cap =
+            next_lane == std::numeric_limits<int>::max() ? u_last - u : std::min(u_last - u, next_lane - u - 1);
+        advance(1 + hmin(select(inr, cube_runs(c, dist - 1, gi, cap), splati(cap))));  // u and the run: empty
+        next_check = u;
+        continue;
+      }
+    }
+    visited -= inr;
+    VI sample = inr;
+    if (bits_data != nullptr) {
+      const VI brick = (ic[0] >> 2) + bx * ((ic[1] >> 2) + by * (ic[2] >> 2));
+      const VI half = gather_i32(reinterpret_cast<const std::int32_t*>(bits_data),
+                                 select(inr, 2 * brick + ((ic[2] >> 1) & 1), zero));
+      sample &= ((half >> ((ic[0] & 3) | ((ic[1] & 3) << 2) | ((ic[2] & 1) << 4))) & 1) != 0;
+    }
+    const unsigned lanes = bits(sample);
+    queue_u[queued] = u;
+    queue_lanes[queued] = lanes;
+    if (snapshots != nullptr) snapshots[2 * queued] = visited, snapshots[2 * queued + 1] = cell_tests;
+    queued += lanes != 0 ? 1 : 0;
+    advance(1);
+  }
+  for (int a = 0; a < 3; ++a) w.g[a] = g[a];
+  w.visited = visited, w.cell_tests = cell_tests;
+  w.u = u, w.next_check = next_check;
+  return queued;
+}
+
 }  // namespace
 
 std::string slicing_mode_name(SlicingMode m) {
@@ -250,6 +384,9 @@ void check_slicing_settings(const Volume& volume, const SlicingSettings& s) {
   if (slicing_needs_gradients(s) && s.gradient.bits != 4 && s.gradient.bits != 8)
     bad(fmt::format("gradient bits must be 8 or 4 (got {})", s.gradient.bits));
   if (!s.background.allFinite()) bad("the background must be finite");
+  const auto d = volume.dims();
+  if (std::max({d[0], d[1], d[2]}) >= (1 << 30))
+    bad(fmt::format("a volume axis of 2^30 voxels or more is not supported (got {} x {} x {})", d[0], d[1], d[2]));
   if (s.skip_cell != 2 && s.skip_cell != 4 && s.skip_cell != 8 && s.skip_cell != 16)
     bad(fmt::format("skip_cell must be 2, 4, 8 or 16 voxels (got {})", s.skip_cell));
   if (!(s.early_termination >= 0 && s.early_termination <= 1))
@@ -283,16 +420,18 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
   } else {
     grad_.reset();
   }
+  if (!s_.mask.empty()) {
+    const auto h = s_.mask.histogram();
+    for (int i = 0; i < 4; ++i) tf_used_[std::size_t(i)] = h[std::size_t(i) + 1] > 0;
+  }
   if (s_.skip_empty) {
     const int kCellShift = cell_shift_ = s_.skip_cell == 2 ? 1 : s_.skip_cell == 4 ? 2 : s_.skip_cell == 8 ? 3 : 4;
-    // Min and max over each cell's voxels [e c, e c + e] (e the cell edge; the + e is the trilinear neighbour).
     for (int a = 0; a < 3; ++a) cells_[std::size_t(a)] = ((volume.dims()[std::size_t(a)] - 1) >> kCellShift) + 1;
-    live_.assign(std::size_t(cells_[0]) * cells_[1] * cells_[2], 0);
-    std::array<bool, 4> used{true, false, false, false};
-    if (!s_.mask.empty()) {
-      const auto h = s_.mask.histogram();
-      for (int i = 0; i < 4; ++i) used[std::size_t(i)] = h[std::size_t(i) + 1] > 0;
-    }
+    const std::size_t n_cells = std::size_t(cells_[0]) * cells_[1] * cells_[2];
+    auto cell_of = [&](int ci, int cj, int ck) {
+      return std::size_t(ci) + std::size_t(cells_[0]) * (std::size_t(cj) + std::size_t(cells_[1]) * std::size_t(ck));
+    };
+    const std::array<bool, 4>& used = tf_used_;
     const double inv = 1.0 / (hi_ - lo_);
     // Whether a TF in use can see some value in [mn, mx] (voxel values, padded by 1e-5 of their
     // magnitude for the float round-off of a trilinear fetch): the test of the cells and of the
@@ -304,6 +443,9 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
         if (used[std::size_t(t)] && s_.tfs[std::size_t(t)].visible_in(a, b)) return true;
       return false;
     };
+    // The cells whose values (each cell's voxels [e c, e c + e], e the cell edge; the + e is the
+    // trilinear neighbour) a TF in use can see.
+    std::vector<std::uint8_t> range_live(n_cells, 0);
     visit_samples(volume, [&](const auto v) {
       tbb::parallel_for(0, cells_[2], [&](int ck) {
         for (int cj = 0; cj < cells_[1]; ++cj)
@@ -316,11 +458,71 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
                   mn = std::min(mn, x);
                   mx = std::max(mx, x);
                 }
-            live_[std::size_t(ci) + std::size_t(cells_[0]) * (std::size_t(cj) + std::size_t(cells_[1]) * ck)] =
-                any_tf_sees(mn, mx);
+            range_live[cell_of(ci, cj, ck)] = any_tf_sees(mn, mx);
           }
       });
     });
+    // The fetch bits (SlicingSettings::skip_voxels), brick by brick in parallel: with the voxel
+    // bits, a voxel of a live cell whose stencil {i, i + 1} x {j, j + 1} x {k, k + 1} (clamped as
+    // the fetch clamps) holds a value a TF in use can see; without them, every voxel of a live cell.
+    const std::array<int, 3> nd = volume.dims();
+    for (int a = 0; a < 3; ++a) bricks_[std::size_t(a)] = (nd[std::size_t(a)] + 3) >> 2;
+    fetch_bits_.assign(std::size_t(bricks_[0]) * bricks_[1] * bricks_[2], 0);
+    visit_samples(volume, [&](const auto v) {
+      tbb::parallel_for(0, bricks_[2], [&](int bk) {
+        for (int bj = 0; bj < bricks_[1]; ++bj)
+          for (int bi = 0; bi < bricks_[0]; ++bi) {
+            std::uint64_t word = 0;
+            for (int k = 4 * bk; k < std::min(4 * bk + 4, nd[2]); ++k)
+              for (int j = 4 * bj; j < std::min(4 * bj + 4, nd[1]); ++j)
+                for (int i = 4 * bi; i < std::min(4 * bi + 4, nd[0]); ++i) {
+                  if (range_live[cell_of(i >> kCellShift, j >> kCellShift, k >> kCellShift)] == 0) continue;
+                  bool fetch = true;
+                  if (s_.skip_voxels) {
+                    const int i1 = std::min(i + 1, nd[0] - 1), j1 = std::min(j + 1, nd[1] - 1),
+                              k1 = std::min(k + 1, nd[2] - 1);
+                    double mn = 1e300, mx = -1e300;
+                    for (const int kk : {k, k1})
+                      for (const int jj : {j, j1})
+                        for (const int ii : {i, i1}) {
+                          const double x = double(v.at(ii, jj, kk));
+                          mn = std::min(mn, x);
+                          mx = std::max(mx, x);
+                        }
+                    fetch = any_tf_sees(mn, mx);
+                  }
+                  if (fetch) word |= std::uint64_t(1) << fetch_bit(i, j, k);
+                }
+            fetch_bits_[std::size_t(bi) + std::size_t(bricks_[0]) * (std::size_t(bj) + std::size_t(bricks_[1]) * bk)] =
+                word;
+          }
+      });
+    });
+    // A cell is live where some sample in it is fetched: some voxel of it has its fetch bit (a
+    // cell of 4³ voxels is a brick; 8³ and 16³ cells hold whole bricks; 2³ cells are octants of one).
+    live_.assign(n_cells, 0);
+    for (int bk = 0; bk < bricks_[2]; ++bk)
+      for (int bj = 0; bj < bricks_[1]; ++bj)
+        for (int bi = 0; bi < bricks_[0]; ++bi) {
+          const std::uint64_t word =
+              fetch_bits_[std::size_t(bi) + std::size_t(bricks_[0]) * (std::size_t(bj) + std::size_t(bricks_[1]) * bk)];
+          if (word == 0) continue;
+          if (kCellShift >= 2) {
+            live_[cell_of(bi >> (kCellShift - 2), bj >> (kCellShift - 2), bk >> (kCellShift - 2))] = 1;
+            continue;
+          }
+          for (int o = 0; o < 8; ++o) {  // the octant (ox, oy, oz) of the brick: voxels 2 o.. 2 o + 1
+            const int ox = o & 1, oy = (o >> 1) & 1, oz = o >> 2;
+            std::uint64_t octant = 0;
+            for (int dz = 0; dz < 2; ++dz)
+              for (int dy = 0; dy < 2; ++dy)
+                for (int dx = 0; dx < 2; ++dx)
+                  octant |= std::uint64_t(1) << fetch_bit(2 * ox + dx, 2 * oy + dy, 2 * oz + dz);
+            const int ci = 2 * bi + ox, cj = 2 * bj + oy, ck = 2 * bk + oz;
+            if ((word & octant) != 0 && ci < cells_[0] && cj < cells_[1] && ck < cells_[2])
+              live_[cell_of(ci, cj, ck)] = 1;
+          }
+        }
     // Chebyshev distance to the nearest cell of a set: breadth-first search from every cell of it
     // over the 26 neighbours (exact for the chessboard metric), capped at 255.
     const int cx = cells_[0], cy = cells_[1], cz = cells_[2];
@@ -339,7 +541,7 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
             for (int di = -1; di <= 1; ++di) {
               const int i = ci + di, j = cj + dj, k = ck + dk;
               if (i < 0 || j < 0 || k < 0 || i >= cx || j >= cy || k >= cz) continue;
-              const std::size_t n = std::size_t(i) + std::size_t(cx) * (std::size_t(j) + std::size_t(cy) * k);
+              const std::size_t n = cell_of(i, j, k);
               if (dist[n] > d) dist[n] = std::uint8_t(d), queue.push_back(int(n));
             }
       }
@@ -353,49 +555,6 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
     cell_info_.resize(live_.size());
     for (std::size_t i = 0; i < live_.size(); ++i)
       cell_info_[i] = std::int32_t(dist_[i]) | std::int32_t(live_reach_[i]) << 8;
-    // The voxel bits (SlicingSettings::skip_voxels): a voxel's stencil lies in its cell's padded
-    // range, so only voxels of live cells can be set. Word by word in parallel (32 voxels in x
-    // order, rows and slices continuing across words), with no scratch of a byte per voxel.
-    const std::array<int, 3> nd = volume.dims();
-    const std::int64_t voxels = std::int64_t(nd[0]) * nd[1] * nd[2];
-    if (s_.skip_voxels && voxels < (std::int64_t(1) << 31)) {
-      voxel_bits_.assign(std::size_t((voxels + 31) / 32), 0);
-      visit_samples(volume, [&](const auto v) {
-        tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, std::int64_t(voxel_bits_.size()), 1024),
-                          [&](const tbb::blocked_range<std::int64_t>& words) {
-                            const std::int64_t v0 = 32 * words.begin();
-                            int i = int(v0 % nd[0]), j = int((v0 / nd[0]) % nd[1]);
-                            int k = int(v0 / (std::int64_t(nd[0]) * nd[1]));
-                            for (std::int64_t w = words.begin(); w < words.end(); ++w) {
-                              std::uint32_t word = 0;
-                              for (int b = 0; b < 32 && 32 * w + b < voxels; ++b) {
-                                const std::size_t cell =
-                                    std::size_t(i >> kCellShift) +
-                                    std::size_t(cells_[0]) * (std::size_t(j >> kCellShift) +
-                                                              std::size_t(cells_[1]) * std::size_t(k >> kCellShift));
-                                if (live_[cell] != 0) {
-                                  const int i1 = std::min(i + 1, nd[0] - 1), j1 = std::min(j + 1, nd[1] - 1),
-                                            k1 = std::min(k + 1, nd[2] - 1);
-                                  double mn = 1e300, mx = -1e300;
-                                  for (const int kk : {k, k1})
-                                    for (const int jj : {j, j1})
-                                      for (const int ii : {i, i1}) {
-                                        const double x = double(v.at(ii, jj, kk));
-                                        mn = std::min(mn, x);
-                                        mx = std::max(mx, x);
-                                      }
-                                  if (any_tf_sees(mn, mx)) word |= std::uint32_t(1) << b;
-                                }
-                                if (++i == nd[0]) {
-                                  i = 0;
-                                  if (++j == nd[1]) j = 0, ++k;
-                                }
-                              }
-                              voxel_bits_[std::size_t(w)] = std::int32_t(word);
-                            }
-                          });
-      });
-    }
   }
 }
 
@@ -463,9 +622,36 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   std::array<std::optional<LaneLinearTf>, 4> lane_tfs;
   for (std::size_t t = 0; t < 4; ++t)
     if (tfs[t].linear()) lane_tfs[t].emplace(s_.tfs[t]);
-  const std::int32_t* const cell_info = cell_info_.data();
-  // The voxel bits (SlicingSettings::skip_voxels), null when off.
-  const std::int32_t* const voxel_bits = voxel_bits_.empty() ? nullptr : voxel_bits_.data();
+  // The fetch bits in bricks of 4³ voxels (null without empty-space skipping).
+  const std::uint64_t* const fetch_bits = fetch_bits_.empty() ? nullptr : fetch_bits_.data();
+  const int bricks_x = bricks_[0], bricks_y = bricks_[1];
+  auto fetch_bit_set = [&](int i, int j, int k) {
+    const std::size_t b =
+        std::size_t(i >> 2) + std::size_t(bricks_x) * (std::size_t(j >> 2) + std::size_t(bricks_y) * (k >> 2));
+    return ((fetch_bits[b] >> fetch_bit(i, j, k)) & 1) != 0;
+  };
+  // The packets' walk (walk_planes).
+  WalkGrid grid;
+  grid.fetch_bits = fetch_bits, grid.cell_info = cell_info_.empty() ? nullptr : cell_info_.data();
+  grid.dims = dims, grid.cells = cells_;
+  grid.bricks_x = bricks_x, grid.bricks_y = bricks_y, grid.cell_shift = cell_shift_;
+  // A ray's first position (at its first plane in the walk's order) and move per plane in fixed
+  // point (fixed_position.h), from the double arithmetic o + t_k v and (Δd / cos ψ) v, in index
+  // units. A move is clamped to 2^30 voxels: a ray with two planes in the box moves less than the
+  // box per plane, so only positions outside it change.
+  auto fixed_ray = [&](const CameraRay& ray, const RaySlices& rs, bool ftb) {
+    const Eigen::Vector3d delta =
+        (ftb ? 1.0 : -1.0) * (stack.spacing / rs.cos_psi) * ray.direction.cwiseProduct(inv_spacing);
+    const int k_start = ftb ? rs.k_last : rs.k_first;
+    const Eigen::Vector3d g_first =
+        (ray.origin + rs.t(stack, k_start) * ray.direction - origin).cwiseProduct(inv_spacing);
+    FixedRay r;
+    for (int a = 0; a < 3; ++a) {
+      r.g0[std::size_t(a)] = fixed::from_double(g_first[a]);
+      r.dg[std::size_t(a)] = fixed::from_double(std::clamp(delta[a], -0x1p30, 0x1p30));
+    }
+    return r;
+  };
   // The gradient for the packets' lighting: the three encoded channels of a voxel in one word.
   const std::int32_t* const grad_words = grad_words_.empty() ? nullptr : grad_words_.data();
   const float grad_channel_scale = lit ? grad_->channel(0).scale : 1.0f;
@@ -534,11 +720,9 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             // The linear kind: the last α seen and its corrected value (std::pow only when α changes).
             double last_a = -1, last_ac = 0;
             const int n_samples = rs.k_last - rs.k_first + 1;
-            // The first sample's index coordinates as exact_positions computes them; the others
-            // g_first + step · delta (one rounding per axis, see SlicingSettings::exact_positions).
-            const int k_start = kFrontToBack ? rs.k_last : rs.k_first;
-            const Eigen::Vector3d g_first =
-                (ray.origin + rs.t(stack, k_start) * ray.direction - origin).cwiseProduct(inv_spacing);
+            // The samples' positions g_0 + step Δg in fixed point (fixed_position.h; not with
+            // exact_positions).
+            const FixedRay fr = fixed_ray(ray, rs, kFrontToBack);
             std::int64_t n_visited = 0, n_skipped = 0, n_classified = 0, n_jumped = 0, n_cell_tests = 0;
             // The planes from the current sample on while g stays 0.01 index units inside the cube
             // of cells c ± r (c the current sample's cell, r in cells) along this ray, capped at
@@ -568,24 +752,31 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             for (int step = 0; step < n_samples; ++step) {
               const int k = kFrontToBack ? rs.k_last - step : rs.k_first + step;
               ++n_visited;
-              // g: the sample's index coordinates; p (world) where the mask or the light needs it.
+              // g: the sample's index coordinates (i0, j0, k0 its stencil's lower corner, w the
+              // weights); p (world) where the mask or the light needs it.
               Eigen::Vector3d g, p;
+              int i0, j0, k0;
+              float wx, wy, wz;
               if (exact_positions) {
                 p = ray.origin + rs.t(stack, k) * ray.direction;
                 g = (p - origin).cwiseProduct(inv_spacing);
+                const float gx = float(g.x()), gy = float(g.y()), gz = float(g.z());
+                const float fx = std::floor(gx), fy = std::floor(gy), fz = std::floor(gz);
+                i0 = int(fx), j0 = int(fy), k0 = int(fz);
+                wx = gx - fx, wy = gy - fy, wz = gz - fz;
               } else {
-                const double sd = double(step);
-                g = Eigen::Vector3d(std::fma(sd, delta.x(), g_first.x()), std::fma(sd, delta.y(), g_first.y()),
-                                    std::fma(sd, delta.z(), g_first.z()));
+                std::uint64_t q[3];
+                for (int a = 0; a < 3; ++a) q[a] = fr.g0[std::size_t(a)] + std::uint64_t(step) * fr.dg[std::size_t(a)];
+                i0 = fixed::floor_voxel(q[0]), j0 = fixed::floor_voxel(q[1]), k0 = fixed::floor_voxel(q[2]);
+                wx = fixed::weight(q[0]), wy = fixed::weight(q[1]), wz = fixed::weight(q[2]);
+                g = Eigen::Vector3d(fixed::to_double(q[0]), fixed::to_double(q[1]), fixed::to_double(q[2]));
                 if constexpr (kMasked || kLit) p = ray.origin + rs.t(stack, k) * ray.direction;
               }
-              const float gx = float(g.x()), gy = float(g.y()), gz = float(g.z());
-              const float fx = std::floor(gx), fy = std::floor(gy), fz = std::floor(gz);
+              const int ic0 = std::clamp(i0, 0, dims[0] - 1), ic1 = std::clamp(j0, 0, dims[1] - 1),
+                        ic2 = std::clamp(k0, 0, dims[2] - 1);
               if (skip && step >= live_until) {
                 ++n_cell_tests;
-                const int c0 = std::clamp(int(fx), 0, dims[0] - 1) >> cell_shift;
-                const int c1 = std::clamp(int(fy), 0, dims[1] - 1) >> cell_shift;
-                const int c2 = std::clamp(int(fz), 0, dims[2] - 1) >> cell_shift;
+                const int c0 = ic0 >> cell_shift, c1 = ic1 >> cell_shift, c2 = ic2 >> cell_shift;
                 const std::size_t cell = std::size_t(c0) + cells_x * (std::size_t(c1) + cells_y * std::size_t(c2));
                 const int dist = dist_cells[cell];  // 0: live
                 const int cc[3] = {c0, c1, c2};
@@ -612,15 +803,11 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                   live_until = step + 1 + (run >= 1 ? int(run) : 0);
                 }
               }
-              // The voxel bits: no TF in use can see this sample's stencil (α = 0), so it is not fetched.
-              if (voxel_bits != nullptr) {
-                const std::int64_t v = std::int64_t(std::clamp(int(fx), 0, dims[0] - 1)) +
-                                       dims[0] * (std::int64_t(std::clamp(int(fy), 0, dims[1] - 1)) +
-                                                  std::int64_t(dims[1]) * std::clamp(int(fz), 0, dims[2] - 1));
-                if (((voxel_bits[v >> 5] >> (v & 31)) & 1) == 0) {
-                  ++n_skipped;
-                  continue;
-                }
+              // The fetch bits: with the voxel bits, no TF in use can see this sample's stencil (α =
+              // 0), so it is not fetched.
+              if (skip && !fetch_bit_set(ic0, ic1, ic2)) {
+                ++n_skipped;
+                continue;
               }
               int m = 1;
               if constexpr (kMasked) {
@@ -628,8 +815,6 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 if (m == 0) continue;
               }
               ++n_classified;
-              const int i0 = int(fx), j0 = int(fy), k0 = int(fz);
-              const float wx = gx - fx, wy = gy - fy, wz = gz - fz;
               const float f = samples.trilinear_cell(i0, j0, k0, wx, wy, wz);
               const std::size_t ti = std::size_t(m - 1);
               const InlineTf& tf = tfs[ti];
@@ -653,7 +838,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 if (exponent != 1.0 && piece != 0) {
                   const std::size_t slot = ti * std::size_t(max_pieces) + std::size_t(piece);
                   if (ac_stamp[slot] != ray_id)
-                    ac_stamp[slot] = ray_id, ac_piece[slot] = 1.0 - std::pow(1.0 - a, exponent);
+                    ac_stamp[slot] = ray_id, ac_piece[slot] = 1.0 - power(1.0 - a, exponent);
                   ac = ac_piece[slot];
                 }
               }
@@ -700,13 +885,24 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
         }
       counts[std::size_t(ty) * tiles_x + tx] = cnt;
     };
-    // The SIMD path (SlicingSettings::simd): packets of eight neighbouring pixels of a tile (4 x 2).
-    // Each lane keeps its ray's scalar state (first position, move per plane, the next step it
-    // visits, the end of its live run); the packet visits plane K, the nearest plane that some
-    // live lane visits next (planes in the order of the scalar loop: u = k back to front, u = -k
-    // front to back), and the lanes whose next plane it is are active there. A lane's sample
-    // position at step j is fma(j, Δg, g_0) as in the scalar loop, so every lane takes the same
-    // samples, jumps, counts and arithmetic as its ray alone.
+    // The SIMD path (SlicingSettings::simd): packets of neighbouring pixels of a tile (4 x 2 on
+    // eight lanes, 2 x 2 on four), each lane one ray with its scalar state (fixed-point first
+    // position and move per plane, its planes [u0, u0 + ns)). The packet walks the planes U in
+    // the scalar loop's order (u = k back to front, u = -k front to back) in two phases that take
+    // turns over chunks of planes:
+    //  A, the walk: every lane's position (integer adds), its brick word of fetch bits (one 64-bit
+    //    gather) and so which lanes fetch at this plane; where no lane in range is in a brick with
+    //    a fetch bit, the empty-space cells are looked up and, where every lane is in an empty
+    //    cell, the packet jumps the planes while all stay in their empty cubes. Planes where some
+    //    lane fetches are queued with the lanes' mask.
+    //  B, the fetch: per queued plane, the lanes' positions again (g_0 + j Δg: the same integers),
+    //    mask, trilinear corners, TF, light and compositing on the lanes, with no branch of the walk
+    //    in between, so the gathers of one plane overlap the arithmetic of the last.
+    // A lane fetches exactly the samples whose fetch bit is set, with its ray's arithmetic (the
+    // scalar code's operations in its order), so the image and the samples, skipped, classified
+    // and terminated counts are the scalar path's bit for bit; visited and cell_tests count the
+    // packet's own walk. Early termination ends a lane in phase B; its planes already queued are
+    // masked there, and the walk leaves it out from then on.
     auto do_packet_tile = [&](int tx, int ty, auto lit_c, auto masked_c, auto ftb_c) {
       using namespace packet;
       constexpr bool kLit = decltype(lit_c)::value, kMasked = decltype(masked_c)::value;
@@ -716,27 +912,30 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
       // lane first meets it (-1: not yet), as the scalar loop's per-ray table.
       std::vector<VD> acp(std::size_t(4 * max_pieces));
       const VI cell_max[3] = {splati(dims[0] - 1), splati(dims[1] - 1), splati(dims[2] - 1)};
-      const VI ncell_m1[3] = {splati(cells_[0] - 1), splati(cells_[1] - 1), splati(cells_[2] - 1)};
       const VI str[3] = {splati(std::int32_t(samples.sx)), splati(std::int32_t(samples.sy)),
                          splati(std::int32_t(samples.sz))};
       const VI zero = splati(0), one = splati(1);
       const VI gstr[3] = {splati(1), splati(dims[0]), splati(dims[0] * dims[1])};  // grad_words_ (voxels)
       auto clampv = [](VI i, VI hi) { return select(i < 0, splati(0), select(i > hi, hi, i)); };
-      // Packets of kLanesX x 2 pixels (lane l at x0 + l % kLanesX, y0 + l / kLanesX; 4 x 2 with
-      // AVX-512, 2 x 2 otherwise): neighbours closer than in a row.
+      const VI lane_bit = lane_bits();
+      // The queue of phase A: planes where some lane fetches, and which lanes.
+      // Planes queued per walk: front to back fewer, since the walk runs ahead of a lane's
+      // termination (the phantom's Blend at QC 1, early termination 0.99: 135-153 ms with 64, 98 ms
+      // with 8; back to front 64, 16 and 8 within the noise).
+      constexpr int kQueue = 64, kQueueFrontToBack = 8;
+      std::array<int, kQueue> queue_u;
+      std::array<unsigned, kQueue> queue_lanes;
+      // Front to back: the lanes' walk counters after each queued plane, so that a lane that
+      // terminates there keeps the counts of its walk up to that plane only.
+      std::array<VI, 2 * kQueue> queue_counts;
       const int x_end = std::min(W, (tx + 1) * T), y_end = std::min(H, (ty + 1) * T);
       for (int y0 = ty * T; y0 < y_end; y0 += 2)
         for (int x0 = tx * T; x0 < x_end; x0 += kLanesX) {
           std::array<CameraRay, kLanes> lray;
           std::array<RaySlices, kLanes> lrs;
-          VD G[3] = {}, D[3] = {}, ID[3] = {}, ex = splat(1);
+          VU GQ0[3] = {}, DQ[3] = {};     // each lane's first position and move per plane (32.32 fixed point)
+          VD IDQ[3] = {}, ex = splat(1);  // 1 / Δg in fixed-point units (0 where Δg = 0)
           VI u0 = zero, ns = zero, alive = zero;
-          // Per axis: the lanes whose g rises (the cube's side ahead is its high side), and the
-          // side's 0.01 inset (-0.01 high, +0.01 low); `still`: some lane hardly moves on an axis.
-          VI rises[3] = {zero, zero, zero};
-          VF off[3] = {}, side_max[3] = {}, side_min[3] = {};  // the side ahead closed within (min, max)
-          VF IDf[3] = {};                                      // 1 / Δg per axis in float
-          bool still = false;
           // The linear kind: each lane's last visible α and its corrected value (as per ray).
           VD last_a = splat(-1), last_ac = splat(0);
           VD O[3] = {}, V[3] = {}, TOFF = splat(0), COSPSI = splat(1);  // each lane's ray and RaySlices
@@ -752,36 +951,36 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             for (int a = 0; a < 3; ++a) O[a][l] = ray.origin[a], V[a][l] = ray.direction[a];
             TOFF[l] = rs.t_offset, COSPSI[l] = rs.cos_psi;
             ex[l] = opacity_correction ? (stack.spacing / rs.cos_psi) / h0 : 1.0;
-            const Eigen::Vector3d delta =
-                (kFrontToBack ? 1.0 : -1.0) * (stack.spacing / rs.cos_psi) * ray.direction.cwiseProduct(inv_spacing);
-            const Eigen::Vector3d inv_delta = delta.cwiseInverse();
-            const int k_start = kFrontToBack ? rs.k_last : rs.k_first;
-            const Eigen::Vector3d g_first =
-                (ray.origin + rs.t(stack, k_start) * ray.direction - origin).cwiseProduct(inv_spacing);
+            const FixedRay fr = fixed_ray(ray, rs, kFrontToBack);
             for (int a = 0; a < 3; ++a) {
-              G[a][l] = g_first[a], D[a][l] = delta[a], ID[a][l] = inv_delta[a];
-              IDf[a][l] = float(inv_delta[a]);
-            }
-            for (int a = 0; a < 3; ++a) {
-              const bool rising = delta[a] > 1e-6;
-              rises[a][l] = rising ? -1 : 0;
-              off[a][l] = rising ? -0.01f : 0.01f;
-              const float e_cells = float(cells_[std::size_t(a)] << cell_shift);
-              side_max[a][l] = rising ? e_cells : std::numeric_limits<float>::infinity();
-              side_min[a][l] = rising ? -std::numeric_limits<float>::infinity() : 0.0f;
-              still = still || !(delta[a] > 1e-6 || delta[a] < -1e-6);
+              GQ0[a][l] = fr.g0[std::size_t(a)], DQ[a][l] = fr.dg[std::size_t(a)];
+              IDQ[a][l] = fr.dg[std::size_t(a)] != 0 ? 1.0 / double(std::int64_t(fr.dg[std::size_t(a)])) : 0.0;
             }
             u0[l] = kFrontToBack ? -rs.k_last : rs.k_first;
             ns[l] = rs.k_last - rs.k_first + 1;
             alive[l] = -1;
           }
+          // The constant kinds' corrected α per lane and piece, for the TFs the mask uses, as the
+          // scalar loop computes it per ray (slicing_pow on the lanes; exact_pow: std::pow lane by lane).
           for (int t = 0; t < 4; ++t) {
+            const InlineTf& tf = tfs[std::size_t(t)];
+            if (!tf_used_[std::size_t(t)] || tf.linear()) continue;
             acp[std::size_t(t * max_pieces)] = splat(0);
-            for (int p = 1; p < max_pieces; ++p) acp[std::size_t(t * max_pieces + p)] = splat(-1);
+            for (int p = 1; p < tf.pieces(); ++p) {
+              const double a = tf.piece_alpha(p);
+              VD c = splat(a);
+              if (exact_pow) {
+                for (int l = 0; l < kLanes; ++l)
+                  if (ex[l] != 1.0) c[l] = 1.0 - std::pow(1.0 - a, ex[l]);
+              } else {
+                c = select(ex != 1.0, 1.0 - lane_math::pow(splat(1.0 - a), ex), c);
+              }
+              acp[std::size_t(t * max_pieces + p)] = c;
+            }
           }
           VD Cr = splat(0), Cg = splat(0), Cb = splat(0), A = splat(0);
           // Counters per lane (a mask is -1 where true: subtracting it counts), summed after the packet.
-          VI n_visited = zero, n_fetched = zero, n_classified = zero, n_cell_tests = zero;
+          VI n_fetched = zero, n_classified = zero;
           // Blinn-Phong on the lanes (shade()'s arithmetic, Eigen's evaluation order written out:
           // sums of three squares or products as (x + y) + z, normalized() as v / sqrt(|v|²) where
           // |v|² > 0): the gradient's three encoded channels of each corner by one 32-bit gather
@@ -843,272 +1042,201 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             cr = select(lit_l, cr * k + sp, cr), cg = select(lit_l, cg * k + sp, cg),
             cb = select(lit_l, cb * k + sp, cb);
           };
-          // The planes from a lane's sample on while g stays 0.01 inside the cube of cells c ± r
-          // (the scalar loop's cube_run, lane by lane: the same minima of the same quotients).
-          auto cube_run_any = [&](const VI(&c)[3], VI r, const VD(&g)[3], VD run) {
-            for (int a = 0; a < 3; ++a) {
-              const VL closed_hi = wide(~((c[a] + r) >= ncell_m1[a])), closed_lo = wide(~((c[a] - r) <= 0));
-              const VD hi = __builtin_convertvector((c[a] + r + 1) << cell_shift, VD);
-              const VD lo = __builtin_convertvector((c[a] - r) << cell_shift, VD);
-              const VL up = D[a] > 1e-6, down = D[a] < -1e-6;
-              const VD run_hi = (hi - 0.01 - g[a]) * ID[a], run_lo = (lo + 0.01 - g[a]) * ID[a];
-              run = select(up & closed_hi & (run_hi < run), run_hi, run);
-              run = select(down & closed_lo & (run_lo < run), run_lo, run);
-              const VL parked = ~up & ~down & ((closed_hi & (g[a] > hi - 0.01)) | (closed_lo & (g[a] < lo + 0.01)));
-              run = select(parked, splat(0), run);
-            }
-            return run;
-          };
-          // Whole planes of each lane's run (0 where < 1), capped at `cap`. Where every lane moves on
-          // every axis, only the side ahead bounds a run, and the run is computed in float from the
-          // float position: (side ∓ 0.01 - g) / Δg errs by a few float ulps of g and of the side
-          // (< 1e-3 voxel for coordinates below 8192) plus 1e-7 of the distance (< 1e-3 voxel for
-          // cubes below 8192 voxels), well inside the 0.01 voxel inset, so the lane stays in its
-          // cube for the planes counted. (The packet only needs runs that never overshoot: its
-          // lanes' statuses are tested again when the shortest ends.) Otherwise the scalar run.
-          const bool float_runs = !still && std::max({dims[0], dims[1], dims[2]}) < 8192;
-          auto whole_runs = [&](const VI(&c)[3], VI r, const VD(&g)[3], const VF(&gf)[3], VI cap) {
-            if (!float_runs) {
-              const VD run = cube_run_any(c, r, g, __builtin_convertvector(cap, VD));
-              return __builtin_convertvector(select(run >= 1, run, splat(0)), VI);
-            }
-            VF run = __builtin_convertvector(cap, VF);
-            for (int a = 0; a < 3; ++a) {
-              const VF side = __builtin_convertvector((c[a] + select(rises[a], r + 1, -r)) << cell_shift, VF);
-              const VF run_a = (side + off[a] - gf[a]) * IDf[a];
-              run = select((side < side_max[a]) & (side > side_min[a]) & (run_a < run), run_a, run);
-            }
-            return select(run >= 1, __builtin_convertvector(run, VI), splati(0));
-          };
-          // The packet's planes u (u = k back to front, -k front to back) from the first lane's
-          // first to the last lane's last; lane l takes part in [u0, uend) until it terminates.
-          // Empty-space skipping per packet: at a test every lane in range looks up its cell and
-          // its cube run (the scalar loop's, lane by lane); until the shortest run (or a waiting
-          // lane's first plane) ends, every lane stays in the cube it tested in, so its status
-          // (live: sample, empty: skip) holds without lookups, and where every lane in range is
-          // empty the packet jumps. So each lane fetches exactly its scalar ray's samples (the
-          // live ones; empty-cell samples have α = 0 and change nothing): the same pixels, sample,
-          // fetch, classification and termination counts; only visited and cell_tests differ.
-          const VI uend = u0 + ns;
-          VI n_lane_samples = ns, done = zero, live = alive;
+          WalkLanes walk;
+          for (int a = 0; a < 3; ++a) walk.dg[a] = DQ[a], walk.inv_dg[a] = IDQ[a];
+          walk.u0 = u0, walk.uend = u0 + ns, walk.alive = alive, walk.done = zero;
+          walk.visited = zero, walk.cell_tests = zero;
+          VI n_lane_samples = ns;
           int u_first = std::numeric_limits<int>::max(), u_last = std::numeric_limits<int>::min();
           for (int l = 0; l < kLanes; ++l)
-            if (alive[l]) u_first = std::min(u_first, u0[l]), u_last = std::max(u_last, uend[l] - 1);
-          int test_at = skip ? u_first : std::numeric_limits<int>::max();
-          for (int U = u_first; U <= u_last; ++U) {
-            const int K = U;
-            const VI inr = (u0 <= U) & (uend > U) & ~done;
-            const VI step = splati(U) - u0;
-            const VD sd = __builtin_convertvector(step, VD);
-            const VD g[3] = {fma(sd, D[0], G[0]), fma(sd, D[1], G[1]), fma(sd, D[2], G[2])};
-            const VF gf[3] = {__builtin_convertvector(g[0], VF), __builtin_convertvector(g[1], VF),
-                              __builtin_convertvector(g[2], VF)};
-            const VF fl[3] = {floor(gf[0]), floor(gf[1]), floor(gf[2])};
-            const VI ii[3] = {__builtin_convertvector(fl[0], VI), __builtin_convertvector(fl[1], VI),
-                              __builtin_convertvector(fl[2], VI)};
-            n_visited -= inr;
-            if (U >= test_at) {
-              n_cell_tests -= inr;
-              const VI c[3] = {clampv(ii[0], cell_max[0]) >> cell_shift, clampv(ii[1], cell_max[1]) >> cell_shift,
-                               clampv(ii[2], cell_max[2]) >> cell_shift};
-              const VI cell = select(inr, c[0] + int(cells_x) * (c[1] + int(cells_y) * c[2]), zero);
-              const VI info = gather_i32(cell_info, cell);
-              const VI dist = info & 255, reach = info >> 8;
-              const VI empty = dist != 0;
-              const VI nrun = select(inr & (live_runs ? splati(-1) : empty),
-                                     whole_runs(c, select(empty, dist - 1, reach), g, gf, ns - 1 - step), zero);
-              const VI waiting = alive & ~done & (u0 > U);
-              const int n = std::min(hmin(select(inr, nrun, splati(std::numeric_limits<int>::max()))),
-                                     hmin(select(waiting, u0 - U - 1, splati(std::numeric_limits<int>::max()))));
-              if (n == std::numeric_limits<int>::max()) break;  // no lane in range or to come
-              live = ~empty;
-              test_at = U + 1 + n;
-              if (!any(inr & live)) {
-                U += n;  // every lane in range stays in empty cells for n more planes
-                continue;
+            if (alive[l]) u_first = std::min(u_first, u0[l]), u_last = std::max(u_last, walk.uend[l] - 1);
+          // The lanes' positions at u_first (phase B recomputes each plane's from these).
+          VU GS[3];
+          for (int a = 0; a < 3; ++a) GS[a] = GQ0[a] + __builtin_convertvector(splati(u_first) - u0, VU) * DQ[a];
+          for (int a = 0; a < 3; ++a) walk.g[a] = GS[a];
+          walk.u = walk.next_check = u_first, walk.u_last = u_last;
+          VI& done = walk.done;
+          while (walk.u <= walk.u_last) {
+            // Phase A: the walk, until the queue is full or the lanes' planes end.
+            const int queued = walk_planes(grid, walk, kFrontToBack ? kQueueFrontToBack : kQueue, queue_u.data(),
+                                           queue_lanes.data(), kFrontToBack ? queue_counts.data() : nullptr);
+            // Phase B: the queued planes' samples.
+            for (int q = 0; q < queued; ++q) {
+              const int Uq = queue_u[std::size_t(q)];
+              VI sample = (splati(int(queue_lanes[std::size_t(q)])) & lane_bit) != 0;
+              if constexpr (kFrontToBack) {
+                sample &= ~done;
+                if (!any(sample)) continue;
               }
-            }
-            VI sample = inr & live;
-            // The lanes' lower stencil corners clamped to the volume: the voxel bits' index and the
-            // fetch's first corners.
-            const VI ic[3] = {clampv(ii[0], cell_max[0]), clampv(ii[1], cell_max[1]), clampv(ii[2], cell_max[2])};
-            if (voxel_bits != nullptr) {  // the scalar loop's voxel bits, lane by lane
-              const VI vox = ic[0] + dims[0] * (ic[1] + dims[1] * ic[2]);
-              const VI word = gather_i32(voxel_bits, select(sample, vox >> 5, zero));
-              sample &= ((word >> (vox & 31)) & 1) != 0;
-            }
-            n_fetched -= sample;
-            if (!any(sample)) continue;
-            const int k = kFrontToBack ? -K : K;  // the plane (the same for every lane)
-            VI m = one;
-            // The world point o + t_k v of each lane (the scalar loop's p) where the mask or the light
-            // needs it.
-            VD P[3];
-            if constexpr (kMasked || kLit) {
-              const VD tk = (splat(stack.depth(k)) - TOFF) / COSPSI;
-              for (int a = 0; a < 3; ++a) P[a] = O[a] + tk * V[a];
-            }
-            if constexpr (kMasked) {
-              // MaskVolume::lookup on the lanes: cell floor(u n) clamped, u = (p - lo) / size.
-              VI cell = zero;
-              for (int a = 2; a >= 0; --a) {
-                const double n = double(mask_dims[a]);
-                const VD f = floor((P[a] - mask_lo[a]) * mask_inv_size[a] * n);
-                const VD c = select(f < 0.0, splat(0), select(f >= n, splat(n - 1), f));
-                const VI ci = __builtin_convertvector(select(c >= 0.0, c, splat(0)), VI);  // (NaN: cell 0)
-                cell = a == 2 ? ci : ci + mask_dims[a] * cell;
+              const VI step = splati(Uq) - u0;
+              const std::uint64_t s = std::uint64_t(std::int64_t(Uq) - u_first);
+              const VU gq[3] = {GS[0] + s * DQ[0], GS[1] + s * DQ[1], GS[2] + s * DQ[2]};
+              const VI ii[3] = {fixed::floor_voxel(gq[0]), fixed::floor_voxel(gq[1]), fixed::floor_voxel(gq[2])};
+              const VI ic[3] = {clampv(ii[0], cell_max[0]), clampv(ii[1], cell_max[1]), clampv(ii[2], cell_max[2])};
+              n_fetched -= sample;
+              const int k = kFrontToBack ? -Uq : Uq;  // the plane (the same for every lane)
+              VI m = one;
+              // The world point o + t_k v of each lane (the scalar loop's p) where the mask or the light
+              // needs it.
+              VD P[3];
+              if constexpr (kMasked || kLit) {
+                const VD tk = (splat(stack.depth(k)) - TOFF) / COSPSI;
+                for (int a = 0; a < 3; ++a) P[a] = O[a] + tk * V[a];
               }
-              cell = select(sample, cell, zero);
-              VI looked;
-              for (int l = 0; l < kLanes; ++l) looked[l] = mask_cells[cell[l]];
-              m = select(sample, looked, one);
-              sample &= m != 0;
-            }
-            n_classified -= sample;
-            if (!any(sample)) continue;
-            // Trilinear fetch (VolumeSamples::trilinear_cell's arithmetic; offset 0 in idle lanes).
-            const VF w[3] = {gf[0] - fl[0], gf[1] - fl[1], gf[2] - fl[2]};
-            VI o0[3], o1[3];
-            for (int a = 0; a < 3; ++a) {
-              o0[a] = select(sample, ic[a] * str[a], zero);
-              o1[a] = select(sample, clampv(ii[a] + 1, cell_max[a]) * str[a], zero);
-            }
-            const VF one_f = splatf(1.0f);
-            // The corners v[y][z] at x0 and x1 (offsets y0/y1, z0/z1). Float samples with x fastest
-            // and no lane at the x border: each x0, x1 pair by one 64-bit gather (the same values).
-            VF vx0[2][2], vx1[2][2];
-            bool paired = false;
-            if constexpr (std::is_same_v<std::remove_cv_t<std::remove_pointer_t<decltype(samples.data)>>, float>) {
-              paired = x_packed && !any(sample & ((ii[0] < 0) | (ii[0] >= cell_max[0])));
-              if (paired)
+              if constexpr (kMasked) {
+                // MaskVolume::lookup on the lanes: cell floor(u n) clamped, u = (p - lo) / size.
+                VI cell = zero;
+                for (int a = 2; a >= 0; --a) {
+                  const double n = double(mask_dims[a]);
+                  const VD f = floor((P[a] - mask_lo[a]) * mask_inv_size[a] * n);
+                  const VD c = select(f < 0.0, splat(0), select(f >= n, splat(n - 1), f));
+                  const VI ci = __builtin_convertvector(select(c >= 0.0, c, splat(0)), VI);  // (NaN: cell 0)
+                  cell = a == 2 ? ci : ci + mask_dims[a] * cell;
+                }
+                cell = select(sample, cell, zero);
+                VI looked;
+                for (int l = 0; l < kLanes; ++l) looked[l] = mask_cells[cell[l]];
+                m = select(sample, looked, one);
+                sample &= m != 0;
+              }
+              n_classified -= sample;
+              if (!any(sample)) continue;
+              // Trilinear fetch (VolumeSamples::trilinear_cell's arithmetic; offset 0 in idle lanes).
+              const VF w[3] = {fixed::weight(gq[0]), fixed::weight(gq[1]), fixed::weight(gq[2])};
+              VI o0[3], o1[3];
+              for (int a = 0; a < 3; ++a) {
+                o0[a] = select(sample, ic[a] * str[a], zero);
+                o1[a] = select(sample, clampv(ii[a] + 1, cell_max[a]) * str[a], zero);
+              }
+              const VF one_f = splatf(1.0f);
+              // The corners v[y][z] at x0 and x1 (offsets y0/y1, z0/z1). Float samples with x fastest
+              // and no lane at the x border: each x0, x1 pair by one 64-bit gather (the same values).
+              VF vx0[2][2], vx1[2][2];
+              bool paired = false;
+              if constexpr (std::is_same_v<std::remove_cv_t<std::remove_pointer_t<decltype(samples.data)>>, float>) {
+                paired = x_packed && !any(sample & ((ii[0] < 0) | (ii[0] >= cell_max[0])));
+                if (paired)
+                  for (int yy = 0; yy < 2; ++yy)
+                    for (int zz = 0; zz < 2; ++zz)
+                      gather_pairs(samples.data, o0[0] + (yy ? o1[1] : o0[1]) + (zz ? o1[2] : o0[2]), vx0[yy][zz],
+                                   vx1[yy][zz]);
+              }
+              if (!paired)
                 for (int yy = 0; yy < 2; ++yy)
-                  for (int zz = 0; zz < 2; ++zz)
-                    gather_pairs(samples.data, o0[0] + (yy ? o1[1] : o0[1]) + (zz ? o1[2] : o0[2]), vx0[yy][zz],
-                                 vx1[yy][zz]);
-            }
-            if (!paired)
-              for (int yy = 0; yy < 2; ++yy)
-                for (int zz = 0; zz < 2; ++zz) {
-                  const VI oyz = (yy ? o1[1] : o0[1]) + (zz ? o1[2] : o0[2]);
-                  vx0[yy][zz] = gather(samples.data, o0[0] + oyz);
-                  vx1[yy][zz] = gather(samples.data, o1[0] + oyz);
-                }
-            const VF c00 = vx0[0][0] * (one_f - w[0]) + vx1[0][0] * w[0];
-            const VF c10 = vx0[1][0] * (one_f - w[0]) + vx1[1][0] * w[0];
-            const VF c01 = vx0[0][1] * (one_f - w[0]) + vx1[0][1] * w[0];
-            const VF c11 = vx0[1][1] * (one_f - w[0]) + vx1[1][1] * w[0];
-            const VF f =
-                ((c00 * (one_f - w[1]) + c10 * w[1]) * (one_f - w[2]) + (c01 * (one_f - w[1]) + c11 * w[1]) * w[2]) *
-                samples.scale;
-            const VD fn = (__builtin_convertvector(f, VD) - lo_) * inv_range;
-            VD a = splat(0), ac = splat(0), cr = splat(0), cg = splat(0), cb = splat(0);
-            for (int t = 0; t < (kMasked ? 4 : 1); ++t) {
-              const VI sel = kMasked ? sample & (m == t + 1) : sample;
-              if (!any(sel)) continue;
-              const InlineTf& tf = tfs[std::size_t(t)];
-              const VL ws = wide(sel);
-              if (tf.linear()) {
-                // The linear kind on the lanes (LaneLinearTf: InlineTf's bits); the corrected α
-                // where a visible α changed (the scalar loop's last α), by lane_math::pow on the
-                // lanes (exact_pow: std::pow lane by lane).
-                VD ta, tr, tg, tb;
-                lane_tfs[std::size_t(t)]->evaluate(fn, ta, tr, tg, tb);
-                const VL corr = ws & (ta > 0) & (ex != 1.0);
-                const VL fresh = corr & (ta != last_a);
-                if (exact_pow) {
-                  for (unsigned b = bits(narrow(fresh)); b != 0; b &= b - 1) {
-                    const int l = __builtin_ctz(b);
-                    last_ac[l] = 1.0 - std::pow(1.0 - ta[l], ex[l]);
+                  for (int zz = 0; zz < 2; ++zz) {
+                    const VI oyz = (yy ? o1[1] : o0[1]) + (zz ? o1[2] : o0[2]);
+                    vx0[yy][zz] = gather(samples.data, o0[0] + oyz);
+                    vx1[yy][zz] = gather(samples.data, o1[0] + oyz);
                   }
-                } else if (any(narrow(fresh))) {
-                  last_ac = select(fresh, 1.0 - lane_math::pow(1.0 - ta, ex), last_ac);
+              const VF c00 = vx0[0][0] * (one_f - w[0]) + vx1[0][0] * w[0];
+              const VF c10 = vx0[1][0] * (one_f - w[0]) + vx1[1][0] * w[0];
+              const VF c01 = vx0[0][1] * (one_f - w[0]) + vx1[0][1] * w[0];
+              const VF c11 = vx0[1][1] * (one_f - w[0]) + vx1[1][1] * w[0];
+              const VF f =
+                  ((c00 * (one_f - w[1]) + c10 * w[1]) * (one_f - w[2]) + (c01 * (one_f - w[1]) + c11 * w[1]) * w[2]) *
+                  samples.scale;
+              const VD fn = (__builtin_convertvector(f, VD) - lo_) * inv_range;
+              VD a = splat(0), ac = splat(0), cr = splat(0), cg = splat(0), cb = splat(0);
+              for (int t = 0; t < (kMasked ? 4 : 1); ++t) {
+                const VI sel = kMasked ? sample & (m == t + 1) : sample;
+                if (!any(sel)) continue;
+                const InlineTf& tf = tfs[std::size_t(t)];
+                const VL ws = wide(sel);
+                if (tf.linear()) {
+                  // The linear kind on the lanes (LaneLinearTf: InlineTf's bits); the corrected α
+                  // where a visible α changed (the scalar loop's last α), by lane_math::pow on the
+                  // lanes (exact_pow: std::pow lane by lane).
+                  VD ta, tr, tg, tb;
+                  lane_tfs[std::size_t(t)]->evaluate(fn, ta, tr, tg, tb);
+                  const VL corr = ws & (ta > 0) & (ex != 1.0);
+                  const VL fresh = corr & (ta != last_a);
+                  if (exact_pow) {
+                    for (unsigned b = bits(narrow(fresh)); b != 0; b &= b - 1) {
+                      const int l = __builtin_ctz(b);
+                      last_ac[l] = 1.0 - std::pow(1.0 - ta[l], ex[l]);
+                    }
+                  } else if (any(narrow(fresh))) {
+                    last_ac = select(fresh, 1.0 - lane_math::pow(1.0 - ta, ex), last_ac);
+                  }
+                  last_a = select(fresh, ta, last_a);
+                  a = select(ws, ta, a), ac = select(ws, select(corr, last_ac, ta), ac);
+                  cr = select(ws, tr, cr), cg = select(ws, tg, cg), cb = select(ws, tb, cb);
+                  continue;
                 }
-                last_a = select(fresh, ta, last_a);
-                a = select(ws, ta, a), ac = select(ws, select(corr, last_ac, ta), ac);
-                cr = select(ws, tr, cr), cg = select(ws, tg, cg), cb = select(ws, tb, cb);
+                VD pa = splat(0), pr = splat(0), pg = splat(0), pb = splat(0), pac = acp[std::size_t(t * max_pieces)];
+                for (int i = tf.ranges() - 1; i >= 0; --i) {
+                  const double rl = tf.range_lo(i), rh = tf.range_hi(i);
+                  const VL above = tf.range_lo_closed(i) ? VL(fn >= rl) : VL(fn > rl);
+                  const VL below = tf.range_hi_closed(i) ? VL(fn <= rh) : VL(fn < rh);
+                  const VL in = above & below;
+                  const Eigen::Vector3d& rgb = tf.piece_rgb(i + 1);
+                  pa = select(in, splat(tf.piece_alpha(i + 1)), pa);
+                  pr = select(in, splat(rgb.x()), pr), pg = select(in, splat(rgb.y()), pg);
+                  pb = select(in, splat(rgb.z()), pb);
+                  pac = select(in, acp[std::size_t(t * max_pieces + i + 1)], pac);
+                }
+                a = select(ws, pa, a), ac = select(ws, pac, ac);
+                cr = select(ws, pr, cr), cg = select(ws, pg, cg), cb = select(ws, pb, cb);
+              }
+              const VI vis = sample & narrow(a > 0);
+              if (!any(vis)) continue;
+              if constexpr (kLit) {
+                if (grad_words != nullptr) {
+                  shade_lanes(vis, ii, w, P, V, cr, cg, cb);
+                } else {
+                  for (int l = 0; l < kLanes; ++l) {
+                    if (!vis[l]) continue;
+                    const auto& ray = lray[std::size_t(l)];
+                    Eigen::Vector3d c(cr[l], cg[l], cb[l]);
+                    shade(c, ii[0][l], ii[1][l], ii[2][l], w[0][l], w[1][l], w[2][l],
+                          ray.origin + lrs[std::size_t(l)].t(stack, k) * ray.direction, -ray.direction);
+                    cr[l] = c.x(), cg[l] = c.y(), cb[l] = c.z();
+                  }
+                }
+              }
+              const VL wv = wide(vis);
+              if constexpr (kFrontToBack) {
+                const VD wgt = (1.0 - A) * ac;
+                Cr = select(wv, Cr + wgt * cr, Cr), Cg = select(wv, Cg + wgt * cg, Cg),
+                Cb = select(wv, Cb + wgt * cb, Cb);
+                A = select(wv, A + wgt, A);
+                const VI term = vis & narrow(A >= stop_alpha);
+                if (any(term)) {
+                  cnt.terminated += count(term);
+                  n_lane_samples = select(term, step + 1, n_lane_samples);
+                  walk.visited = select(term, queue_counts[std::size_t(2 * q)], walk.visited);
+                  walk.cell_tests = select(term, queue_counts[std::size_t(2 * q + 1)], walk.cell_tests);
+                  done |= term;
+                }
                 continue;
               }
-              VI piece = zero;
-              VD pa = splat(0), pr = splat(0), pg = splat(0), pb = splat(0), pac = acp[std::size_t(t * max_pieces)];
-              for (int i = tf.ranges() - 1; i >= 0; --i) {
-                const double rl = tf.range_lo(i), rh = tf.range_hi(i);
-                const VL above = tf.range_lo_closed(i) ? VL(fn >= rl) : VL(fn > rl);
-                const VL below = tf.range_hi_closed(i) ? VL(fn <= rh) : VL(fn < rh);
-                const VL in = above & below;
-                const Eigen::Vector3d& rgb = tf.piece_rgb(i + 1);
-                piece = select(narrow(in), splati(i + 1), piece);
-                pa = select(in, splat(tf.piece_alpha(i + 1)), pa);
-                pr = select(in, splat(rgb.x()), pr), pg = select(in, splat(rgb.y()), pg);
-                pb = select(in, splat(rgb.z()), pb);
-                pac = select(in, acp[std::size_t(t * max_pieces + i + 1)], pac);
-              }
-              for (unsigned b = bits(sel & narrow(pac < 0)); b != 0; b &= b - 1) {
-                const int l = __builtin_ctz(b);
-                const std::size_t slot = std::size_t(t * max_pieces + piece[l]);
-                acp[slot][l] = ex[l] != 1.0 ? 1.0 - std::pow(1.0 - pa[l], ex[l]) : pa[l];
-                pac[l] = acp[slot][l];
-              }
-              a = select(ws, pa, a), ac = select(ws, pac, ac);
-              cr = select(ws, pr, cr), cg = select(ws, pg, cg), cb = select(ws, pb, cb);
-            }
-            const VI vis = sample & narrow(a > 0);
-            if (!any(vis)) continue;
-            if constexpr (kLit) {
-              if (grad_words != nullptr) {
-                shade_lanes(vis, ii, w, P, V, cr, cg, cb);
-              } else {
-                for (int l = 0; l < kLanes; ++l) {
-                  if (!vis[l]) continue;
-                  const auto& ray = lray[std::size_t(l)];
-                  Eigen::Vector3d c(cr[l], cg[l], cb[l]);
-                  shade(c, ii[0][l], ii[1][l], ii[2][l], w[0][l], w[1][l], w[2][l],
-                        ray.origin + lrs[std::size_t(l)].t(stack, k) * ray.direction, -ray.direction);
-                  cr[l] = c.x(), cg[l] = c.y(), cb[l] = c.z();
+              if (mode == SlicingMode::kBlend) {
+                if (blend_op == BlendOperator::kOver) {
+                  Cr = select(wv, ac * cr + (1.0 - ac) * Cr, Cr), Cg = select(wv, ac * cg + (1.0 - ac) * Cg, Cg);
+                  Cb = select(wv, ac * cb + (1.0 - ac) * Cb, Cb);
+                } else {
+                  Cr = select(wv, Cr + ac * cr, Cr), Cg = select(wv, Cg + ac * cg, Cg),
+                  Cb = select(wv, Cb + ac * cb, Cb);
                 }
-              }
-            }
-            const VL wv = wide(vis);
-            if constexpr (kFrontToBack) {
-              const VD wgt = (1.0 - A) * ac;
-              Cr = select(wv, Cr + wgt * cr, Cr), Cg = select(wv, Cg + wgt * cg, Cg),
-              Cb = select(wv, Cb + wgt * cb, Cb);
-              A = select(wv, A + wgt, A);
-              const VI term = vis & narrow(A >= stop_alpha);
-              if (any(term)) {
-                cnt.terminated += count(term);
-                n_lane_samples = select(term, step + 1, n_lane_samples);
-                done |= term;
-                if (!any(alive & ~done)) break;
-                // Test again at the next plane: the lanes left may all be empty there (a jump), which
-                // the runs tested with the stopped lane would only find at their end.
-                if (skip) test_at = U + 1;
-              }
-              continue;
-            }
-            if (mode == SlicingMode::kBlend) {
-              if (blend_op == BlendOperator::kOver) {
-                Cr = select(wv, ac * cr + (1.0 - ac) * Cr, Cr), Cg = select(wv, ac * cg + (1.0 - ac) * Cg, Cg);
-                Cb = select(wv, ac * cb + (1.0 - ac) * Cb, Cb);
+                A = select(wv, ac + (1.0 - ac) * A, A);
               } else {
-                Cr = select(wv, Cr + ac * cr, Cr), Cg = select(wv, Cg + ac * cg, Cg), Cb = select(wv, Cb + ac * cb, Cb);
+                const VL wins = wv & (a >= A);
+                if (mode == SlicingMode::kCombined) {
+                  const VL rest = wv & ~wins;
+                  Cr = select(rest, ac * cr + (1.0 - ac) * Cr, Cr), Cg = select(rest, ac * cg + (1.0 - ac) * Cg, Cg);
+                  Cb = select(rest, ac * cb + (1.0 - ac) * Cb, Cb);
+                }
+                Cr = select(wins, cr, Cr), Cg = select(wins, cg, Cg), Cb = select(wins, cb, Cb);
+                A = select(wins, a, A);
               }
-              A = select(wv, ac + (1.0 - ac) * A, A);
-            } else {
-              const VL wins = wv & (a >= A);
-              if (mode == SlicingMode::kCombined) {
-                const VL rest = wv & ~wins;
-                Cr = select(rest, ac * cr + (1.0 - ac) * Cr, Cr), Cg = select(rest, ac * cg + (1.0 - ac) * Cg, Cg);
-                Cb = select(rest, ac * cb + (1.0 - ac) * Cb, Cb);
-              }
-              Cr = select(wins, cr, Cr), Cg = select(wins, cg, Cg), Cb = select(wins, cb, Cb);
-              A = select(wins, a, A);
             }
+            if (kFrontToBack && !any(alive & ~done)) break;
           }
           cnt.samples += hsum(n_lane_samples);
-          cnt.visited += hsum(n_visited);
+          cnt.visited += hsum(walk.visited);
           cnt.skipped += hsum(n_lane_samples) - hsum(n_fetched);
           cnt.classified += hsum(n_classified);
-          cnt.cell_tests += hsum(n_cell_tests);
+          cnt.cell_tests += hsum(walk.cell_tests);
           for (int l = 0; l < kLanes; ++l) {
             const int x = x0 + l % kLanesX, y = y0 + l / kLanesX;
             if (x >= x_end || y >= y_end) continue;
@@ -1216,16 +1344,18 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
   add("slice.quality_class", num(s.quality_class));
   add("slice.spacing", num(slice_spacing(s.quality_class, volume.spacing())));
   add("slice.order", "back to front");
-  add("slice.positions", s.exact_positions ? "exact: o + t_k v per sample"
-                                           : "incremental: g_0 + j dg per ray (float round-off, < 1e-9 voxel)");
+  add("slice.positions", s.exact_positions
+                             ? "exact: o + t_k v per sample"
+                             : "incremental: g_0 + j dg per ray in 32.32 fixed point (< (j + 1) 2^-33 voxel)");
   if (const auto* p = std::get_if<Pinhole>(&camera))
     add("camera.fov", fmt::format("{:.6g} deg (vertical)", 2 * std::atan(0.5 * p->height / p->fy) * 180 / M_PI));
   add("cpu.realisation", "per-pixel ray-plane sampling");
   add("cpu.packets", s.simd && !s.exact_positions
-                         ? "4 x 2 pixel blocks on 8 SIMD lanes (the same image as one ray at a time)"
+                         ? fmt::format("{} x 2 pixel blocks on {} SIMD lanes, a walk then a fetch phase (the same "
+                                       "image as one ray at a time)",
+                                       packet::kLanesX, packet::kLanes)
                          : "off (one ray at a time)");
-  add("cpu.pow",
-      s.exact_pow ? "std::pow" : "the linear TF's corrected alpha by slicing_pow (within 1e-14 of std::pow)");
+  add("cpu.pow", s.exact_pow ? "std::pow" : "the TFs' corrected alpha by slicing_pow (within 1e-14 of std::pow)");
   add("mode", slicing_mode_name(s.mode));
   add("blend.operator", s.blend == BlendOperator::kOver ? "over" : "additive");
   add("blend.opacity_correction", s.opacity_correction ? "on, dref = h0, along-ray spacing dd / cos psi" : "off");

@@ -95,43 +95,47 @@ struct SlicingSettings {
   /// Ignored (logged as such) in the other modes and for the additive operator.
   double early_termination = 0;
   /// Sample positions. false (default): per ray, the first plane's index coordinates g_0 from
-  /// t_k as below, the others g_0 + j Δg (Δg the move per plane; one fused multiply-add per axis,
-  /// no division), which differ from the exact ones by float round-off, |Δg| < 1e-9 voxel (see
-  /// slicing_speed_test). true: each sample at o + t_k v with t_k from its plane's depth (one
-  /// division per sample; the arithmetic before issue 17's second speed round, bit for bit).
+  /// t_k as below and the move per plane Δg, each rounded once to 32.32 fixed point, and sample j at
+  /// g_0 + j Δg by integer arithmetic (fixed_position.h): no division, the same positions in every
+  /// path, within (j + 1) 2⁻³³ voxel of the double arithmetic's, and the trilinear weights to 2⁻²⁴
+  /// (see slicing_speed_test). true: each sample at o + t_k v with t_k from its plane's depth (one
+  /// division per sample) and the weights of its float coordinates, as before issue 17's speed rounds.
   bool exact_positions = false;
-  /// Live runs (with skip_empty): from a sample in a live cell, the planes while the ray stays
-  /// 0.01 voxel inside the cube of cells around it that are all live (the Chebyshev distance to the
-  /// nearest empty cell minus one) are sampled without looking up their cells: the same samples,
-  /// counts and image as testing each. false: every sample's cell is looked up (for tests and
-  /// measurements).
+  /// Live runs (with skip_empty, one ray at a time): from a sample in a live cell, the planes while
+  /// the ray stays 0.01 voxel inside the cube of cells around it that are all live (the Chebyshev
+  /// distance to the nearest empty cell minus one) are sampled without looking up their cells: the
+  /// same samples, counts and image as testing each. false: every sample's cell is looked up (for
+  /// tests and measurements). The packets' walk looks cells up every few planes either way.
   bool live_runs = true;
   /// Voxel bits (with skip_empty; issue 17's sixth speed round): inside live cells, a sample whose
   /// trilinear stencil (the voxels {i, i + 1} × {j, j + 1} × {k, k + 1} at its lower corner, clamped
   /// as the fetch clamps) holds no value that a TF in use can see (the stencil's range, padded as
   /// the cells' ranges, against visible_in) is not fetched: one bit per voxel (0.9 MB for a
-  /// 256 × 256 × 113 volume) looked up before the eight corners. Such a sample would have α = 0, so
-  /// the image is the same bit for bit; it is counted as skipped. false: every sample of a live cell
-  /// is fetched (the image before that round, and its counts).
+  /// 256 × 256 × 113 volume, in bricks of 4³ voxels) looked up before the eight corners. Such a
+  /// sample would have α = 0, so the image is the same bit for bit; it is counted as skipped. A cell
+  /// none of whose voxels has its bit is empty (jumped). false: the bit is set for every voxel of a
+  /// cell whose range a TF can see (every sample of a live cell is fetched: the image before that
+  /// round, and its counts).
   bool skip_voxels = true;
-  /// Packets (issue 17's third and fourth speed rounds): true (default): eight neighbouring pixels of
-  /// a tile (a 4 x 2 block) advance plane by plane together, positions, cells, trilinear fetches
-  /// (gathers), the mask lookup, both TF kinds, the corrected α, the Blinn-Phong lighting (its
-  /// specular power per lane) and the compositing on eight lanes; a lane that has nothing to
-  /// do at a plane (outside its ray's planes, in an empty cell, cut away by the mask, terminated)
-  /// is masked. Empty space is skipped per packet (lookups when the shortest lane run ends, jumps
-  /// where every lane is empty), so each lane fetches exactly its ray's live samples with its ray's
-  /// arithmetic (the scalar code's operations in its order): the image
-  /// and the samples, skipped, classified and terminated counts are the scalar path's bit for bit
-  /// (slicing_speed_test); visited and cell_tests count the packets' own work. Not with
-  /// exact_positions. false: one ray at a time (the reference).
+  /// Packets (issue 17's speed rounds): true (default): neighbouring pixels of a tile (4 x 2 on
+  /// eight lanes with AVX-512, 2 x 2 on four otherwise) advance plane by plane together, in two
+  /// phases that take turns over chunks of planes: a walk (positions, the fetch bits by one gather,
+  /// the empty-space cells every few planes and jumps where every lane is two cells from a live
+  /// one) queues the planes where some lane fetches, and the fetch phase runs the trilinear gathers,
+  /// the mask lookup, both TF kinds, the corrected α, the Blinn-Phong lighting (its specular power
+  /// per lane) and the compositing on the lanes for those planes; a lane with nothing to do at a
+  /// plane (outside its ray's planes, no fetch bit, cut away by the mask, terminated) is masked. Each
+  /// lane fetches exactly its ray's samples with its ray's arithmetic (the scalar code's
+  /// operations in its order): the image and the samples, skipped, classified and terminated counts
+  /// are the scalar path's bit for bit (slicing_speed_test); visited and cell_tests count the
+  /// walk's own work. Not with exact_positions. false: one ray at a time (the reference).
   bool simd = true;
-  /// The linear TF's corrected α 1 - (1 - α)^(Δ/h0), a power per sample: false (default):
-  /// slicing_pow (issue 17's fourth speed round: eight lanes at a time in the packets, the same bits
-  /// per lane as per ray; within 1e-14 of std::pow, so pixels differ from std::pow's by at most
-  /// one float ulp, see slicing_speed_test). true: std::pow (the images before that round bit for
-  /// bit; lane by lane in the packets). The constant TF's corrected α (once per ray and piece) and
-  /// the specular term are std::pow either way.
+  /// The corrected α 1 - (1 - α)^(Δ/h0), a power per sample of the linear TF and per ray and
+  /// piece of the constant TF: false (default): slicing_pow (issue 17's fourth speed round; for
+  /// the constant TF since its seventh: eight lanes at a time in the packets, the same bits per lane
+  /// as per ray; within 1e-14 of std::pow, so pixels differ from std::pow's by at most one float
+  /// ulp, see slicing_speed_test). true: std::pow (lane by lane in the packets). The specular term
+  /// is std::pow either way.
   bool exact_pow = false;
 };
 
@@ -207,9 +211,10 @@ class SlicingRenderer {
   SlicingSettings s_;
   std::optional<GradientVolume> grad_;
   double lo_ = 0, hi_ = 1;
-  int cell_shift_ = 3;                 ///< log2 of the empty-space cell edge (voxels)
-  std::array<int, 3> cells_{0, 0, 0};  ///< empty-space cells of skip_cell³ voxels
-  std::vector<std::uint8_t> live_;     ///< 1 where a TF in use may be visible
+  std::array<bool, 4> tf_used_{true, false, false, false};  ///< TFs the mask uses (TF 1 without a mask)
+  int cell_shift_ = 3;                                      ///< log2 of the empty-space cell edge (voxels)
+  std::array<int, 3> cells_{0, 0, 0};                       ///< empty-space cells of skip_cell³ voxels
+  std::vector<std::uint8_t> live_;                          ///< 1 where some sample is fetched (fetch_bits_)
   /// Chebyshev distance (in cells, capped at 255) from each cell to the nearest live cell (0: live).
   std::vector<std::uint8_t> dist_;
   /// For a live cell, the radius (in cells) of the cube around it whose cells are all live: the
@@ -217,9 +222,14 @@ class SlicingRenderer {
   std::vector<std::uint8_t> live_reach_;
   /// dist_ | live_reach_ << 8 per cell: one 32-bit gather per lane in the packets (SlicingSettings::simd).
   std::vector<std::int32_t> cell_info_;
-  /// Bit v % 32 of word v / 32 set where a TF in use may be visible in voxel v's trilinear stencil
-  /// (v = i + nx (j + ny k); SlicingSettings::skip_voxels); empty when off.
-  std::vector<std::int32_t> voxel_bits_;
+  /// The fetch bits (with skip_empty): one per voxel, set where a sample whose stencil's lower
+  /// corner is that voxel is fetched — with skip_voxels where a TF in use may see a value of the
+  /// stencil, else wherever the voxel's cell may be seen. In bricks of 4³ voxels, one 64-bit word
+  /// each (bricks_ per axis, x fastest; bit (i & 3) + 4 (j & 3) + 16 (k & 3)): a ray's steps stay in
+  /// one word for a few planes, and a zero word tells that the brick has nothing to fetch. A cell is
+  /// live (live_) where some voxel of it has its bit.
+  std::vector<std::uint64_t> fetch_bits_;
+  std::array<int, 3> bricks_{0, 0, 0};
   /// The gradient's three encoded channels of each voxel (x fastest) as e_x | e_y << 8 | e_z << 16:
   /// one 32-bit gather per corner in the packets' lighting (simd and a lit mode).
   std::vector<std::int32_t> grad_words_;
