@@ -235,113 +235,153 @@ class LaneLinearTf {
   std::array<Curve, 4> curves_;
 };
 
-/// What the packets' walk reads (per frame; SlicingRenderer's empty-space tables).
+/// The planes that may hold a fetched sample of one tile of pixels (SlicingRenderer's packets, with
+/// empty-space skipping and a pinhole without distortion, whose pixels' rays are an affine family
+/// of directions): plane k may where the box of the tile's samples on it — that of the four corner
+/// rays' points, padded by 1e-3 voxel against the rounding of both — touches a live cell, its
+/// voxels clamped as the samples' are. Computed 64 planes at a time when a walk first asks, so that
+/// planes no ray of the tile meets (the box's ends, background tiles) cost nothing.
+class TilePlanes {
+ public:
+  /// Corner c's point on plane k in index coordinates: base[c] + depth(k) along[c].
+  std::array<Eigen::Vector3d, 4> base, along;
+  const SliceStack* stack = nullptr;
+  /// SlicingRenderer::live_sums_ (the live cells in [0, x) x [0, y) x [0, z)), sx x sy x sz.
+  const std::int32_t* live_sums = nullptr;
+  int sx = 0, sy = 0;
+  std::array<int, 3> dims{};
+  int cell_shift = 2;
+  std::int64_t tests = 0;  ///< planes tested
+
+  void reset(int count) {
+    words_.assign(std::size_t((count + 63) / 64), 0);
+    ready_.assign(words_.size(), 0);
+    count_ = count;
+  }
+  /// All planes (no bound: a corner ray that looks away from the planes).
+  void all() {
+    std::fill(words_.begin(), words_.end(), ~std::uint64_t(0));
+    std::fill(ready_.begin(), ready_.end(), 1);
+  }
+  std::uint64_t word(int w) {
+    if (ready_[std::size_t(w)] == 0) compute(w);
+    return words_[std::size_t(w)];
+  }
+
+ private:
+  void compute(int w) {
+    std::uint64_t bits = 0;
+    for (int k = 64 * w; k < std::min(64 * w + 64, count_); ++k) {
+      const double d = stack->depth(k);
+      int lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) {
+        double mn = std::numeric_limits<double>::infinity(), mx = -mn;
+        for (int c = 0; c < 4; ++c) {
+          const double x = base[std::size_t(c)][a] + d * along[std::size_t(c)][a];
+          mn = std::min(mn, x), mx = std::max(mx, x);
+        }
+        const double top = double(dims[std::size_t(a)] - 1);
+        lo[a] = int(std::clamp(std::floor(mn - 1e-3), 0.0, top)) >> cell_shift;
+        hi[a] = int(std::clamp(std::floor(mx + 1e-3), 0.0, top)) >> cell_shift;
+      }
+      // The live cells in the box [lo, hi] from the prefix sums (inclusion-exclusion, no branch).
+      auto at = [&](int x, int y, int z) {
+        return live_sums[std::size_t(x) + std::size_t(sx) * (std::size_t(y) + std::size_t(sy) * std::size_t(z))];
+      };
+      const int x0 = lo[0], y0 = lo[1], z0 = lo[2], x1 = hi[0] + 1, y1 = hi[1] + 1, z1 = hi[2] + 1;
+      const std::int32_t live = (at(x1, y1, z1) - at(x0, y1, z1) - at(x1, y0, z1) + at(x0, y0, z1)) -
+                                (at(x1, y1, z0) - at(x0, y1, z0) - at(x1, y0, z0) + at(x0, y0, z0));
+      bits |= std::uint64_t(live != 0) << (k & 63);
+      ++tests;
+    }
+    words_[std::size_t(w)] = bits;
+    ready_[std::size_t(w)] = 1;
+  }
+  std::vector<std::uint64_t> words_;
+  std::vector<std::uint8_t> ready_;
+  int count_ = 0;
+};
+
+/// What the packets' walk reads: the fetch bits and the tile's planes.
 struct WalkGrid {
   const std::uint64_t* fetch_bits = nullptr;  ///< null: no empty-space skipping (every sample fetched)
-  const std::int32_t* cell_info = nullptr;
-  std::array<int, 3> dims{}, cells{};
-  int bricks_x = 0, bricks_y = 0, cell_shift = 2;
+  std::array<int, 3> dims{};
+  int bricks_x = 0, bricks_y = 0;
+  TilePlanes* planes = nullptr;  ///< null: every plane
+  bool front_to_back = false;    ///< u = -k (else u = k)
 };
 
 /// One packet's lanes as the walk keeps them (packet::kLanes rays of a pixel block).
 struct WalkLanes {
   packet::VU g[3];         ///< positions at plane `u` (32.32 fixed point, fixed_position.h)
   packet::VU dg[3];        ///< moves per plane
-  packet::VD inv_dg[3];    ///< 1 / dg as doubles (0 where dg = 0)
   packet::VI u0, uend;     ///< each lane's planes [u0, uend)
   packet::VI alive, done;  ///< lanes with planes; lanes stopped by early termination
-  packet::VI visited, cell_tests;
+  packet::VI visited;
   int u = 0, u_last = 0;  ///< the next plane to walk, the packet's last plane
-  int next_check = 0;     ///< the next plane whose cells are looked up
 };
 
-/// The walk of a packet (phase A of SlicingRenderer's packets): from plane w.u on, each plane's lane
-/// positions and fetch bits (one gather of the bricks' words), the planes where some lane fetches
-/// queued with the lanes' mask (bit l: lane l), until `max` are queued or the lanes' planes end
-/// (then w.u > w.u_last). Every kCheckEvery planes, and where no lane is in its planes, the lanes'
-/// empty-space cells are looked up: where every lane in its planes is at least two cells from a live
-/// cell (so at least a cell's width from any fetched sample), the packet jumps the planes while all
-/// stay in their empty cubes (exact fixed-point runs, conservative by 2⁻⁴⁰ of the quotient). Nearer
-/// to live cells it walks plane by plane, which costs less than the mispredicted jumps of a few
-/// planes that a lookup at every empty plane gave (the decision waits for two gathers). Returns the
-/// number queued; `visited` and `cell_tests` count the walk per lane; with `snapshots`, each queued
-/// plane's counters after it (early termination keeps a lane's counts up to its last plane).
-/// Not inlined: the walk keeps its state in registers apart from the fetch phase's.
+/// The first plane u' >= u (in the walk's order) that the tile's planes may hold samples on, or
+/// u_last + 1.
+inline int next_plane(const WalkGrid& grid, int u, int u_last) {
+  if (grid.planes == nullptr || u > u_last) return u;
+  TilePlanes& planes = *grid.planes;
+  if (!grid.front_to_back) {  // k = u rising
+    int w = u >> 6;
+    std::uint64_t word = planes.word(w) & (~std::uint64_t(0) << (u & 63));
+    while (word == 0) {
+      if (++w > (u_last >> 6)) return u_last + 1;
+      word = planes.word(w);
+    }
+    return std::min(64 * w + __builtin_ctzll(word), u_last + 1);
+  }
+  const int k = -u, k_last = -u_last;  // k falling to k_last
+  int w = k >> 6;
+  std::uint64_t word = planes.word(w) & (~std::uint64_t(0) >> (63 - (k & 63)));
+  while (word == 0) {
+    if (--w < (k_last >> 6)) return u_last + 1;
+    word = planes.word(w);
+  }
+  return std::min(-(64 * w + 63 - __builtin_clzll(word)), u_last + 1);
+}
+
+/// The walk of a packet (phase A of SlicingRenderer's packets): from plane w.u on, over the planes
+/// the tile may hold samples on, each plane's lane positions and fetch bits (one gather of the bricks'
+/// words); the planes where some lane fetches are queued with the lanes' mask (bit l: lane l), until
+/// `max` are queued or the lanes' planes end (then w.u > w.u_last). Returns the number queued;
+/// `visited` counts the walk per lane; with `snapshots`, each queued plane's counter after it (early
+/// termination keeps a lane's count up to its last plane). Not inlined: the walk keeps its state in
+/// registers apart from the fetch phase's.
 [[gnu::noinline]] int walk_planes(const WalkGrid& grid, WalkLanes& w, int max, int* queue_u, unsigned* queue_lanes,
                                   packet::VI* snapshots) {
   using namespace packet;
-  constexpr int kCheckEvery = 4;
-  // Jump only where every lane is at least this many cells from a live one: 8 voxels' worth (2
-  // cells of 4 voxels, the default), so that a jump passes several planes.
-  const int jump_dist = std::max(1, 8 >> grid.cell_shift);
   const VI zero = splati(0);
   const VI dmax[3] = {splati(grid.dims[0] - 1), splati(grid.dims[1] - 1), splati(grid.dims[2] - 1)};
-  const VI ncell_m1[3] = {splati(grid.cells[0] - 1), splati(grid.cells[1] - 1), splati(grid.cells[2] - 1)};
   auto clampv = [](VI i, VI hi) { return select(i < 0, splati(0), select(i > hi, hi, i)); };
   const std::uint64_t* const bits_data = grid.fetch_bits;
-  const int bx = grid.bricks_x, by = grid.bricks_y, cx = grid.cells[0], cy = grid.cells[1], shift = grid.cell_shift;
+  const int bx = grid.bricks_x, by = grid.bricks_y;
   VU g[3] = {w.g[0], w.g[1], w.g[2]};
   const VU dg[3] = {w.dg[0], w.dg[1], w.dg[2]};
   const VI u0 = w.u0, uend = w.uend, live = w.alive & ~w.done;
-  VI visited = w.visited, cell_tests = w.cell_tests;
-  int u = w.u, next_check = w.next_check;
+  VI visited = w.visited;
+  int u = w.u;
   const int u_last = w.u_last;
-  // Whole further planes n for which every lane's position g + n dg stays in the cube of cells c ±
-  // r (a side at the volume's border is open: clamping keeps the cell there), at most `cap`: where
-  // g rises, g + n dg < side: n < (side - g) / dg; where it falls, n <= (g - side) / -dg. The
-  // quotients err by the rounding of 1 / dg and one product (2⁻⁵² relative) and are shrunk by 2⁻⁴⁰
-  // first, so a run never reaches past its cube (it may stop one plane short).
-  auto cube_runs = [&](const VI(&c)[3], VI r, const VI(&gi)[3], int cap) {
-    const double kShrink = 1.0 - 0x1p-40;
-    VD run = splat(double(cap));
-    for (int a = 0; a < 3; ++a) {
-      const VL closed_hi = wide(~((c[a] + r) >= ncell_m1[a])), closed_lo = wide(~((c[a] - r) <= 0));
-      const VD frac = fixed::fraction(g[a]);
-      const VD to_hi = __builtin_convertvector(((c[a] + r + 1) << shift) - gi[a], VD) * fixed::kOne - frac;
-      const VD to_lo = __builtin_convertvector(gi[a] - ((c[a] - r) << shift), VD) * fixed::kOne + frac;
-      const VD n_hi = ceil(to_hi * w.inv_dg[a] * kShrink) - 1.0, n_lo = floor(to_lo * -w.inv_dg[a] * kShrink);
-      run = select(VL(w.inv_dg[a] > 0.0) & closed_hi & (n_hi < run), n_hi, run);
-      run = select(VL(w.inv_dg[a] < 0.0) & closed_lo & (n_lo < run), n_lo, run);
-    }
-    return __builtin_convertvector(select(run > 0.0, run, splat(0)), VI);
-  };
-  auto advance = [&](int n) {
-    for (int a = 0; a < 3; ++a) g[a] += std::uint64_t(std::int64_t(n)) * dg[a];
-    u += n;
-  };
   int queued = 0;
-  while (u <= u_last && queued < max) {
-    const VI inr = (u0 <= u) & (uend > u) & live;
-    const VI gi[3] = {fixed::floor_voxel(g[0]), fixed::floor_voxel(g[1]), fixed::floor_voxel(g[2])};
-    const VI ic[3] = {clampv(gi[0], dmax[0]), clampv(gi[1], dmax[1]), clampv(gi[2], dmax[2])};
-    if (bits_data != nullptr && u >= next_check) {
-      next_check = u + kCheckEvery;
-      const VI waiting = live & (u0 > u);
-      const int next_lane = hmin(select(waiting, u0, splati(std::numeric_limits<int>::max())));
-      if (!any(inr)) {  // between lanes' planes: on to the next lane's first plane
-        if (next_lane == std::numeric_limits<int>::max()) {
-          u = u_last + 1;
-          break;
-        }
-        advance(next_lane - u);
-        next_check = u;
-        continue;
-      }
-      cell_tests -= inr;
-      const VI c[3] = {ic[0] >> shift, ic[1] >> shift, ic[2] >> shift};
-      const VI info = gather_i32(grid.cell_info, select(inr, c[0] + cx * (c[1] + cy * c[2]), zero));
-      const VI dist = info & 255;
-      if (!any(inr & (dist < jump_dist))) {
-        const int cap =
-            next_lane == std::numeric_limits<int>::max() ? u_last - u : std::min(u_last - u, next_lane - u - 1);
-        advance(1 + hmin(select(inr, cube_runs(c, dist - 1, gi, cap), splati(cap))));  // u and the run: empty
-        next_check = u;
-        continue;
-      }
+  while (queued < max) {
+    const int next = next_plane(grid, u, u_last);
+    if (next > u_last) {
+      u = u_last + 1;
+      break;
     }
+    const std::uint64_t move = std::uint64_t(std::int64_t(next - u));
+    for (int a = 0; a < 3; ++a) g[a] += move * dg[a];
+    u = next;
+    const VI inr = (u0 <= u) & (uend > u) & live;
     visited -= inr;
     VI sample = inr;
     if (bits_data != nullptr) {
+      const VI ic[3] = {clampv(fixed::floor_voxel(g[0]), dmax[0]), clampv(fixed::floor_voxel(g[1]), dmax[1]),
+                        clampv(fixed::floor_voxel(g[2]), dmax[2])};
       const VI brick = (ic[0] >> 2) + bx * ((ic[1] >> 2) + by * (ic[2] >> 2));
       const VI half = gather_i32(reinterpret_cast<const std::int32_t*>(bits_data),
                                  select(inr, 2 * brick + ((ic[2] >> 1) & 1), zero));
@@ -350,13 +390,14 @@ struct WalkLanes {
     const unsigned lanes = bits(sample);
     queue_u[queued] = u;
     queue_lanes[queued] = lanes;
-    if (snapshots != nullptr) snapshots[2 * queued] = visited, snapshots[2 * queued + 1] = cell_tests;
+    if (snapshots != nullptr) snapshots[queued] = visited;
     queued += lanes != 0 ? 1 : 0;
-    advance(1);
+    ++u;
+    for (int a = 0; a < 3; ++a) g[a] += dg[a];
   }
   for (int a = 0; a < 3; ++a) w.g[a] = g[a];
-  w.visited = visited, w.cell_tests = cell_tests;
-  w.u = u, w.next_check = next_check;
+  w.visited = visited;
+  w.u = u;
   return queued;
 }
 
@@ -552,9 +593,20 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
     // to the nearest empty cell minus one (254 where none is within the cap).
     live_reach_ = chebyshev(false);
     for (auto& r : live_reach_) r = std::uint8_t(r == 0 ? 0 : r - 1);
-    cell_info_.resize(live_.size());
-    for (std::size_t i = 0; i < live_.size(); ++i)
-      cell_info_[i] = std::int32_t(dist_[i]) | std::int32_t(live_reach_[i]) << 8;
+    // Prefix sums of the live cells (the packets' tile planes count the live cells of a box by
+    // eight of them).
+    const std::size_t sx = std::size_t(cx) + 1, sy = std::size_t(cy) + 1;
+    live_sums_.assign(sx * sy * std::size_t(cz + 1), 0);
+    for (int k = 1; k <= cz; ++k)
+      for (int j = 1; j <= cy; ++j)
+        for (int i = 1; i <= cx; ++i) {
+          auto at = [&](int x, int y, int z) -> std::int32_t& {
+            return live_sums_[std::size_t(x) + sx * (std::size_t(y) + sy * std::size_t(z))];
+          };
+          at(i, j, k) = std::int32_t(live_[cell_of(i - 1, j - 1, k - 1)]) + at(i - 1, j, k) + at(i, j - 1, k) +
+                        at(i, j, k - 1) - at(i - 1, j - 1, k) - at(i - 1, j, k - 1) - at(i, j - 1, k - 1) +
+                        at(i - 1, j - 1, k - 1);
+        }
   }
 }
 
@@ -632,9 +684,17 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   };
   // The packets' walk (walk_planes).
   WalkGrid grid;
-  grid.fetch_bits = fetch_bits, grid.cell_info = cell_info_.empty() ? nullptr : cell_info_.data();
-  grid.dims = dims, grid.cells = cells_;
-  grid.bricks_x = bricks_x, grid.bricks_y = bricks_y, grid.cell_shift = cell_shift_;
+  grid.fetch_bits = fetch_bits, grid.dims = dims, grid.bricks_x = bricks_x, grid.bricks_y = bricks_y;
+  // The tiles' planes: the corner rays bound a tile's samples on a plane where the pixels' rays are
+  // an affine family of directions (a pinhole without distortion).
+  const bool tile_bounds = !pin->distorted();
+  // The planes are bounded per block of pixels whose samples on a plane spread over about two cells
+  // (at the box's centre): a tile of a fine image, fewer pixels where there are few pixels per voxel
+  // (a block's box would cover most of a small volume), down to one packet.
+  const double voxels_per_pixel = (box.centre() - eye).dot(stack.n) / pin->fy / h0;
+  const int block_px = int(std::min(double(s_.tile), double(2 << cell_shift_) / std::max(voxels_per_pixel, 1e-9)));
+  const int block_x = std::max(packet::kLanesX, block_px / packet::kLanesX * packet::kLanesX);
+  const int block_y = std::max(2, block_px / 2 * 2);
   // A ray's first position (at its first plane in the walk's order) and move per plane in fixed
   // point (fixed_position.h), from the double arithmetic o + t_k v and (Δd / cos ψ) v, in index
   // units. A move is clamped to 2^30 voxels: a ray with two planes in the box moves less than the
@@ -923,18 +983,48 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
       // termination (the phantom's Blend at QC 1, early termination 0.99: 135-153 ms with 64, 98 ms
       // with 8; back to front 64, 16 and 8 within the noise).
       constexpr int kQueue = 64, kQueueFrontToBack = 8;
+      std::vector<TilePlanes> block_planes;  // per block of the tile (block_x x block_y pixels)
       std::array<int, kQueue> queue_u;
       std::array<unsigned, kQueue> queue_lanes;
       // Front to back: the lanes' walk counters after each queued plane, so that a lane that
       // terminates there keeps the counts of its walk up to that plane only.
-      std::array<VI, 2 * kQueue> queue_counts;
+      std::array<VI, kQueue> queue_counts;
       const int x_end = std::min(W, (tx + 1) * T), y_end = std::min(H, (ty + 1) * T);
+      // The planes that may hold a fetched sample of this tile: where the box of the tile's samples
+      // on the plane (that of the four corner rays' points, padded by 1e-3 voxel against the
+      // rounding of both) touches a live cell, clamped as the samples' voxels are. Each packet then
+      // walks these planes only (with skipping; every plane without it or with a distorted camera).
+      WalkGrid tile_grid = grid;
+      tile_grid.front_to_back = kFrontToBack;
+      // The planes of the pixels [x_lo, x_hi] x [y_lo, y_hi] (inclusive) from their corner rays.
+      auto bound_planes = [&](TilePlanes& tile_planes, int x_lo, int y_lo, int x_hi, int y_hi) {
+        tile_planes.stack = &stack, tile_planes.live_sums = live_sums_.data(), tile_planes.dims = dims;
+        tile_planes.sx = cells_[0] + 1, tile_planes.sy = cells_[1] + 1, tile_planes.cell_shift = cell_shift;
+        tile_planes.reset(stack.count);
+        bool ok = true;
+        for (int c = 0; c < 4; ++c) {
+          const CameraRay r = rays.generate_ray(c & 1 ? x_hi : x_lo, c & 2 ? y_hi : y_lo);
+          const double cos_psi = stack.n.dot(r.direction);
+          ok = ok && r.ok && cos_psi > 0;
+          tile_planes.along[std::size_t(c)] = (r.direction / cos_psi).cwiseProduct(inv_spacing);
+          tile_planes.base[std::size_t(c)] =
+              (r.origin - origin).cwiseProduct(inv_spacing) - stack.n.dot(r.origin) * tile_planes.along[std::size_t(c)];
+        }
+        if (!ok) tile_planes.all();
+      };
+      const int blocks_x = (x_end - tx * T + block_x - 1) / block_x,
+                blocks_y = (y_end - ty * T + block_y - 1) / block_y;
+      if (skip && tile_bounds) {
+        if (block_planes.size() < std::size_t(blocks_x * blocks_y))
+          block_planes.resize(std::size_t(blocks_x * blocks_y));
+        for (auto& b : block_planes) b.stack = nullptr;  // not bounded yet in this tile
+      }
       for (int y0 = ty * T; y0 < y_end; y0 += 2)
         for (int x0 = tx * T; x0 < x_end; x0 += kLanesX) {
           std::array<CameraRay, kLanes> lray;
           std::array<RaySlices, kLanes> lrs;
-          VU GQ0[3] = {}, DQ[3] = {};     // each lane's first position and move per plane (32.32 fixed point)
-          VD IDQ[3] = {}, ex = splat(1);  // 1 / Δg in fixed-point units (0 where Δg = 0)
+          VU GQ0[3] = {}, DQ[3] = {};  // each lane's first position and move per plane (32.32 fixed point)
+          VD ex = splat(1);
           VI u0 = zero, ns = zero, alive = zero;
           // The linear kind: each lane's last visible α and its corrected value (as per ray).
           VD last_a = splat(-1), last_ac = splat(0);
@@ -954,7 +1044,6 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             const FixedRay fr = fixed_ray(ray, rs, kFrontToBack);
             for (int a = 0; a < 3; ++a) {
               GQ0[a][l] = fr.g0[std::size_t(a)], DQ[a][l] = fr.dg[std::size_t(a)];
-              IDQ[a][l] = fr.dg[std::size_t(a)] != 0 ? 1.0 / double(std::int64_t(fr.dg[std::size_t(a)])) : 0.0;
             }
             u0[l] = kFrontToBack ? -rs.k_last : rs.k_first;
             ns[l] = rs.k_last - rs.k_first + 1;
@@ -1043,9 +1132,9 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             cb = select(lit_l, cb * k + sp, cb);
           };
           WalkLanes walk;
-          for (int a = 0; a < 3; ++a) walk.dg[a] = DQ[a], walk.inv_dg[a] = IDQ[a];
+          for (int a = 0; a < 3; ++a) walk.dg[a] = DQ[a];
           walk.u0 = u0, walk.uend = u0 + ns, walk.alive = alive, walk.done = zero;
-          walk.visited = zero, walk.cell_tests = zero;
+          walk.visited = zero;
           VI n_lane_samples = ns;
           int u_first = std::numeric_limits<int>::max(), u_last = std::numeric_limits<int>::min();
           for (int l = 0; l < kLanes; ++l)
@@ -1054,11 +1143,20 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
           VU GS[3];
           for (int a = 0; a < 3; ++a) GS[a] = GQ0[a] + __builtin_convertvector(splati(u_first) - u0, VU) * DQ[a];
           for (int a = 0; a < 3; ++a) walk.g[a] = GS[a];
-          walk.u = walk.next_check = u_first, walk.u_last = u_last;
+          walk.u = u_first, walk.u_last = u_last;
+          if (skip && tile_bounds) {
+            const int bx = (x0 - tx * T) / block_x, by = (y0 - ty * T) / block_y;
+            TilePlanes& planes = block_planes[std::size_t(by * blocks_x + bx)];
+            if (planes.stack == nullptr) {
+              const int xb = tx * T + bx * block_x, yb = ty * T + by * block_y;
+              bound_planes(planes, xb, yb, std::min(xb + block_x, x_end) - 1, std::min(yb + block_y, y_end) - 1);
+            }
+            tile_grid.planes = &planes;
+          }
           VI& done = walk.done;
           while (walk.u <= walk.u_last) {
             // Phase A: the walk, until the queue is full or the lanes' planes end.
-            const int queued = walk_planes(grid, walk, kFrontToBack ? kQueueFrontToBack : kQueue, queue_u.data(),
+            const int queued = walk_planes(tile_grid, walk, kFrontToBack ? kQueueFrontToBack : kQueue, queue_u.data(),
                                            queue_lanes.data(), kFrontToBack ? queue_counts.data() : nullptr);
             // Phase B: the queued planes' samples.
             for (int q = 0; q < queued; ++q) {
@@ -1204,8 +1302,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 if (any(term)) {
                   cnt.terminated += count(term);
                   n_lane_samples = select(term, step + 1, n_lane_samples);
-                  walk.visited = select(term, queue_counts[std::size_t(2 * q)], walk.visited);
-                  walk.cell_tests = select(term, queue_counts[std::size_t(2 * q + 1)], walk.cell_tests);
+                  walk.visited = select(term, queue_counts[std::size_t(q)], walk.visited);
                   done |= term;
                 }
                 continue;
@@ -1236,7 +1333,6 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
           cnt.visited += hsum(walk.visited);
           cnt.skipped += hsum(n_lane_samples) - hsum(n_fetched);
           cnt.classified += hsum(n_classified);
-          cnt.cell_tests += hsum(walk.cell_tests);
           for (int l = 0; l < kLanes; ++l) {
             const int x = x0 + l % kLanesX, y = y0 + l / kLanesX;
             if (x >= x_end || y >= y_end) continue;
@@ -1247,6 +1343,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             frame.alpha.at(x, y) = float(A[l]);
           }
         }
+      for (const auto& b : block_planes) cnt.cell_tests += b.tests;
       counts[std::size_t(ty) * tiles_x + tx] = cnt;
     };
     auto run_tiles = [&](auto lit_c, auto masked_c, auto ftb_c) {

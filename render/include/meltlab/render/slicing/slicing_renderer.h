@@ -119,16 +119,18 @@ struct SlicingSettings {
   bool skip_voxels = true;
   /// Packets (issue 17's speed rounds): true (default): neighbouring pixels of a tile (4 x 2 on
   /// eight lanes with AVX-512, 2 x 2 on four otherwise) advance plane by plane together, in two
-  /// phases that take turns over chunks of planes: a walk (positions, the fetch bits by one gather,
-  /// the empty-space cells every few planes and jumps where every lane is two cells from a live
-  /// one) queues the planes where some lane fetches, and the fetch phase runs the trilinear gathers,
-  /// the mask lookup, both TF kinds, the corrected α, the Blinn-Phong lighting (its specular power
-  /// per lane) and the compositing on the lanes for those planes; a lane with nothing to do at a
-  /// plane (outside its ray's planes, no fetch bit, cut away by the mask, terminated) is masked. Each
-  /// lane fetches exactly its ray's samples with its ray's arithmetic (the scalar code's
-  /// operations in its order): the image and the samples, skipped, classified and terminated counts
-  /// are the scalar path's bit for bit (slicing_speed_test); visited and cell_tests count the
-  /// walk's own work. Not with exact_positions. false: one ray at a time (the reference).
+  /// phases that take turns over chunks of planes: a walk over the planes that may hold a fetched
+  /// sample of the packet's block of pixels (those where the box of the block's samples, from its
+  /// corner rays, touches a live cell; a block is a tile, or fewer pixels in a coarse image) takes
+  /// the lanes' positions and fetch bits (one gather) and queues the planes where some lane fetches;
+  /// the fetch phase runs the trilinear gathers, the mask lookup, both TF kinds, the corrected α,
+  /// the Blinn-Phong lighting (its specular power per lane) and the compositing on the lanes for
+  /// those planes; a lane with nothing to do at a plane (outside its ray's planes, no fetch bit, cut
+  /// away by the mask, terminated) is masked. Each lane fetches exactly its ray's samples with its
+  /// ray's arithmetic (the scalar code's operations in its order): the image and the samples,
+  /// skipped, classified and terminated counts are the scalar path's bit for bit
+  /// (slicing_speed_test); visited and cell_tests count the packets' own work (lane positions, and
+  /// planes bounded per block). Not with exact_positions. false: one ray at a time (the reference).
   bool simd = true;
   /// The corrected α 1 - (1 - α)^(Δ/h0), a power per sample of the linear TF and per ray and
   /// piece of the constant TF: false (default): slicing_pow (issue 17's fourth speed round; for
@@ -150,11 +152,13 @@ struct SlicingStats {
   std::int64_t terminated = 0;  ///< rays stopped by early termination (their remaining samples not counted)
   std::int64_t visited =
       0;  ///< samples whose position was computed (the others jumped in empty runs; packets: lane positions)
-  std::int64_t cell_tests = 0;  ///< visited samples whose empty-space cell was looked up (the others in live runs)
-  int slices = 0;               ///< planes in the stack
-  double slice_spacing = 0;     ///< Δd
-  double render_ms = 0;         ///< sampling and compositing
-  double post_ms = 0;           ///< colour adjustment and bloom
+  /// One ray at a time: visited samples whose empty-space cell was looked up (the others in live
+  /// runs); packets: planes bounded per block of pixels.
+  std::int64_t cell_tests = 0;
+  int slices = 0;            ///< planes in the stack
+  double slice_spacing = 0;  ///< Δd
+  double render_ms = 0;      ///< sampling and compositing
+  double post_ms = 0;        ///< colour adjustment and bloom
 };
 
 struct SlicingFrame {
@@ -220,8 +224,9 @@ class SlicingRenderer {
   /// For a live cell, the radius (in cells) of the cube around it whose cells are all live: the
   /// Chebyshev distance to the nearest empty cell minus one (0 for empty cells).
   std::vector<std::uint8_t> live_reach_;
-  /// dist_ | live_reach_ << 8 per cell: one 32-bit gather per lane in the packets (SlicingSettings::simd).
-  std::vector<std::int32_t> cell_info_;
+  /// Prefix sums of live_ ((cells + 1) per axis, x fastest): the live cells of any box by eight
+  /// lookups (the packets' planes per tile).
+  std::vector<std::int32_t> live_sums_;
   /// The fetch bits (with skip_empty): one per voxel, set where a sample whose stencil's lower
   /// corner is that voxel is fetched — with skip_voxels where a TF in use may see a value of the
   /// stencil, else wherever the voxel's cell may be seen. In bricks of 4³ voxels, one 64-bit word
