@@ -4,6 +4,7 @@
 
 #include "fixed_position.h"
 #include "lane_math.h"
+#include "ray_setup.h"
 #include "packet.h"
 
 // The packets pass 64-byte vectors between inline lambdas of this file only (no ABI crossed).
@@ -665,7 +666,6 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   const BlinnPhong light = s_.light;
   const MaskVolume& mask = s_.mask;
   const Eigen::Vector3d background = s_.background;
-  const bool opacity_correction = s_.opacity_correction;
   const bool exact_positions = s_.exact_positions;
   const bool live_runs = s_.live_runs;
   int max_pieces = 1;
@@ -695,23 +695,21 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   const int block_px = int(std::min(double(s_.tile), double(2 << cell_shift_) / std::max(voxels_per_pixel, 1e-9)));
   const int block_x = std::max(packet::kLanesX, block_px / packet::kLanesX * packet::kLanesX);
   const int block_y = std::max(2, block_px / 2 * 2);
-  // A ray's first position (at its first plane in the walk's order) and move per plane in fixed
-  // point (fixed_position.h), from the double arithmetic o + t_k v and (Δd / cos ψ) v, in index
-  // units. A move is clamped to 2^30 voxels: a ray with two planes in the box moves less than the
-  // box per plane, so only positions outside it change.
-  auto fixed_ray = [&](const CameraRay& ray, const RaySlices& rs, bool ftb) {
-    const Eigen::Vector3d delta =
-        (ftb ? 1.0 : -1.0) * (stack.spacing / rs.cos_psi) * ray.direction.cwiseProduct(inv_spacing);
-    const int k_start = ftb ? rs.k_last : rs.k_first;
-    const Eigen::Vector3d g_first =
-        (ray.origin + rs.t(stack, k_start) * ray.direction - origin).cwiseProduct(inv_spacing);
-    FixedRay r;
-    for (int a = 0; a < 3; ++a) {
-      r.g0[std::size_t(a)] = fixed::from_double(g_first[a]);
-      r.dg[std::size_t(a)] = fixed::from_double(std::clamp(delta[a], -0x1p30, 0x1p30));
-    }
-    return r;
-  };
+  // Every ray's set-up (ray_setup.h): an undistorted pinhole's directions from its parameters, a
+  // distorted one's from RayGenerator.
+  const bool pinhole_rays = !pin->distorted();
+  ray_setup::Frame ray_frame;
+  ray_frame.cx = pin->cx, ray_frame.cy = pin->cy, ray_frame.fx = pin->fx, ray_frame.fy = pin->fy;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) ray_frame.rot[a][b] = world_from_camera.linear()(a, b);
+    ray_frame.eye[a] = eye[a], ray_frame.n[a] = stack.n[a];
+    ray_frame.lo[a] = box.lo[a], ray_frame.hi[a] = box.hi[a];
+    ray_frame.origin[a] = origin[a], ray_frame.inv_spacing[a] = inv_spacing[a];
+  }
+  ray_frame.t_offset = (stack.n[0] * eye[0] + stack.n[1] * eye[1]) + stack.n[2] * eye[2];
+  ray_frame.s_max = stack.s_max, ray_frame.spacing = stack.spacing, ray_frame.count = stack.count;
+  ray_frame.h0 = h0, ray_frame.opacity_correction = s_.opacity_correction;
+  ray_frame.sign = front_to_back ? 1.0 : -1.0;
   // The gradient for the packets' lighting: the three encoded channels of a voxel in one word.
   const std::int32_t* const grad_words = grad_words_.empty() ? nullptr : grad_words_.data();
   const float grad_channel_scale = lit ? grad_->channel(0).scale : 1.0f;
@@ -765,13 +763,25 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
       std::int64_t ray_id = 0;
       for (int y = ty * T; y < std::min(H, (ty + 1) * T); ++y)
         for (int x = tx * T; x < std::min(W, (tx + 1) * T); ++x) {
-          const CameraRay ray = rays.generate_ray(x, y);
-          const RaySlices rs = ray_slices(stack, box, ray.origin, ray.direction);
+          // The ray and its planes (ray_setup.h: the packets' lanes compute the same bits).
+          CameraRay ray;
+          ray.origin = eye;
+          double v[3];
+          if (pinhole_rays) {
+            ray_setup::pinhole_direction(ray_frame, double(x), double(y), v);
+          } else {
+            const Eigen::Vector3d d = rays.generate_ray(x, y).direction;
+            v[0] = d.x(), v[1] = d.y(), v[2] = d.z();
+          }
+          ray.direction = Eigen::Vector3d(v[0], v[1], v[2]);
+          const ray_setup::Rays<double> rr = ray_setup::rays_from(ray_frame, v);
+          RaySlices rs;
+          rs.k_first = rr.k_first, rs.k_last = rr.k_last, rs.t_offset = ray_frame.t_offset, rs.cos_psi = rr.cos_psi;
           SliceAccumulator acc;
           if (!rs.empty()) {
             ++cnt.rays;
             ++ray_id;
-            const double exponent = opacity_correction ? (stack.spacing / rs.cos_psi) / h0 : 1.0;
+            const double exponent = rr.exponent;
             const Eigen::Vector3d to_eye = -ray.direction;
             // The move of g (index units) from one visited plane to the next (t_k is linear in k and
             // falls with k: back to front walks towards the eye).
@@ -782,7 +792,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             const int n_samples = rs.k_last - rs.k_first + 1;
             // The samples' positions g_0 + step Δg in fixed point (fixed_position.h; not with
             // exact_positions).
-            const FixedRay fr = fixed_ray(ray, rs, kFrontToBack);
+            const FixedRay fr{{rr.g0[0], rr.g0[1], rr.g0[2]}, {rr.dg[0], rr.dg[1], rr.dg[2]}};
             std::int64_t n_visited = 0, n_skipped = 0, n_classified = 0, n_jumped = 0, n_cell_tests = 0;
             // The planes from the current sample on while g stays 0.01 index units inside the cube
             // of cells c ± r (c the current sample's cell, r in cells) along this ray, capped at
@@ -1021,33 +1031,42 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
       }
       for (int y0 = ty * T; y0 < y_end; y0 += 2)
         for (int x0 = tx * T; x0 < x_end; x0 += kLanesX) {
-          std::array<CameraRay, kLanes> lray;
-          std::array<RaySlices, kLanes> lrs;
           VU GQ0[3] = {}, DQ[3] = {};  // each lane's first position and move per plane (32.32 fixed point)
           VD ex = splat(1);
           VI u0 = zero, ns = zero, alive = zero;
           // The linear kind: each lane's last visible α and its corrected value (as per ray).
           VD last_a = splat(-1), last_ac = splat(0);
-          VD O[3] = {}, V[3] = {}, TOFF = splat(0), COSPSI = splat(1);  // each lane's ray and RaySlices
-          for (int l = 0; l < kLanes; ++l) {
-            const int x = x0 + l % kLanesX, y = y0 + l / kLanesX;
-            if (x >= x_end || y >= y_end) continue;
-            lray[l] = rays.generate_ray(x, y);
-            lrs[l] = ray_slices(stack, box, lray[l].origin, lray[l].direction);
-            const RaySlices& rs = lrs[std::size_t(l)];
-            if (rs.empty()) continue;
-            ++cnt.rays;
-            const CameraRay& ray = lray[std::size_t(l)];
-            for (int a = 0; a < 3; ++a) O[a][l] = ray.origin[a], V[a][l] = ray.direction[a];
-            TOFF[l] = rs.t_offset, COSPSI[l] = rs.cos_psi;
-            ex[l] = opacity_correction ? (stack.spacing / rs.cos_psi) / h0 : 1.0;
-            const FixedRay fr = fixed_ray(ray, rs, kFrontToBack);
-            for (int a = 0; a < 3; ++a) {
-              GQ0[a][l] = fr.g0[std::size_t(a)], DQ[a][l] = fr.dg[std::size_t(a)];
+          VD O[3] = {}, V[3] = {}, TOFF = splat(ray_frame.t_offset), COSPSI = splat(1);  // each lane's ray
+          {
+            // The lanes' rays and planes (ray_setup.h: each lane the bits of its ray alone).
+            VD xs, ys;
+            VI in_tile;
+            for (int l = 0; l < kLanes; ++l) {
+              const int x = x0 + l % kLanesX, y = y0 + l / kLanesX;
+              xs[l] = x, ys[l] = y, in_tile[l] = x < x_end && y < y_end ? -1 : 0;
             }
-            u0[l] = kFrontToBack ? -rs.k_last : rs.k_first;
-            ns[l] = rs.k_last - rs.k_first + 1;
-            alive[l] = -1;
+            if (pinhole_rays) {
+              ray_setup::pinhole_direction(ray_frame, xs, ys, V);
+            } else {
+              for (int a = 0; a < 3; ++a) V[a] = splat(stack.n[a]);
+              for (int l = 0; l < kLanes; ++l)
+                if (in_tile[l]) {
+                  const Eigen::Vector3d d = rays.generate_ray(xs[l], ys[l]).direction;
+                  for (int a = 0; a < 3; ++a) V[a][l] = d[a];
+                }
+            }
+            const ray_setup::Rays<VD> rr = ray_setup::rays_from(ray_frame, V);
+            alive = in_tile & (rr.k_first <= rr.k_last);
+            const VL live_l = wide(alive);
+            cnt.rays += count(alive);
+            for (int a = 0; a < 3; ++a) {
+              O[a] = splat(eye[a]);
+              GQ0[a] = live_l ? rr.g0[a] : VU{}, DQ[a] = live_l ? rr.dg[a] : VU{};
+            }
+            COSPSI = select(live_l, rr.cos_psi, splat(1));
+            ex = select(live_l, rr.exponent, splat(1));
+            u0 = select(alive, kFrontToBack ? -rr.k_last : rr.k_first, zero);
+            ns = select(alive, rr.k_last - rr.k_first + 1, zero);
           }
           // The constant kinds' corrected α per lane and piece, for the TFs the mask uses, as the
           // scalar loop computes it per ray (slicing_pow on the lanes; exact_pow: std::pow lane by lane).
@@ -1284,10 +1303,9 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 } else {
                   for (int l = 0; l < kLanes; ++l) {
                     if (!vis[l]) continue;
-                    const auto& ray = lray[std::size_t(l)];
                     Eigen::Vector3d c(cr[l], cg[l], cb[l]);
                     shade(c, ii[0][l], ii[1][l], ii[2][l], w[0][l], w[1][l], w[2][l],
-                          ray.origin + lrs[std::size_t(l)].t(stack, k) * ray.direction, -ray.direction);
+                          Eigen::Vector3d(P[0][l], P[1][l], P[2][l]), -Eigen::Vector3d(V[0][l], V[1][l], V[2][l]));
                     cr[l] = c.x(), cg[l] = c.y(), cb[l] = c.z();
                   }
                 }
