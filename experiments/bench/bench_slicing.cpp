@@ -20,8 +20,9 @@
 // QC 1 (gradients radius 2, 8 bits, built once outside the timing), Blend with an all-ones mask
 // (100³) at QC 1 for both TFs, the ray caster at equal
 // density (Δs = QC · h0) without and with its empty-space skipping. Counters: samples (plane
-// samples, jumped ones included), visited (positions computed), fetched (not in empty cells),
-// cell_tests (visited samples whose empty-space cell was looked up; the others in live runs). CPU time
+// samples, jumped ones included), visited (positions computed), fetched (fetch bit set),
+// cell_tests (one ray at a time: visited samples whose empty-space cell was looked up, the others in
+// live runs; packets: planes bounded per block of pixels), terminated (early termination). CPU time
 // of the whole process (MeasureProcessCPUTime: every TBB thread) beside the wall time, since the
 // cores are shared: "CPU" / "Time" ≈ the cores the frame kept busy.
 //   --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
