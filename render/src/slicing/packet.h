@@ -115,32 +115,23 @@ inline VF floor(VF x) {
   return t - (t > x ? splatf(1.0f) : splatf(0.0f));
 }
 
-/// std::floor per lane (doubles).
-inline VD floor(VD x) {
+/// x rounded per lane to an integer towards -inf (kMode _MM_FROUND_TO_NEG_INF: std::floor) or +inf
+/// (_MM_FROUND_TO_POS_INF: std::ceil), doubles.
+template <int kMode>
+inline VD round_to(VD x) {
 #if defined(__AVX512F__)
   // (The masked form with x as the source: GCC 12 flags the unmasked one's undefined source.)
-  return VD(_mm512_mask_roundscale_pd(__m512d(x), 0xFF, __m512d(x), _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC));
+  return VD(_mm512_mask_roundscale_pd(__m512d(x), 0xFF, __m512d(x), kMode | _MM_FROUND_NO_EXC));
 #elif defined(__AVX__)
-  return VD(_mm256_round_pd(__m256d(x), _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC));
+  return VD(_mm256_round_pd(__m256d(x), kMode | _MM_FROUND_NO_EXC));
 #else
   VD r;
-  for (int l = 0; l < kLanes; ++l) r[l] = std::floor(x[l]);
+  for (int l = 0; l < kLanes; ++l) r[l] = kMode == 0x01 ? std::floor(x[l]) : std::ceil(x[l]);
   return r;
 #endif
 }
-
-/// std::ceil per lane (doubles).
-inline VD ceil(VD x) {
-#if defined(__AVX512F__)
-  return VD(_mm512_mask_roundscale_pd(__m512d(x), 0xFF, __m512d(x), _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC));
-#elif defined(__AVX__)
-  return VD(_mm256_round_pd(__m256d(x), _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC));
-#else
-  VD r;
-  for (int l = 0; l < kLanes; ++l) r[l] = std::ceil(x[l]);
-  return r;
-#endif
-}
+inline VD floor(VD x) { return round_to<0x01>(x); }  // _MM_FROUND_TO_NEG_INF
+inline VD ceil(VD x) { return round_to<0x02>(x); }   // _MM_FROUND_TO_POS_INF
 
 /// std::sqrt per lane (correctly rounded, as the scalar one).
 inline VD sqrt(VD x) {

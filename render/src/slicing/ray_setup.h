@@ -13,6 +13,8 @@
 #include "fixed_position.h"
 #include "packet.h"
 
+#include <meltlab/render/slicing/slice_geometry.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -38,6 +40,15 @@ struct Frame {
   bool opacity_correction = true;  ///< false: exponent 1
   double sign = -1;                ///< +1 front to back, -1 back to front
 };
+
+/// The plane part of a Frame (normal, eye, box, stack) for rays from `eye`; the rest default.
+inline Frame plane_frame(const SliceStack& st, const Box3& box, const Eigen::Vector3d& eye) {
+  Frame f;
+  for (int a = 0; a < 3; ++a) f.eye[a] = eye[a], f.n[a] = st.n[a], f.lo[a] = box.lo[a], f.hi[a] = box.hi[a];
+  f.t_offset = (f.n[0] * f.eye[0] + f.n[1] * f.eye[1]) + f.n[2] * f.eye[2];
+  f.s_max = st.s_max, f.spacing = st.spacing, f.count = st.count;
+  return f;
+}
 
 namespace detail {
 inline double sel(bool m, double a, double b) { return m ? a : b; }
@@ -88,23 +99,22 @@ inline void pinhole_direction(const Frame& f, D x, D y, D (&v)[3]) {
   for (int a = 0; a < 3; ++a) v[a] = sel(n2 > 0.0, d[a] / len, d[a]);
 }
 
-/// The set-up of rays from the eye with unit directions v (one or a packet's lanes).
+/// The planes rays from the eye with unit directions v meet inside the box (one ray or a packet's
+/// lanes; ray_slices is this for one ray).
 template <class D>
-struct Rays {
+struct Planes {
   using I = decltype(detail::to_int(D{}));
-  using U = decltype(detail::fixed_of(D{}));
-  D cos_psi{};            ///< n · v
-  I k_first{}, k_last{};  ///< the planes inside the box (k_first > k_last: none)
-  D exponent{};           ///< (Δd / cos ψ) / h0, or 1 without opacity correction
-  U g0[3]{}, dg[3]{};     ///< the first plane's position and the move per plane (fixed point)
+  D cos_psi{};                 ///< n · v
+  I k_first{}, k_last{};       ///< the planes inside the box (k_first > k_last: none)
+  decltype(D{} < D{}) miss{};  ///< no plane: the ray misses the box or looks away from the planes
 };
 
-/// The planes the rays meet inside the box (ray_slices and intersect_box's arithmetic) and their
-/// fixed-point positions from the first plane of the walk's order (the farthest back to front).
+/// The slab test (intersect_box's arithmetic), then the planes between the box's near and far
+/// points along the ray (s_k = s_max - (k + 1/2) Δd in [s(t0), s(t1)]).
 template <class D>
-inline Rays<D> rays_from(const Frame& f, const D (&v)[3]) {
+inline Planes<D> planes_of(const Frame& f, const D (&v)[3]) {
   using detail::sel;
-  Rays<D> r;
+  Planes<D> r;
   r.cos_psi = (f.n[0] * v[0] + f.n[1] * v[1]) + f.n[2] * v[2];
   // intersect_box: the slabs, an axis the ray does not move on must contain the eye.
   D t0 = D{} - std::numeric_limits<double>::infinity(), t1 = D{} + std::numeric_limits<double>::infinity();
@@ -121,12 +131,33 @@ inline Rays<D> rays_from(const Frame& f, const D (&v)[3]) {
   miss = miss | (t0 > t1) | (t1 < 0.0);
   t0 = sel(t0 < 0.0, D{} + 0.0, t0);  // std::max(t0, 0.0)
   const D s_near = f.t_offset + t0 * r.cos_psi, s_far = f.t_offset + t1 * r.cos_psi;
-  using I = typename Rays<D>::I;
+  using I = typename Planes<D>::I;
   const I kf = detail::to_int(detail::ceil_((f.s_max - s_far) / f.spacing - 0.5));
   const I kl = detail::to_int(detail::floor_((f.s_max - s_near) / f.spacing - 0.5));
   const auto missing = detail::narrow(miss);
   r.k_first = detail::sel(missing, I{} + 0, detail::sel(kf < 0, I{} + 0, kf));
   r.k_last = detail::sel(missing, I{} - 1, detail::sel(kl > f.count - 1, I{} + (f.count - 1), kl));
+  r.miss = miss;
+  return r;
+}
+
+/// The set-up of rays from the eye with unit directions v (one or a packet's lanes).
+template <class D>
+struct Rays : Planes<D> {
+  using U = decltype(detail::fixed_of(D{}));
+  D exponent{};        ///< (Δd / cos ψ) / h0, or 1 without opacity correction
+  U g0[3]{}, dg[3]{};  ///< the first plane's position and the move per plane (fixed point)
+};
+
+/// The planes (planes_of) and the fixed-point positions from the first plane of the walk's order
+/// (the farthest back to front).
+template <class D>
+inline Rays<D> rays_from(const Frame& f, const D (&v)[3]) {
+  using detail::sel;
+  Rays<D> r;
+  static_cast<Planes<D>&>(r) = planes_of(f, v);
+  const auto miss = r.miss;
+  using I = typename Planes<D>::I;
   // The walk's first plane and the move per plane; the exponent of the opacity correction.
   const D along = f.spacing / r.cos_psi;
   r.exponent = f.opacity_correction ? along / f.h0 : D{} + 1.0;

@@ -2,9 +2,11 @@
 
 #include <meltlab/render/slicing/slice_geometry.h>
 
-#include <meltlab/core/error.h>
-#include <meltlab/render/integrator/volume_integrator.h>
+#include "ray_setup.h"
 
+#include <meltlab/core/error.h>
+
+#include <Eigen/Geometry>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -105,17 +107,14 @@ SliceStack slice_stack(const Box3& box, const Eigen::Vector3d& eye, double spaci
 }
 
 RaySlices ray_slices(const SliceStack& st, const Box3& box, const Eigen::Vector3d& o, const Eigen::Vector3d& v) {
+  // The slicing renderer's set-up for one ray (ray_setup.h: its packets compute the same bits).
+  const ray_setup::Frame f = ray_setup::plane_frame(st, box, o);
+  const double dir[3] = {v.x(), v.y(), v.z()};
+  const ray_setup::Planes<double> p = ray_setup::planes_of(f, dir);
   RaySlices r;
-  r.cos_psi = st.n.dot(v);
-  r.t_offset = st.n.dot(o);
-  const auto iv = intersect_box(box, o, v);
-  if (!iv || !(r.cos_psi > 0)) return r;
-  const double t0 = std::max(iv->t0, 0.0), t1 = iv->t1;
-  // s along the ray grows with t; planes with s_k in [s(t0), s(t1)] lie inside the box.
-  const double s_near = r.t_offset + t0 * r.cos_psi, s_far = r.t_offset + t1 * r.cos_psi;
-  // s_k = s_max - (k + 1/2) Δd <= s_far  <=>  k >= (s_max - s_far) / Δd - 1/2.
-  r.k_first = std::max(0, int(std::ceil((st.s_max - s_far) / st.spacing - 0.5)));
-  r.k_last = std::min(st.count - 1, int(std::floor((st.s_max - s_near) / st.spacing - 0.5)));
+  r.cos_psi = p.cos_psi, r.t_offset = f.t_offset;
+  if (p.miss) return r;
+  r.k_first = p.k_first, r.k_last = p.k_last;
   return r;
 }
 

@@ -698,16 +698,12 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   // Every ray's set-up (ray_setup.h): an undistorted pinhole's directions from its parameters, a
   // distorted one's from RayGenerator.
   const bool pinhole_rays = !pin->distorted();
-  ray_setup::Frame ray_frame;
+  ray_setup::Frame ray_frame = ray_setup::plane_frame(stack, box, eye);
   ray_frame.cx = pin->cx, ray_frame.cy = pin->cy, ray_frame.fx = pin->fx, ray_frame.fy = pin->fy;
   for (int a = 0; a < 3; ++a) {
     for (int b = 0; b < 3; ++b) ray_frame.rot[a][b] = world_from_camera.linear()(a, b);
-    ray_frame.eye[a] = eye[a], ray_frame.n[a] = stack.n[a];
-    ray_frame.lo[a] = box.lo[a], ray_frame.hi[a] = box.hi[a];
     ray_frame.origin[a] = origin[a], ray_frame.inv_spacing[a] = inv_spacing[a];
   }
-  ray_frame.t_offset = (stack.n[0] * eye[0] + stack.n[1] * eye[1]) + stack.n[2] * eye[2];
-  ray_frame.s_max = stack.s_max, ray_frame.spacing = stack.spacing, ray_frame.count = stack.count;
   ray_frame.h0 = h0, ray_frame.opacity_correction = s_.opacity_correction;
   ray_frame.sign = front_to_back ? 1.0 : -1.0;
   // The gradient for the packets' lighting: the three encoded channels of a voxel in one word.
