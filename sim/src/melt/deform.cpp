@@ -77,21 +77,16 @@ inline void move_group(const MoveConstants<Real>& c, const VertexGroup<Real>& g,
   if (g.clear_sums)
     for (std::size_t i = 0; i < kLanes; ++i) g.sums[i].lane = L{};
   transpose8<Real>(rec, col);
-  typename LaneTypes<Index>::Value count8;  // 8 triangle counts, converted to Real below
-  std::memcpy(&count8, g.count, sizeof(count8));
-  const L count = __builtin_convertvector(count8, L);
-  using Bytes [[gnu::vector_size(kLanes)]] = std::uint8_t;  // 8 flags, widened in registers
-  Bytes alive8;
-  std::memcpy(&alive8, g.alive, sizeof(alive8));
-  const Mask live = __builtin_convertvector(alive8, Mask) != 0;
-  const Mask has = live & (count > Real(0));  // live with triangles: moves
+  const L count = lanes_from_ints<Real>(g.count);  // 8 triangle counts
+  const Mask live = lanes_nonzero<Real>(g.alive);  // 8 flags, widened in registers
+  const Mask has = live & (count > Real(0));       // live with triangles: moves
 
   const L n2 = col[0] * col[0] + col[1] * col[1] + col[2] * col[2];
   const L inv = lane_inverse_length<Real>(n2);  // Eq. 2.10
   const L Nx = col[0] * inv, Ny = col[1] * inv, Nz = col[2] * inv;
   L MEx = col[3], MEy = col[4], MEz = col[5];  // Eq. 3.5: sum, or mean
   if (c.mean) {
-    const L divisor = has ? count : broadcast<Real>(1);
+    const L divisor = lane_select<Real>(has, count, broadcast<Real>(1));
     MEx = MEx / divisor, MEy = MEy / divisor, MEz = MEz / divisor;
   }
   L mx, my, mz;
@@ -100,9 +95,9 @@ inline void move_group(const MoveConstants<Real>& c, const VertexGroup<Real>& g,
     const L d = Nx * MEx + Ny * MEy + Nz * MEz;
     const Mask combined = c.less_equal ? d <= Real(0) : d < Real(0);
     const Real mkN = -c.kN;
-    mx = combined ? (c.kE * MEx - c.kN * Nx) * s : (mkN * Nx) * s;
-    my = combined ? (c.kE * MEy - c.kN * Ny) * s : (mkN * Ny) * s;
-    mz = combined ? (c.kE * MEz - c.kN * Nz) * s : (mkN * Nz) * s;
+    mx = lane_select<Real>(combined, (c.kE * MEx - c.kN * Nx) * s, (mkN * Nx) * s);
+    my = lane_select<Real>(combined, (c.kE * MEy - c.kN * Ny) * s, (mkN * Ny) * s);
+    mz = lane_select<Real>(combined, (c.kE * MEz - c.kN * Nz) * s, (mkN * Nz) * s);
   } else if constexpr (kMode == DeformMode::kNormalOnly) {
     const Real mkN = -c.kN;
     mx = (mkN * Nx) * s, my = (mkN * Ny) * s, mz = (mkN * Nz) * s;
@@ -110,22 +105,25 @@ inline void move_group(const MoveConstants<Real>& c, const VertexGroup<Real>& g,
     mx = (c.kE * MEx) * s, my = (c.kE * MEy) * s, mz = (c.kE * MEz) * s;
   }
   const L zero{};
-  mx = has ? mx : zero, my = has ? my : zero, mz = has ? mz : zero;
+  mx = lane_select<Real>(has, mx, zero), my = lane_select<Real>(has, my, zero);
+  mz = lane_select<Real>(has, mz, zero);
   L px, py, pz;
   deinterleave3<Real>(g.packed, px, py, pz);
-  px = has ? px + mx : px, py = has ? py + my : py, pz = has ? pz + mz : pz;  // Eq. 3.8
+  px = lane_select<Real>(has, px + mx, px);  // Eq. 3.8
+  py = lane_select<Real>(has, py + my, py), pz = lane_select<Real>(has, pz + mz, pz);
   store_lanes<Real>(g.px, px), store_lanes<Real>(g.py, py), store_lanes<Real>(g.pz, pz);
   interleave3<Real>(g.packed, px, py, pz);
   if (g.record) {
-    store_lanes<Real>(g.nx, has ? Nx : zero), store_lanes<Real>(g.ny, has ? Ny : zero);
-    store_lanes<Real>(g.nz, has ? Nz : zero);
+    store_lanes<Real>(g.nx, lane_select<Real>(has, Nx, zero));
+    store_lanes<Real>(g.ny, lane_select<Real>(has, Ny, zero));
+    store_lanes<Real>(g.nz, lane_select<Real>(has, Nz, zero));
     store_lanes<Real>(g.mx, mx), store_lanes<Real>(g.my, my), store_lanes<Real>(g.mz, mz);
   }
   for (std::size_t i = 0; i < kLanes; ++i) g.triangle_count[i] = g.alive[i] ? g.count[i] : 0;
   max_move = lane_max<Real>(max_move,
                             lane_max<Real>(lane_max<Real>(lane_abs<Real>(mx), lane_abs<Real>(my)), lane_abs<Real>(mz)));
   const L coord = lane_max<Real>(lane_max<Real>(lane_abs<Real>(px), lane_abs<Real>(py)), lane_abs<Real>(pz));
-  max_coord = lane_max<Real>(max_coord, has ? coord : zero);
+  max_coord = lane_max<Real>(max_coord, lane_select<Real>(has, coord, zero));
 }
 
 // What the sweep of one cycle shares between its parts.

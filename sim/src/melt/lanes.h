@@ -39,6 +39,75 @@ struct LaneTypes {
   using Mask [[gnu::vector_size(kLanes * sizeof(Real))]] = Int;
 };
 
+#if defined(__AVX2__) && !defined(__AVX512F__)
+// Without AVX-512 a 64-byte vector of doubles has no machine mode: GCC 12 keeps it in memory and
+// lowers selects, comparisons and element moves lane by lane through the stack (the double cycle
+// ran 2.9x slower than with AVX-512 on the same Zen 4, 1.4x more than float lost). So there eight
+// doubles are two AVX registers: a struct of two 4-lane vectors with the vector extension's
+// operators, each applied to both halves (the same IEEE operation per lane, so the same bits).
+namespace lanes_detail {
+using V4d = double __attribute__((vector_size(32)));
+using V4l = std::int64_t __attribute__((vector_size(32)));
+
+/// Eight lane masks (all bits set where true), as two halves.
+struct MaskD8 {
+  V4l h[2];
+  std::int64_t operator[](std::size_t i) const { return h[i >> 2][i & 3]; }
+  friend MaskD8 operator&(const MaskD8& a, const MaskD8& b) { return {{a.h[0] & b.h[0], a.h[1] & b.h[1]}}; }
+  friend MaskD8 operator|(const MaskD8& a, const MaskD8& b) { return {{a.h[0] | b.h[0], a.h[1] | b.h[1]}}; }
+  friend MaskD8 operator~(const MaskD8& a) { return {{~a.h[0], ~a.h[1]}}; }
+  MaskD8& operator|=(const MaskD8& b) { return *this = *this | b; }
+};
+
+/// Eight doubles as two halves.
+struct LanesD8 {
+  V4d h[2];
+  LanesD8() = default;
+  LanesD8(double a0, double a1, double a2, double a3, double a4, double a5, double a6, double a7)
+      : h{{a0, a1, a2, a3}, {a4, a5, a6, a7}} {}
+  double operator[](std::size_t i) const { return h[i >> 2][i & 3]; }
+  // (GCC gives a vector the alias set of its elements: a double lvalue may name a lane.)
+  double& operator[](std::size_t i) { return reinterpret_cast<double*>(h)[i]; }
+  LanesD8& operator+=(const LanesD8& b) { return h[0] += b.h[0], h[1] += b.h[1], *this; }
+  LanesD8 operator-() const { return pair(-h[0], -h[1]); }
+  static LanesD8 pair(V4d lo, V4d hi) {
+    LanesD8 r;
+    r.h[0] = lo, r.h[1] = hi;
+    return r;
+  }
+};
+#define MELTLAB_LANES_D8_OP(op)                                                                              \
+  inline LanesD8 operator op(const LanesD8& a, const LanesD8& b) {                                           \
+    return LanesD8::pair(a.h[0] op b.h[0], a.h[1] op b.h[1]);                                                \
+  }                                                                                                          \
+  inline LanesD8 operator op(const LanesD8& a, double b) { return LanesD8::pair(a.h[0] op b, a.h[1] op b); } \
+  inline LanesD8 operator op(double a, const LanesD8& b) { return LanesD8::pair(a op b.h[0], a op b.h[1]); }
+MELTLAB_LANES_D8_OP(+)
+MELTLAB_LANES_D8_OP(-)
+MELTLAB_LANES_D8_OP(*)
+MELTLAB_LANES_D8_OP(/)
+#undef MELTLAB_LANES_D8_OP
+#define MELTLAB_LANES_D8_CMP(op)                                                                                   \
+  inline MaskD8 operator op(const LanesD8& a, const LanesD8& b) { return {{a.h[0] op b.h[0], a.h[1] op b.h[1]}}; } \
+  inline MaskD8 operator op(const LanesD8& a, double b) { return {{a.h[0] op b, a.h[1] op b}}; }                   \
+  inline MaskD8 operator op(double a, const LanesD8& b) { return {{a op b.h[0], a op b.h[1]}}; }
+MELTLAB_LANES_D8_CMP(<)
+MELTLAB_LANES_D8_CMP(>)
+MELTLAB_LANES_D8_CMP(<=)
+MELTLAB_LANES_D8_CMP(>=)
+MELTLAB_LANES_D8_CMP(==)
+MELTLAB_LANES_D8_CMP(!=)
+#undef MELTLAB_LANES_D8_CMP
+}  // namespace lanes_detail
+
+template <>
+struct LaneTypes<double> {
+  using Value = lanes_detail::LanesD8;
+  using Int = std::int64_t;
+  using Mask = lanes_detail::MaskD8;
+};
+#endif
+
 template <class Real>
 using Lanes = typename LaneTypes<Real>::Value;
 template <class Real>
@@ -59,6 +128,13 @@ inline Lanes<Real> broadcast(Real x) {
   return Lanes<Real>{} + x;
 }
 
+/// m ? a : b lane by lane (m from a comparison of lanes). Lane code selects with this, not with
+/// ?:, which cannot be overloaded for the two-register doubles.
+template <class Real>
+inline Lanes<Real> lane_select(const LaneMask<Real>& m, const Lanes<Real>& a, const Lanes<Real>& b) {
+  return m ? a : b;
+}
+
 /// Lane-wise sqrt (exactly rounded, like std::sqrt; compiles to one SIMD instruction).
 template <class Real>
 inline Lanes<Real> lane_sqrt(Lanes<Real> x) {
@@ -66,23 +142,69 @@ inline Lanes<Real> lane_sqrt(Lanes<Real> x) {
   return x;
 }
 
+#if defined(__AVX2__) && !defined(__AVX512F__)
+template <>
+inline Lanes<double> lane_select<double>(const LaneMask<double>& m, const Lanes<double>& a, const Lanes<double>& b) {
+  return Lanes<double>::pair(m.h[0] ? a.h[0] : b.h[0], m.h[1] ? a.h[1] : b.h[1]);
+}
+template <>
+inline Lanes<double> lane_sqrt<double>(Lanes<double> x) {
+  return Lanes<double>::pair(lanes_detail::V4d(_mm256_sqrt_pd(__m256d(x.h[0]))),
+                             lanes_detail::V4d(_mm256_sqrt_pd(__m256d(x.h[1]))));
+}
+#endif
+
 /// 1/|v| for |v|² = n2, or 0 for a zero vector, lane by lane: the same operations as the
 /// scalar inverse_length() of triangle_kernels.h.
 template <class Real>
 inline Lanes<Real> lane_inverse_length(Lanes<Real> n2) {
   const Lanes<Real> tiny = broadcast(std::numeric_limits<Real>::min());
-  const Lanes<Real> inv = Real(1) / lane_sqrt<Real>(n2 < tiny ? tiny : n2);
-  return n2 > Real(0) ? inv : Lanes<Real>{};
+  const Lanes<Real> inv = Real(1) / lane_sqrt<Real>(lane_select<Real>(n2 < tiny, tiny, n2));
+  return lane_select<Real>(n2 > Real(0), inv, Lanes<Real>{});
 }
 
 /// Lane-wise |x| and max(a, b) (as std::max: a unless a < b).
 template <class Real>
 inline Lanes<Real> lane_abs(Lanes<Real> x) {
-  return x < Real(0) ? -x : x;
+  return lane_select<Real>(x < Real(0), -x, x);
 }
 template <class Real>
 inline Lanes<Real> lane_max(Lanes<Real> a, Lanes<Real> b) {
-  return a < b ? b : a;
+  return lane_select<Real>(a < b, b, a);
+}
+
+/// Lanes of Real from eight 32-bit integers, and the lane mask of eight bytes that are not zero.
+template <class Real>
+inline Lanes<Real> lanes_from_ints(const std::int32_t* p) {
+  using Ints [[gnu::vector_size(kLanes * sizeof(std::int32_t))]] = std::int32_t;
+  Ints v;
+  std::memcpy(&v, p, sizeof(v));
+  if constexpr (!std::is_class_v<Lanes<Real>>) {
+    return __builtin_convertvector(v, Lanes<Real>);
+  } else {
+    using Half [[gnu::vector_size(4 * sizeof(std::int32_t))]] = std::int32_t;
+    using HalfReal [[gnu::vector_size(4 * sizeof(Real))]] = Real;
+    Half lo, hi;
+    std::memcpy(&lo, p, sizeof(lo));
+    std::memcpy(&hi, p + 4, sizeof(hi));
+    return Lanes<Real>::pair(__builtin_convertvector(lo, HalfReal), __builtin_convertvector(hi, HalfReal));
+  }
+}
+template <class Real>
+inline LaneMask<Real> lanes_nonzero(const std::uint8_t* p) {
+  using Bytes [[gnu::vector_size(kLanes)]] = std::uint8_t;
+  Bytes b;
+  std::memcpy(&b, p, sizeof(b));
+  if constexpr (!std::is_class_v<LaneMask<Real>>) {
+    return __builtin_convertvector(b, LaneMask<Real>) != 0;
+  } else {
+    using Half [[gnu::vector_size(4)]] = std::uint8_t;
+    using HalfMask [[gnu::vector_size(4 * sizeof(std::int64_t))]] = std::int64_t;
+    Half lo, hi;
+    std::memcpy(&lo, p, sizeof(lo));
+    std::memcpy(&hi, p + 4, sizeof(hi));
+    return {{__builtin_convertvector(lo, HalfMask) != 0, __builtin_convertvector(hi, HalfMask) != 0}};
+  }
 }
 
 /// Whether every lane of x is greater than y (false for a NaN lane).
@@ -143,16 +265,8 @@ inline void interleave3(Real* p, const Lanes<Real>& x, const Lanes<Real>& y, con
 // the same numbers to the same lanes as the generic forms above (tests/sim/lane_moves_test.cpp
 // checks both precisions against index arithmetic).
 namespace lanes_detail {
-inline void split(const Lanes<double>& v, __m256d& lo, __m256d& hi) {
-  std::memcpy(&lo, &v, sizeof(lo));
-  std::memcpy(&hi, reinterpret_cast<const char*>(&v) + sizeof(lo), sizeof(hi));
-}
-inline Lanes<double> join(__m256d lo, __m256d hi) {
-  Lanes<double> v;
-  std::memcpy(&v, &lo, sizeof(lo));
-  std::memcpy(reinterpret_cast<char*>(&v) + sizeof(lo), &hi, sizeof(hi));
-  return v;
-}
+inline void split(const Lanes<double>& v, __m256d& lo, __m256d& hi) { lo = __m256d(v.h[0]), hi = __m256d(v.h[1]); }
+inline Lanes<double> join(__m256d lo, __m256d hi) { return Lanes<double>::pair(V4d(lo), V4d(hi)); }
 /// c[j][i] = r[i][j] for a 4×4 block.
 inline void transpose4(const __m256d (&r)[4], __m256d (&c)[4]) {
   const __m256d t0 = _mm256_unpacklo_pd(r[0], r[1]), t1 = _mm256_unpackhi_pd(r[0], r[1]);

@@ -30,7 +30,9 @@ using L = Lanes<double>;
 L dot3(const L (&u)[3], const L (&v)[3]) { return (u[0] * v[0] + u[1] * v[1]) + u[2] * v[2]; }
 
 /// std::clamp(c, -1.0, 1.0), lane by lane (quality.cpp's cosine).
-L clamp_unit(L c) { return c < -1.0 ? broadcast(-1.0) : (1.0 < c ? broadcast(1.0) : c); }
+L clamp_unit(L c) {
+  return lane_select<double>(c < -1.0, broadcast(-1.0), lane_select<double>(1.0 < c, broadcast(1.0), c));
+}
 
 }  // namespace
 
@@ -79,7 +81,7 @@ void MeshStatistics::triangle_terms(const TriMesh<Real>& m, std::size_t begin, s
   const L six_volume = dot3(p[0], c);
   const auto has_normal = n2 > 0.0;
   L unit[3];
-  for (int a = 0; a < 3; ++a) unit[a] = has_normal ? n[a] / n_len : L{};
+  for (int a = 0; a < 3; ++a) unit[a] = lane_select<double>(has_normal, n[a] / n_len, L{});
 
   // Twist (quality.cpp, triangle_twist_deg): the largest cosine between median and mid-line.
   L max_cos = broadcast(-1.0);
@@ -105,7 +107,7 @@ void MeshStatistics::triangle_terms(const TriMesh<Real>& m, std::size_t begin, s
   sub(p[0], p[2], ca);
   const L s2 = (dot3(e1, e1) + dot3(bc, bc)) + dot3(ca, ca);
   constexpr double k4Sqrt3 = 4.0 * std::numbers::sqrt3;  // = 4.0 * std::sqrt(3.0): both correctly rounded
-  const L quality = s2 == 0.0 ? L{} : (k4Sqrt3 * half_area) / s2;
+  const L quality = lane_select<double>(s2 == 0.0, L{}, (k4Sqrt3 * half_area) / s2);
 
   for (std::size_t i = 0; i < end - begin; ++i) {
     if (!live[i]) continue;
