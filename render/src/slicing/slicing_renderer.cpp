@@ -31,11 +31,6 @@ namespace {
 /// The bit of voxel (i, j, k) in its brick's word of fetch bits (SlicingRenderer::fetch_bits_).
 constexpr int fetch_bit(int i, int j, int k) { return (i & 3) | (j & 3) << 2 | (k & 3) << 4; }
 
-/// A ray's first sample position and move per plane (fixed_position.h).
-struct FixedRay {
-  std::array<std::uint64_t, 3> g0{}, dg{};
-};
-
 /// Per-tile counters, summed after the frame.
 struct TileCounts {
   std::int64_t rays = 0, samples = 0, classified = 0, skipped = 0, terminated = 0, visited = 0, cell_tests = 0;
@@ -236,6 +231,12 @@ class LaneLinearTf {
   std::array<Curve, 4> curves_;
 };
 
+/// Where SlicingRenderer::live_sums_ keeps the number of live cells in [0, x) x [0, y) x [0, z): a
+/// (cells + 1)-sided table, x fastest.
+inline std::size_t live_sum_index(const std::array<int, 3>& cells, int x, int y, int z) {
+  return std::size_t(x) + std::size_t(cells[0] + 1) * (std::size_t(y) + std::size_t(cells[1] + 1) * std::size_t(z));
+}
+
 /// The planes that may hold a fetched sample of one tile of pixels (SlicingRenderer's packets, with
 /// empty-space skipping and a pinhole without distortion, whose pixels' rays are an affine family
 /// of directions): plane k may where the box of the tile's samples on it — that of the four corner
@@ -247,10 +248,9 @@ class TilePlanes {
   /// Corner c's point on plane k in index coordinates: base[c] + depth(k) along[c].
   std::array<Eigen::Vector3d, 4> base, along;
   const SliceStack* stack = nullptr;
-  /// SlicingRenderer::live_sums_ (the live cells in [0, x) x [0, y) x [0, z)), sx x sy x sz.
+  /// SlicingRenderer::live_sums_ (live_sum_index) over `cells`.
   const std::int32_t* live_sums = nullptr;
-  int sx = 0, sy = 0;
-  std::array<int, 3> dims{};
+  std::array<int, 3> cells{}, dims{};
   int cell_shift = 2;
   std::int64_t tests = 0;  ///< planes tested
 
@@ -286,9 +286,7 @@ class TilePlanes {
         hi[a] = int(std::clamp(std::floor(mx + 1e-3), 0.0, top)) >> cell_shift;
       }
       // The live cells in the box [lo, hi] from the prefix sums (inclusion-exclusion, no branch).
-      auto at = [&](int x, int y, int z) {
-        return live_sums[std::size_t(x) + std::size_t(sx) * (std::size_t(y) + std::size_t(sy) * std::size_t(z))];
-      };
+      auto at = [&](int x, int y, int z) { return live_sums[live_sum_index(cells, x, y, z)]; };
       const int x0 = lo[0], y0 = lo[1], z0 = lo[2], x1 = hi[0] + 1, y1 = hi[1] + 1, z1 = hi[2] + 1;
       const std::int32_t live = (at(x1, y1, z1) - at(x0, y1, z1) - at(x1, y0, z1) + at(x0, y0, z1)) -
                                 (at(x1, y1, z0) - at(x0, y1, z0) - at(x1, y0, z0) + at(x0, y0, z0));
@@ -596,14 +594,11 @@ SlicingRenderer::SlicingRenderer(const Volume& volume, const SlicingSettings& se
     for (auto& r : live_reach_) r = std::uint8_t(r == 0 ? 0 : r - 1);
     // Prefix sums of the live cells (the packets' tile planes count the live cells of a box by
     // eight of them).
-    const std::size_t sx = std::size_t(cx) + 1, sy = std::size_t(cy) + 1;
-    live_sums_.assign(sx * sy * std::size_t(cz + 1), 0);
+    live_sums_.assign(live_sum_index(cells_, 0, 0, cz + 1), 0);
+    auto at = [&](int x, int y, int z) -> std::int32_t& { return live_sums_[live_sum_index(cells_, x, y, z)]; };
     for (int k = 1; k <= cz; ++k)
       for (int j = 1; j <= cy; ++j)
         for (int i = 1; i <= cx; ++i) {
-          auto at = [&](int x, int y, int z) -> std::int32_t& {
-            return live_sums_[std::size_t(x) + sx * (std::size_t(y) + sy * std::size_t(z))];
-          };
           at(i, j, k) = std::int32_t(live_[cell_of(i - 1, j - 1, k - 1)]) + at(i - 1, j, k) + at(i, j - 1, k) +
                         at(i, j, k - 1) - at(i - 1, j - 1, k) - at(i - 1, j, k - 1) - at(i, j - 1, k - 1) +
                         at(i - 1, j - 1, k - 1);
@@ -786,9 +781,6 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             // The linear kind: the last α seen and its corrected value (std::pow only when α changes).
             double last_a = -1, last_ac = 0;
             const int n_samples = rs.k_last - rs.k_first + 1;
-            // The samples' positions g_0 + step Δg in fixed point (fixed_position.h; not with
-            // exact_positions).
-            const FixedRay fr{{rr.g0[0], rr.g0[1], rr.g0[2]}, {rr.dg[0], rr.dg[1], rr.dg[2]}};
             std::int64_t n_visited = 0, n_skipped = 0, n_classified = 0, n_jumped = 0, n_cell_tests = 0;
             // The planes from the current sample on while g stays 0.01 index units inside the cube
             // of cells c ± r (c the current sample's cell, r in cells) along this ray, capped at
@@ -831,8 +823,9 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 i0 = int(fx), j0 = int(fy), k0 = int(fz);
                 wx = gx - fx, wy = gy - fy, wz = gz - fz;
               } else {
+                // The samples' positions g_0 + step Δg in fixed point (fixed_position.h).
                 std::uint64_t q[3];
-                for (int a = 0; a < 3; ++a) q[a] = fr.g0[std::size_t(a)] + std::uint64_t(step) * fr.dg[std::size_t(a)];
+                for (int a = 0; a < 3; ++a) q[a] = rr.g0[a] + std::uint64_t(step) * rr.dg[a];
                 i0 = fixed::floor_voxel(q[0]), j0 = fixed::floor_voxel(q[1]), k0 = fixed::floor_voxel(q[2]);
                 wx = fixed::weight(q[0]), wy = fixed::weight(q[1]), wz = fixed::weight(q[2]);
                 g = Eigen::Vector3d(fixed::to_double(q[0]), fixed::to_double(q[1]), fixed::to_double(q[2]));
@@ -989,7 +982,6 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
       // termination (the phantom's Blend at QC 1, early termination 0.99: 135-153 ms with 64, 98 ms
       // with 8; back to front 64, 16 and 8 within the noise).
       constexpr int kQueue = 64, kQueueFrontToBack = 8;
-      std::vector<TilePlanes> block_planes;  // per block of the tile (block_x x block_y pixels)
       std::array<int, kQueue> queue_u;
       std::array<unsigned, kQueue> queue_lanes;
       // Front to back: the lanes' walk counters after each queued plane, so that a lane that
@@ -1005,7 +997,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
       // The planes of the pixels [x_lo, x_hi] x [y_lo, y_hi] (inclusive) from their corner rays.
       auto bound_planes = [&](TilePlanes& tile_planes, int x_lo, int y_lo, int x_hi, int y_hi) {
         tile_planes.stack = &stack, tile_planes.live_sums = live_sums_.data(), tile_planes.dims = dims;
-        tile_planes.sx = cells_[0] + 1, tile_planes.sy = cells_[1] + 1, tile_planes.cell_shift = cell_shift;
+        tile_planes.cells = cells_, tile_planes.cell_shift = cell_shift;
         tile_planes.reset(stack.count);
         bool ok = true;
         for (int c = 0; c < 4; ++c) {
@@ -1020,11 +1012,8 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
       };
       const int blocks_x = (x_end - tx * T + block_x - 1) / block_x,
                 blocks_y = (y_end - ty * T + block_y - 1) / block_y;
-      if (skip && tile_bounds) {
-        if (block_planes.size() < std::size_t(blocks_x * blocks_y))
-          block_planes.resize(std::size_t(blocks_x * blocks_y));
-        for (auto& b : block_planes) b.stack = nullptr;  // not bounded yet in this tile
-      }
+      // Per block of the tile (block_x x block_y pixels), bounded when a packet first walks there.
+      std::vector<TilePlanes> block_planes(skip && tile_bounds ? std::size_t(blocks_x * blocks_y) : 0);
       for (int y0 = ty * T; y0 < y_end; y0 += 2)
         for (int x0 = tx * T; x0 < x_end; x0 += kLanesX) {
           VU GQ0[3] = {}, DQ[3] = {};  // each lane's first position and move per plane (32.32 fixed point)

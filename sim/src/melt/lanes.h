@@ -176,10 +176,10 @@ inline Lanes<Real> lane_max(Lanes<Real> a, Lanes<Real> b) {
 /// Lanes of Real from eight 32-bit integers, and the lane mask of eight bytes that are not zero.
 template <class Real>
 inline Lanes<Real> lanes_from_ints(const std::int32_t* p) {
-  using Ints [[gnu::vector_size(kLanes * sizeof(std::int32_t))]] = std::int32_t;
-  Ints v;
-  std::memcpy(&v, p, sizeof(v));
   if constexpr (!std::is_class_v<Lanes<Real>>) {
+    using Ints [[gnu::vector_size(kLanes * sizeof(std::int32_t))]] = std::int32_t;
+    Ints v;
+    std::memcpy(&v, p, sizeof(v));
     return __builtin_convertvector(v, Lanes<Real>);
   } else {
     using Half [[gnu::vector_size(4 * sizeof(std::int32_t))]] = std::int32_t;
@@ -192,10 +192,10 @@ inline Lanes<Real> lanes_from_ints(const std::int32_t* p) {
 }
 template <class Real>
 inline LaneMask<Real> lanes_nonzero(const std::uint8_t* p) {
-  using Bytes [[gnu::vector_size(kLanes)]] = std::uint8_t;
-  Bytes b;
-  std::memcpy(&b, p, sizeof(b));
   if constexpr (!std::is_class_v<LaneMask<Real>>) {
+    using Bytes [[gnu::vector_size(kLanes)]] = std::uint8_t;
+    Bytes b;
+    std::memcpy(&b, p, sizeof(b));
     return __builtin_convertvector(b, LaneMask<Real>) != 0;
   } else {
     using Half [[gnu::vector_size(4)]] = std::uint8_t;
