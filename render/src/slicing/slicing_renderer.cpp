@@ -22,6 +22,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <type_traits>
 
 namespace meltlab::render {
@@ -716,10 +717,13 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
       (dims[0] - 1) * st[0] + (dims[1] - 1) * st[1] + (dims[2] - 1) * st[2] < (std::int64_t(1) << 31);
   const bool x_packed = st[0] == 1;  // neighbouring x samples adjacent (the packets' paired fetch)
   const bool use_packets = s_.simd && !exact_positions && offsets_fit;  // packets: incremental positions
-  // The linear kind's corrected α (a power per sample): lane_math::pow, whose lanes give its scalar
-  // bits (SlicingSettings::exact_pow: std::pow).
+  // The corrected α 1 - (1 - a)^e (per sample of the linear kind, per ray and piece of the constant
+  // kind): lane_math::corrected_alpha, whose lanes give its scalar bits (SlicingSettings::exact_pow:
+  // std::pow).
   const bool exact_pow = s_.exact_pow;
-  auto power = [exact_pow](double x, double y) { return exact_pow ? std::pow(x, y) : lane_math::pow(x, y); };
+  auto correct = [exact_pow](double a, double e) {
+    return exact_pow ? 1.0 - std::pow(1.0 - a, e) : lane_math::corrected_alpha(a, e);
+  };
   visit_samples(volume_, [&](const auto samples) {
     // Blinn-Phong of a lit sample: colour c at the stencil (i0, j0, k0) with weights w, world point
     // p, unit vector towards the eye.
@@ -886,7 +890,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 if (!(a > 0)) continue;
                 ac = a;
                 if (exponent != 1.0) {
-                  if (a != last_a) last_a = a, last_ac = 1.0 - power(1.0 - a, exponent);
+                  if (a != last_a) last_a = a, last_ac = correct(a, exponent);
                   ac = last_ac;
                 }
               } else {
@@ -896,8 +900,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 ac = a;
                 if (exponent != 1.0 && piece != 0) {
                   const std::size_t slot = ti * std::size_t(max_pieces) + std::size_t(piece);
-                  if (ac_stamp[slot] != ray_id)
-                    ac_stamp[slot] = ray_id, ac_piece[slot] = 1.0 - power(1.0 - a, exponent);
+                  if (ac_stamp[slot] != ray_id) ac_stamp[slot] = ray_id, ac_piece[slot] = correct(a, exponent);
                   ac = ac_piece[slot];
                 }
               }
@@ -1054,7 +1057,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             ns = select(alive, rr.k_last - rr.k_first + 1, zero);
           }
           // The constant kinds' corrected α per lane and piece, for the TFs the mask uses, as the
-          // scalar loop computes it per ray (slicing_pow on the lanes; exact_pow: std::pow lane by lane).
+          // scalar loop computes it per ray (corrected_alpha on the lanes; exact_pow: std::pow lane by lane).
           for (int t = 0; t < 4; ++t) {
             const InlineTf& tf = tfs[std::size_t(t)];
             if (!tf_used_[std::size_t(t)] || tf.linear()) continue;
@@ -1066,7 +1069,8 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 for (int l = 0; l < kLanes; ++l)
                   if (ex[l] != 1.0) c[l] = 1.0 - std::pow(1.0 - a, ex[l]);
               } else {
-                c = select(ex != 1.0, 1.0 - lane_math::pow(splat(1.0 - a), ex), c);
+                const VL corr = ex != 1.0;
+                c = select(corr, lane_math::corrected_alpha(splat(a), ex, corr), c);
               }
               acp[std::size_t(t * max_pieces + p)] = c;
             }
@@ -1246,8 +1250,8 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 const VL ws = wide(sel);
                 if (tf.linear()) {
                   // The linear kind on the lanes (LaneLinearTf: InlineTf's bits); the corrected α
-                  // where a visible α changed (the scalar loop's last α), by lane_math::pow on the
-                  // lanes (exact_pow: std::pow lane by lane).
+                  // where a visible α changed (the scalar loop's last α), by lane_math::corrected_alpha
+                  // on the lanes (exact_pow: std::pow lane by lane).
                   VD ta, tr, tg, tb;
                   lane_tfs[std::size_t(t)]->evaluate(fn, ta, tr, tg, tb);
                   const VL corr = ws & (ta > 0) & (ex != 1.0);
@@ -1258,7 +1262,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                       last_ac[l] = 1.0 - std::pow(1.0 - ta[l], ex[l]);
                     }
                   } else if (any(narrow(fresh))) {
-                    last_ac = select(fresh, 1.0 - lane_math::pow(1.0 - ta, ex), last_ac);
+                    last_ac = select(fresh, lane_math::corrected_alpha(ta, ex, fresh), last_ac);
                   }
                   last_a = select(fresh, ta, last_a);
                   a = select(ws, ta, a), ac = select(ws, select(corr, last_ac, ta), ac);
@@ -1401,6 +1405,21 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
 
 double slicing_pow(double x, double y) { return lane_math::pow(x, y); }
 
+double slicing_corrected_alpha(double a, double e) { return lane_math::corrected_alpha(a, e); }
+
+void slicing_corrected_alpha_lanes(std::span<const double> a, std::span<const double> e, std::span<double> out) {
+  if (e.size() != a.size() || out.size() != a.size())
+    throw std::invalid_argument("slicing_corrected_alpha_lanes: spans of different sizes");
+  using packet::kLanes;
+  for (std::size_t i = 0; i < a.size(); i += kLanes) {
+    packet::VD av = packet::splat(0), ev = packet::splat(1);
+    packet::VL need{};
+    for (std::size_t l = 0; l < kLanes && i + l < a.size(); ++l) av[l] = a[i + l], ev[l] = e[i + l], need[l] = -1;
+    const packet::VD r = lane_math::corrected_alpha(av, ev, need);
+    for (std::size_t l = 0; l < kLanes && i + l < a.size(); ++l) out[i + l] = r[l];
+  }
+}
+
 SlicingFrame render_slicing(const Volume& volume, const Camera& camera, const SlicingSettings& settings) {
   return SlicingRenderer(volume, settings).render(camera);
 }
@@ -1455,7 +1474,9 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
                                        "image as one ray at a time)",
                                        packet::kLanesX, packet::kLanes)
                          : "off (one ray at a time)");
-  add("cpu.pow", s.exact_pow ? "std::pow" : "the TFs' corrected alpha by slicing_pow (within 1e-14 of std::pow)");
+  add("cpu.pow", s.exact_pow ? "std::pow"
+                             : "the TFs' corrected alpha by slicing_corrected_alpha (short series for alpha <= 1/32, "
+                               "else slicing_pow; within (4 + e) 2^-53 of 1 - std::pow(1 - a, e))");
   add("mode", slicing_mode_name(s.mode));
   add("blend.operator", s.blend == BlendOperator::kOver ? "over" : "additive");
   add("blend.opacity_correction", s.opacity_correction ? "on, dref = h0, along-ray spacing dd / cos psi" : "off");

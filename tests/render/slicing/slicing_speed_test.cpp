@@ -12,10 +12,16 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <span>
+#include <stdexcept>
 #include <utility>
+#include <vector>
 
 namespace meltlab::render {
 namespace {
@@ -510,8 +516,55 @@ TEST(SlicingSpeed, SlicingPowIsStdPowUpToRoundOff) {
   std::printf("worst error: %.3f of the bound\n", worst);
 }
 
+TEST(SlicingSpeed, CorrectedAlphaIsStdPowUpToRoundOffAndItsLanesGiveItsBits) {
+  // slicing_corrected_alpha: a short series where a <= 1/32 and |e ln(1 - a)| <= 1/16, else 1 -
+  // slicing_pow(1 - a, e). Against 1 - std::pow(1 - a, e) within (4 + e) eps absolute: the reference
+  // itself rounds 1 - a (half an ulp, eps / 2, which the power scales by e) and rounds x^e and 1 - x^e
+  // (about 2 eps); against the long-double value of the exact
+  // -expm1(e log1p(-a)) (64-bit mantissa) the short branch is within 8 eps relative, where 1 - std::pow
+  // may be off by far more relative (a cancellation at small a; the bound asserts the branch is taken
+  // and is accurate, not that std::pow is worse).
+  constexpr double kEps = 0x1p-53;
+  std::vector<double> as, es;
+  for (double e : {0.0, 0.25, 0.5, 0.93, 1.0, 1.07, 1.5, 2.0, 2.14, 4.0, 8.5, 40.0})
+    for (int i = 0; i <= 3000; ++i) {
+      // a: 0, log-spaced 1e-12 ... 1/32, both sides of 1/32, then up to 1
+      const double a = i == 0      ? 0.0
+                       : i <= 1500 ? std::pow(10.0, -12.0 + (12.0 + std::log10(1.0 / 32)) * (i - 1) / 1499)
+                       : i <= 1510 ? std::nextafter(1.0 / 32, i < 1505 ? 0.0 : 1.0) * (1 + (i - 1505) * 1e-15)
+                                   : (i - 1510) / 1490.0;
+      as.push_back(std::min(a, 1.0)), es.push_back(e);
+    }
+  int short_branch = 0;
+  for (std::size_t i = 0; i < as.size(); ++i) {
+    const double a = as[i], e = es[i];
+    const double got = slicing_corrected_alpha(a, e);
+    ASSERT_LE(std::abs(got - (1.0 - std::pow(1.0 - a, e))), (4 + e) * kEps) << a << " " << e;
+    const long double t = static_cast<long double>(e) * std::log1p(-static_cast<long double>(a));
+    const long double exact = -std::expm1(t);
+    if (a <= 1.0 / 32 && std::fabs(t) <= 1.0L / 16 && a > 0 && e > 0) {
+      ++short_branch;
+      ASSERT_LE(std::fabs(static_cast<long double>(got) - exact), 8 * kEps * exact) << a << " " << e;
+    }
+  }
+  EXPECT_GT(short_branch, 8000);
+  EXPECT_EQ(slicing_corrected_alpha(0.0, 1.3), 0.0);
+  EXPECT_EQ(slicing_corrected_alpha(0.01, 0.0), 0.0);
+  EXPECT_EQ(slicing_corrected_alpha(1.0, 0.7), 1.0);
+  // The lanes: every element the scalar's bits, in packets that mix both branches (the order
+  // interleaves small and large a, and exponents that push |t| past 1/16).
+  std::vector<double> ma, me;
+  for (std::size_t i = 0; i < as.size(); i += 7) ma.push_back(as[i]), me.push_back(es[(i * 13) % es.size()]);
+  std::vector<double> out(ma.size());
+  slicing_corrected_alpha_lanes(ma, me, out);
+  for (std::size_t i = 0; i < ma.size(); ++i)
+    ASSERT_EQ(std::bit_cast<std::uint64_t>(out[i]), std::bit_cast<std::uint64_t>(slicing_corrected_alpha(ma[i], me[i])))
+        << ma[i] << " " << me[i];
+  EXPECT_THROW(slicing_corrected_alpha_lanes(ma, me, std::span<double>(out).first(3)), std::invalid_argument);
+}
+
 TEST(SlicingSpeed, ExactPowChangesPixelsByAtMostOneFloatUlp) {
-  // slicing_pow differs from std::pow by < 1e-13 relative at the renderer's arguments (above), so
+  // slicing_corrected_alpha differs from 1 - std::pow(1 - a, e) by at most (4 + e) eps absolute (above), so
   // a pixel's double sum differs by far less than half a float ulp and its float can differ by at
   // most one ulp (where the double falls next to a rounding boundary): the bound checked per pixel.
   const Volume& v = phantom();

@@ -42,6 +42,7 @@
 
 #include <array>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -133,11 +134,12 @@ struct SlicingSettings {
   /// planes bounded per block). Not with exact_positions. false: one ray at a time (the reference).
   bool simd = true;
   /// The corrected α 1 - (1 - α)^(Δ/h0), a power per sample of the linear TF and per ray and
-  /// piece of the constant TF: false (default): slicing_pow (issue 17's fourth speed round; for
-  /// the constant TF since its seventh: eight lanes at a time in the packets, the same bits per lane
-  /// as per ray; within 1e-14 of std::pow, so pixels differ from std::pow's by at most one float
-  /// ulp, see slicing_speed_test). true: std::pow (lane by lane in the packets). The specular term
-  /// is std::pow either way.
+  /// piece of the constant TF: false (default): slicing_corrected_alpha (issue 17's fourth speed
+  /// round; for the constant TF since its seventh: eight lanes at a time in the packets, the same
+  /// bits per lane as per ray; since the eighth a short series for α <= 1/32; within (4 + e) 2^-53
+  /// of 1 - std::pow(1 - α, e), so pixels differ from std::pow's by at most one float ulp, see
+  /// slicing_speed_test). true: std::pow (lane by lane in the packets). The specular term is
+  /// std::pow either way.
   bool exact_pow = false;
 };
 
@@ -243,6 +245,14 @@ class SlicingRenderer {
 /// x^y for x, y >= 0 finite as the renderer computes its per-sample powers (SlicingSettings::exact_pow
 /// false): within 1e-14 of std::pow relative (subnormal results within 1e-300 absolute).
 double slicing_pow(double x, double y);
+
+/// The opacity correction 1 - (1 - a)^e as the renderer computes it (SlicingSettings::exact_pow false):
+/// short series for ln(1 - a) and e^t - 1 where a <= 1/32 and |e ln(1 - a)| <= 1/16, else 1 -
+/// slicing_pow(1 - a, e); within (4 + e) 2^-53 of 1 - std::pow(1 - a, e) absolute, for a in [0, 1], e >= 0.
+double slicing_corrected_alpha(double a, double e);
+/// The same on the packets' lanes (eight at a time, the last packet padded): out[i] has the bits of
+/// slicing_corrected_alpha(a[i], e[i]) whatever branch the other lanes of its packet take.
+void slicing_corrected_alpha_lanes(std::span<const double> a, std::span<const double> e, std::span<double> out);
 
 /// One frame (builds a SlicingRenderer).
 SlicingFrame render_slicing(const Volume& volume, const Camera& camera, const SlicingSettings& settings);
