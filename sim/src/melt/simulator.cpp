@@ -123,7 +123,7 @@ CycleReport MeltSimulator<Real>::step() {
     if ((params_.compact_below > 0.0 && live < params_.compact_below * slots) ||
         (params_.compact_after > 0.0 && dead_share_sum_ >= params_.compact_after)) {
       t = Clock::now();
-      compact_workspace(mesh_, ws);
+      compact_workspace(mesh_, ws, exec_);
       r.compact_ms = ms_since(t);
       r.compacted = true;
       dead_share_sum_ = 0;

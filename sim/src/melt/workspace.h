@@ -221,9 +221,10 @@ template <class Real>
 void repair_pass(TriMesh<Real>& m, MeltWorkspace& ws, CycleReport& report, Execution exec);
 template <class Real>
 std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws, Execution exec);
-/// Compacts the mesh (compact_mesh) and brings the workspace along: triangle lists rebuilt,
-/// edge keys moved with their triangles, per-vertex scratch resized.
+/// Compacts the mesh (compact_mesh, arrays side by side in parallel) and brings the workspace
+/// along: triangle lists rebuilt, the schedule and packed positions invalidated, per-vertex
+/// scratch resized.
 template <class Real>
-void compact_workspace(TriMesh<Real>& m, MeltWorkspace& ws);
+void compact_workspace(TriMesh<Real>& m, MeltWorkspace& ws, Execution exec);
 
 }  // namespace meltlab::sim

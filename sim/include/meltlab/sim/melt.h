@@ -201,9 +201,10 @@ std::int64_t remove_inverted_parts(TriMesh<Real>& m, Execution exec = Execution:
 
 /// Drops dead slots from every array, keeping the relative order of the live vertices and
 /// triangles (so Alg. 2's index comparisons are unchanged). Returns, for every old vertex
-/// slot, its new index (-1 if dead).
+/// slot, its new index (-1 if dead). In place: the arrays keep their capacity. In parallel the
+/// arrays are compacted side by side; the result is the same.
 template <class Real>
-std::vector<Index> compact_mesh(TriMesh<Real>& m);
+std::vector<Index> compact_mesh(TriMesh<Real>& m, Execution exec = Execution::kSerial);
 
 /// Rotates every live triangle min-index first (Alg. 3's sort step alone).
 template <class Real>
