@@ -1,9 +1,10 @@
 #pragma once
-// x^y on one double or on eight lanes (packet::VD) with the same operations in the same order, so
-// that a lane computes the bits of the scalar call: the slicing renderer's power per sample (the
-// linear TF's corrected α 1 - (1 - α)^(Δ/h0)), which the packets would otherwise call std::pow for
-// lane by lane. Not std::pow's bits: within (16 + 4 |y ln x|) 2^-53 of it relative while the result
-// is normal (slicing_speed_test; 4 · 2^-53 absolute on the opacity correction).
+// x^y, and the opacity correction 1 - (1 - α)^e built on it (corrected_alpha, at the end), on one
+// double or on eight lanes (packet::VD) with the same operations in the same order, so that a lane
+// computes the bits of the scalar call: the slicing renderer's corrected α per sample of the linear
+// TF (e = Δ/h0 along the ray), which the packets would otherwise compute with std::pow lane by lane.
+// pow is not std::pow's bits: within (16 + 4 |y ln x|) 2^-53 of it relative while the result is
+// normal (slicing_speed_test).
 //
 // For x >= 0 and y >= 0, both finite (what the renderer passes): x = m 2^k with m in [√½, √2)
 // (subnormal x scaled by 2^54 first), ln x = k ln 2 + 2 atanh(s), s = (m - 1) / (m + 1) (m - 1 is
