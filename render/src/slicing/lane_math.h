@@ -127,8 +127,9 @@ inline D small_alpha_from_t(D t) {
 /// The opacity correction α' = 1 - (1 - a)^e for a in [0, 1] and e >= 0 finite: by the short series
 /// above where a <= 1/32 and |e ln(1 - a)| <= 1/16 (translucent TFs at moderate QC: every sample of
 /// the seed-003 scenes at QC 1), else 1 - pow(1 - a, e). Within (4 + e) 2^-53 of 1 - std::pow(1 - a, e)
-/// absolute (slicing_speed_test). D is double or packet::VD; on the lanes `need` marks the lanes whose
-/// result is used: pow runs only if one of them leaves the short branch.
+/// absolute (slicing_speed_test). One double, or the packet's lanes (the same operations per lane,
+/// so a lane gives the double's bits), where `need` marks the lanes whose result is used: pow runs
+/// only if one of them leaves the short branch.
 inline double corrected_alpha(double a, double e) {
   using namespace detail;
   if (a <= kSmallAlpha) {

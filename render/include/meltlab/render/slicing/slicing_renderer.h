@@ -250,7 +250,8 @@ double slicing_pow(double x, double y);
 /// short series for ln(1 - a) and e^t - 1 where a <= 1/32 and |e ln(1 - a)| <= 1/16, else 1 -
 /// slicing_pow(1 - a, e); within (4 + e) 2^-53 of 1 - std::pow(1 - a, e) absolute, for a in [0, 1], e >= 0.
 double slicing_corrected_alpha(double a, double e);
-/// The same on the packets' lanes (eight at a time, the last packet padded): out[i] has the bits of
+/// The same on the packets' lanes (packet::kLanes at a time: eight with AVX-512, else four; the last
+/// packet padded): out[i] has the bits of
 /// slicing_corrected_alpha(a[i], e[i]) whatever branch the other lanes of its packet take.
 void slicing_corrected_alpha_lanes(std::span<const double> a, std::span<const double> e, std::span<double> out);
 
