@@ -116,7 +116,11 @@ struct MeltWorkspace {
   /// `reindex_tracked` says the list is complete (else it resets every entry).
   std::vector<Index> reindex_changed;
   bool reindex_tracked = false;
-  UnionFind remnant_parts;                ///< remnant check: the connected parts
+  UnionFind remnant_parts;  ///< remnant check: the connected parts
+  /// The triangles and alive flags remnant_parts was found from: the parts are a function of
+  /// these and the vertex slot count alone, so the check reuses them while both are unchanged.
+  std::vector<Triangle> remnant_triangles;
+  std::vector<std::uint8_t> remnant_alive;
   std::vector<double> part_six_volume;    ///< remnant check: 6 x volume per part (at its root)
   std::vector<std::uint8_t> part_doomed;  ///< remnant check: the part is removed
   std::vector<Index> merged;              ///< vertices merged this cycle (ascending): those the short-edge test marked
