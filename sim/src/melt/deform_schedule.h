@@ -102,6 +102,7 @@ class DeformSchedule {
   std::vector<std::uint32_t> block_foreign_;  ///< per block: its triangles with foreign_ set
   std::vector<Index> touched_groups_;         ///< update() scratch: the groups of touched_
   std::vector<double> block_work_;            ///< rebuild() scratch
+  std::vector<std::size_t> block_owned_;      ///< rebuild() scratch: vertices whose first triangle is in the block
   std::vector<Index> touched_;
 };
 
