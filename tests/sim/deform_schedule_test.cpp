@@ -89,6 +89,78 @@ TEST(DeformSchedule, BlocksWithoutTestsHoldNoForeignCornerAcrossCycles) {
   check_cycles<double>(datasets::dumbbell(), 0.5, 2, 300, "dumbbell (repairs), 2 parts");
 }
 
+// Two schedules give the same sweep: the same parts, interior and halo groups, owners and mixed
+// blocks.
+void expect_same_schedule(const DeformSchedule& a, const DeformSchedule& b, std::size_t vertices,
+                          const std::string& what) {
+  ASSERT_EQ(a.parts(), b.parts()) << what;
+  ASSERT_EQ(a.blocks(), b.blocks()) << what;
+  ASSERT_EQ(a.groups(), b.groups()) << what;
+  for (std::size_t p = 0; p < a.parts(); ++p) {
+    const auto x = a.interior_groups(p), y = b.interior_groups(p);
+    EXPECT_TRUE(std::equal(x.begin(), x.end(), y.begin(), y.end())) << what << ": interior groups of part " << p;
+  }
+  const auto hx = a.halo_groups(), hy = b.halo_groups();
+  EXPECT_TRUE(std::equal(hx.begin(), hx.end(), hy.begin(), hy.end())) << what << ": halo groups";
+  std::size_t owners_differ = 0, mixed_differ = 0;
+  for (std::size_t v = 0; v < vertices; ++v)
+    owners_differ += a.owner(static_cast<Index>(v)) != b.owner(static_cast<Index>(v));
+  for (std::size_t k = 0; k < a.blocks(); ++k) mixed_differ += a.block_mixed(k) != b.block_mixed(k);
+  EXPECT_EQ(owners_differ, 0u) << what;
+  EXPECT_EQ(mixed_differ, 0u) << what;
+}
+
+// An update on the threads (groups classified and triangles flagged side by side, the blocks'
+// counts changed atomically) gives the serial update's schedule, through a melt with merges.
+// Every live vertex is touched on top of the cycle's own, so that the update splits into tasks
+// (from 512 touched vertices, and from 512 touched groups on); the real merges change owners and
+// flags. Returns the blocks whose mixed flag the updates changed.
+std::size_t check_update_on_threads(const IndexedMesh& mesh, double kr_rel, std::size_t parts, int cycles,
+                                    const std::string& name) {
+  TriMesh<double> m = TriMesh<double>::from_indexed(mesh);
+  const MeltParams p = relative_melt_params(mesh, 0.05, kr_rel);
+  const auto kl = make_constant_kl(1.0);
+  MeltWorkspace ws;
+  prepare_workspace(ws, m);
+  ws.deform_parts = parts;
+  std::int64_t merged = 0;
+  std::size_t flags_changed = 0;
+  for (int c = 1; c <= cycles; ++c) {
+    deform_pass(m, p, *kl, Execution::kSerial, ws);
+    CycleReport r;
+    collapse_pass(m, p.kr, p.merge, Execution::kSerial, ws, r);
+    merged += r.merged_vertices;
+    if (r.merged_vertices > 0) {
+      glued_pass(m, ws, r);
+      repair_pass(m, ws, r, Execution::kSerial);
+    }
+    ws.schedule.touch(ws.dirty_list);
+    ws.clear_dirty();
+    std::vector<Index> live;
+    for (std::size_t v = 0; v < m.vertex_slots(); ++v)
+      if (m.vertex_alive[v]) live.push_back(static_cast<Index>(v));
+    if (live.size() < 512) break;  // no split into tasks any more
+    DeformSchedule serial = ws.schedule, threads = ws.schedule;
+    serial.touch(live), threads.touch(live);
+    serial.update(m, ws.adj, parts, Execution::kSerial);
+    threads.update(m, ws.adj, parts, Execution::kParallel);
+    expect_same_schedule(serial, threads, m.vertex_slots(), name + ", cycle " + std::to_string(c));
+    for (std::size_t k = 0; k < serial.blocks(); ++k)
+      flags_changed += serial.block_mixed(k) != ws.schedule.block_mixed(k);
+    if (::testing::Test::HasFailure()) break;
+  }
+  EXPECT_GT(merged, 0) << name << ": the melt must merge";
+  return flags_changed;
+}
+
+TEST(DeformSchedule, UpdateOnThreadsGivesTheSerialSchedule) {
+  // Object C: ~12 000 vertices, so the groups too are classified in tasks.
+  check_update_on_threads(datasets::benchmark_object('C'), 0.5, 3, 40, "object C, 3 parts");
+  // Many merges (2 200 vertices left after the first cycles): blocks' flags change on the threads.
+  EXPECT_GT(check_update_on_threads(datasets::geodesic_sphere(20, 0.05), 0.98, 7, 20, "geodesic, 7 parts"), 0u)
+      << "the updates must change some blocks' flags";
+}
+
 // The parts share the work, not just the blocks: a part sweeps the live triangles of its blocks
 // and moves the vertices it owns (a move weighs half a triangle). On object C after 20 cycles
 // (the cycle benchmark's state: merges and a compaction), equal numbers of blocks gave the first

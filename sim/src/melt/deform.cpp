@@ -383,7 +383,7 @@ void deform_pass(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execu
   if (parts == 1)
     ws.schedule.invalidate();
   else
-    ws.schedule.update(m, ws.adj, parts);
+    ws.schedule.update(m, ws.adj, parts, exec);
   // The sums start at zero. One part clears them all first (as one memset, which measured
   // faster on the 75k bunny in double than clearing each group's records in its move: the
   // records are written without being read); a sweep in parts clears each group's records

@@ -31,6 +31,7 @@
 #include "adjacency.h"
 #include "triangle_kernels.h"
 
+#include <meltlab/sim/melt.h>
 #include <meltlab/sim/mesh.h>
 
 #include <cstdint>
@@ -47,9 +48,11 @@ class DeformSchedule {
 
   /// Makes the schedule match `m`, `adj` and a partition into `parts` parts: rebuilt if
   /// anything but the lists of `touched` vertices changed since the last call (or after
-  /// invalidate()), else updated for the groups of the touched vertices.
+  /// invalidate()), else updated for the groups of the touched vertices (on the threads with
+  /// kParallel: each group and each triangle is updated by one task; the same schedule).
   template <class Real>
-  void update(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t parts);
+  void update(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t parts,
+              Execution exec = Execution::kSerial);
   /// Vertices whose triangle lists changed (collected until the next update()).
   void touch(std::span<const Index> vertices);
   /// Forces a rebuild at the next update() (the mesh changed in ways touch() does not cover).
@@ -84,7 +87,8 @@ class DeformSchedule {
   template <class Real>
   void classify(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t g);
   void build_buckets();
-  /// foreign_[t] (and its block's count) from triangle t's corners and their owners.
+  /// foreign_[t] (and its block's count, atomically: tasks update different triangles of one
+  /// block) from triangle t's corners and their owners.
   template <class Real>
   void find_foreign(const TriMesh<Real>& m, std::size_t t);
 
@@ -101,6 +105,9 @@ class DeformSchedule {
   std::vector<std::uint8_t> foreign_;         ///< per triangle slot: 1 if live with a corner owned by another part
   std::vector<std::uint32_t> block_foreign_;  ///< per block: its triangles with foreign_ set
   std::vector<Index> touched_groups_;         ///< update() scratch: the groups of touched_
+  std::vector<Index> touched_vertices_;       ///< update() scratch: touched_ without repeats
+  std::vector<std::uint8_t> vertex_seen_;     ///< update() scratch: 1 for a vertex in touched_vertices_
+  std::vector<std::uint8_t> group_seen_;      ///< update() scratch: 1 for a group in touched_groups_
   std::vector<double> block_work_;            ///< rebuild() scratch
   std::vector<std::size_t> block_owned_;      ///< rebuild() scratch: vertices whose first triangle is in the block
   std::vector<Index> touched_;
