@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace meltlab::sim {
@@ -46,33 +47,53 @@ std::size_t check_blocks(const DeformSchedule& s, const TriMesh<Real>& m, const 
   return wrong;
 }
 
-// The cycle of MeltSimulator::step() on the passes, checking the schedule after each deformation.
+// A mesh melting on the passes of MeltSimulator::step(), serially, in its own workspace with the
+// sweep in `parts` parts.
 template <class Real>
-void check_cycles(const IndexedMesh& mesh, double kr_rel, std::size_t parts, int cycles, const std::string& name) {
-  TriMesh<Real> m = TriMesh<Real>::from_indexed(mesh);
-  const MeltParams p = relative_melt_params(mesh, 0.05, kr_rel);
-  const auto kl = make_constant_kl(1.0);
+struct PassMelt {
+  TriMesh<Real> m;
+  MeltParams p;
+  KlFieldPtr kl = make_constant_kl(1.0);
   MeltWorkspace ws;
-  prepare_workspace(ws, m);
-  ws.deform_parts = parts;
-  std::int64_t merged = 0, updates_after_merges = 0, mixed_blocks = 0;
-  bool touched = false;  // the last cycle changed triangle lists: this update is incremental
-  for (int c = 1; c <= cycles; ++c) {
-    deform_pass(m, p, *kl, Execution::kSerial, ws);
-    ASSERT_EQ(check_blocks(ws.schedule, m, ws.adj, parts), 0u)
-        << name << ", cycle " << c << ": blocks called unmixed with a foreign corner";
-    updates_after_merges += touched;
-    for (std::size_t b = 0; b < ws.schedule.blocks(); ++b) mixed_blocks += ws.schedule.block_mixed(b);
+  PassMelt(const IndexedMesh& mesh, double kr_rel, std::size_t parts)
+      : m(TriMesh<Real>::from_indexed(mesh)), p(relative_melt_params(mesh, 0.05, kr_rel)) {
+    prepare_workspace(ws, m);
+    ws.deform_parts = parts;
+  }
+  void deform() { deform_pass(m, p, *kl, Execution::kSerial, ws); }
+  // The passes after the deformation, with the schedule told whose triangle lists changed: the
+  // vertices merged, and whether any list changed.
+  std::pair<std::int64_t, bool> after_deform() {
     CycleReport r;
     collapse_pass(m, p.kr, p.merge, Execution::kSerial, ws, r);
-    merged += r.merged_vertices;
     if (r.merged_vertices > 0) {
       glued_pass(m, ws, r);
       repair_pass(m, ws, r, Execution::kSerial);
     }
-    touched = !ws.dirty_list.empty();
+    const bool touched = !ws.dirty_list.empty();
     ws.schedule.touch(ws.dirty_list);
     ws.clear_dirty();
+    return {r.merged_vertices, touched};
+  }
+};
+
+// The cycle of MeltSimulator::step() on the passes, checking the schedule after each deformation.
+template <class Real>
+void check_cycles(const IndexedMesh& mesh, double kr_rel, std::size_t parts, int cycles, const std::string& name) {
+  PassMelt<Real> melt(mesh, kr_rel, parts);
+  TriMesh<Real>& m = melt.m;
+  MeltWorkspace& ws = melt.ws;
+  std::int64_t merged = 0, updates_after_merges = 0, mixed_blocks = 0;
+  bool touched = false;  // the last cycle changed triangle lists: this update is incremental
+  for (int c = 1; c <= cycles; ++c) {
+    melt.deform();
+    ASSERT_EQ(check_blocks(ws.schedule, m, ws.adj, parts), 0u)
+        << name << ", cycle " << c << ": blocks called unmixed with a foreign corner";
+    updates_after_merges += touched;
+    for (std::size_t b = 0; b < ws.schedule.blocks(); ++b) mixed_blocks += ws.schedule.block_mixed(b);
+    const auto [merges, lists_changed] = melt.after_deform();
+    merged += merges;
+    touched = lists_changed;
     if (c % 16 == 0) remove_inverted_parts_pass(m, ws, Execution::kSerial);
   }
   EXPECT_GT(merged, 0) << name << ": the check must cover collapses";
@@ -117,25 +138,14 @@ void expect_same_schedule(const DeformSchedule& a, const DeformSchedule& b, std:
 // flags. Returns the blocks whose mixed flag the updates changed.
 std::size_t check_update_on_threads(const IndexedMesh& mesh, double kr_rel, std::size_t parts, int cycles,
                                     const std::string& name) {
-  TriMesh<double> m = TriMesh<double>::from_indexed(mesh);
-  const MeltParams p = relative_melt_params(mesh, 0.05, kr_rel);
-  const auto kl = make_constant_kl(1.0);
-  MeltWorkspace ws;
-  prepare_workspace(ws, m);
-  ws.deform_parts = parts;
+  PassMelt<double> melt(mesh, kr_rel, parts);
+  const TriMesh<double>& m = melt.m;
+  MeltWorkspace& ws = melt.ws;
   std::int64_t merged = 0;
   std::size_t flags_changed = 0;
   for (int c = 1; c <= cycles; ++c) {
-    deform_pass(m, p, *kl, Execution::kSerial, ws);
-    CycleReport r;
-    collapse_pass(m, p.kr, p.merge, Execution::kSerial, ws, r);
-    merged += r.merged_vertices;
-    if (r.merged_vertices > 0) {
-      glued_pass(m, ws, r);
-      repair_pass(m, ws, r, Execution::kSerial);
-    }
-    ws.schedule.touch(ws.dirty_list);
-    ws.clear_dirty();
+    melt.deform();
+    merged += melt.after_deform().first;
     std::vector<Index> live;
     for (std::size_t v = 0; v < m.vertex_slots(); ++v)
       if (m.vertex_alive[v]) live.push_back(static_cast<Index>(v));
