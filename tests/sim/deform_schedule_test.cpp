@@ -132,7 +132,8 @@ void expect_same_schedule(const DeformSchedule& a, const DeformSchedule& b, std:
 }
 
 // An update on the threads (groups classified and triangles flagged side by side, the blocks'
-// counts changed atomically) gives the serial update's schedule, through a melt with merges.
+// counts changed atomically) gives the serial update's schedule, and a rebuild on the threads the
+// serial rebuild's, through a melt with merges.
 // Every live vertex is touched on top of the cycle's own, so that the update splits into tasks
 // (from 512 touched vertices, and from 512 touched groups on); the real merges change owners and
 // flags. Returns the blocks whose mixed flag the updates changed.
@@ -155,6 +156,11 @@ std::size_t check_update_on_threads(const IndexedMesh& mesh, double kr_rel, std:
     serial.update(m, ws.adj, parts, Execution::kSerial);
     threads.update(m, ws.adj, parts, Execution::kParallel);
     expect_same_schedule(serial, threads, m.vertex_slots(), name + ", cycle " + std::to_string(c));
+    DeformSchedule built_serially, built_on_threads;  // rebuilt from scratch
+    built_serially.update(m, ws.adj, parts, Execution::kSerial);
+    built_on_threads.update(m, ws.adj, parts, Execution::kParallel);
+    expect_same_schedule(built_serially, built_on_threads, m.vertex_slots(),
+                         name + ", cycle " + std::to_string(c) + ", rebuilt");
     for (std::size_t k = 0; k < serial.blocks(); ++k)
       flags_changed += serial.block_mixed(k) != ws.schedule.block_mixed(k);
     if (::testing::Test::HasFailure()) break;

@@ -9,8 +9,9 @@
 namespace meltlab::sim {
 
 namespace {
-// Touched groups or vertices per task of an update on the threads (below twice this, one task: a
-// 32k mesh's merges or a bunny's touch a few hundred vertices a cycle; the dragon's thousands).
+// Groups or touched vertices per task of an update or a rebuild on the threads (below twice this,
+// one task: a 32k mesh's merges or a bunny's touch a few hundred vertices a cycle; the dragon's
+// thousands), and an eighth of it in blocks of triangles.
 constexpr std::size_t kUpdateGrain = 256;
 }  // namespace
 
@@ -24,7 +25,7 @@ void DeformSchedule::update(const TriMesh<Real>& m, const VertexTriangles& adj, 
   const std::size_t blocks = (nt + kTriangleBlock - 1) / kTriangleBlock;
   parts = std::max<std::size_t>(1, std::min({parts, blocks, kMaxParts}));
   if (!valid_ || parts != this->parts() || nt != triangles_ || m.vertex_slots() != vertices_) {
-    rebuild(m, adj, parts);
+    rebuild(m, adj, parts, exec);
     return;
   }
   if (touched_.empty()) return;
@@ -91,7 +92,7 @@ void DeformSchedule::find_foreign(const TriMesh<Real>& m, std::size_t t) {
 }
 
 template <class Real>
-void DeformSchedule::rebuild(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t parts) {
+void DeformSchedule::rebuild(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t parts, Execution exec) {
   triangles_ = m.triangle_slots();
   vertices_ = m.vertex_slots();
   blocks_ = (triangles_ + kTriangleBlock - 1) / kTriangleBlock;
@@ -145,24 +146,36 @@ void DeformSchedule::rebuild(const TriMesh<Real>& m, const VertexTriangles& adj,
       block_part_[b] = static_cast<std::uint16_t>(p);
   owner_.assign(vertices_, 0);
   group_part_.assign((vertices_ + kGroup - 1) / kGroup, 0);
-  for (std::size_t g = 0; g < group_part_.size(); ++g) classify(m, adj, g);
+  // Groups and blocks side by side in a parallel cycle (each task writes its own groups' owners
+  // and its own blocks' flags).
+  for_range(
+      exec, group_part_.size(),
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t g = begin; g < end; ++g) classify(m, adj, g);
+      },
+      kUpdateGrain);
   // find_foreign() of every triangle, block by block with the block's count in a register.
   foreign_.resize(triangles_);
   block_foreign_.resize(blocks_);
-  for (std::size_t b = 0; b < blocks_; ++b) {
-    const std::uint16_t part = block_part_[b];
-    std::uint32_t count = 0;
-    const std::size_t end = std::min(triangles_, (b + 1) * kTriangleBlock);
-    for (std::size_t t = b * kTriangleBlock; t < end; ++t) {
-      const Triangle& tri = m.triangle[t];
-      const bool foreign = m.triangle_alive[t] != 0 && ((owner_[static_cast<std::size_t>(tri[0])] != part) |
-                                                        (owner_[static_cast<std::size_t>(tri[1])] != part) |
-                                                        (owner_[static_cast<std::size_t>(tri[2])] != part));
-      foreign_[t] = foreign ? 1 : 0;
-      count += foreign ? 1u : 0u;
-    }
-    block_foreign_[b] = count;
-  }
+  for_range(
+      exec, blocks_,
+      [&](std::size_t first_block, std::size_t end_block) {
+        for (std::size_t b = first_block; b < end_block; ++b) {
+          const std::uint16_t part = block_part_[b];
+          std::uint32_t count = 0;
+          const std::size_t end = std::min(triangles_, (b + 1) * kTriangleBlock);
+          for (std::size_t t = b * kTriangleBlock; t < end; ++t) {
+            const Triangle& tri = m.triangle[t];
+            const bool foreign = m.triangle_alive[t] != 0 && ((owner_[static_cast<std::size_t>(tri[0])] != part) |
+                                                              (owner_[static_cast<std::size_t>(tri[1])] != part) |
+                                                              (owner_[static_cast<std::size_t>(tri[2])] != part));
+            foreign_[t] = foreign ? 1 : 0;
+            count += foreign ? 1u : 0u;
+          }
+          block_foreign_[b] = count;
+        }
+      },
+      kUpdateGrain / 8);
   touched_.clear();
   build_buckets();
   valid_ = true;

@@ -83,7 +83,7 @@ class DeformSchedule {
 
  private:
   template <class Real>
-  void rebuild(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t parts);
+  void rebuild(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t parts, Execution exec);
   template <class Real>
   void classify(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t g);
   void build_buckets();
