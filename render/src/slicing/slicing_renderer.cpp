@@ -168,13 +168,17 @@ class LaneLinearTf {
     VL front, back, idx;
     VD t;
   };
-  /// α (curve 3) and the colour of v, each lane as InlineTf::alpha and ::rgb compute it.
-  [[gnu::always_inline]] void evaluate(VD v, VD& a, VD& r, VD& g, VD& b) const {
+  /// α (curve 3) of v, each lane as InlineTf::alpha computes it, and where v fell on curve 3.
+  [[gnu::always_inline]] VD alpha(VD v, Seg& seg) const {
+    seg = curves_[3].locate(v);
+    return curves_[3].at(seg);
+  }
+  /// The colour of v, each lane as InlineTf::rgb computes it (`seg` from alpha(): the curves that
+  /// share their points share the segment).
+  [[gnu::always_inline]] void rgb(VD v, const Seg& seg, VD& r, VD& g, VD& b) const {
     if (shared_) {
-      const Seg seg = curves_[3].locate(v);
-      a = curves_[3].at(seg), r = curves_[0].at(seg), g = curves_[1].at(seg), b = curves_[2].at(seg);
+      r = curves_[0].at(seg), g = curves_[1].at(seg), b = curves_[2].at(seg);
     } else {
-      a = curves_[3].at(curves_[3].locate(v));
       r = curves_[0].at(curves_[0].locate(v)), g = curves_[1].at(curves_[1].locate(v));
       b = curves_[2].at(curves_[2].locate(v));
     }
@@ -1252,8 +1256,15 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                   // The linear kind on the lanes (LaneLinearTf: InlineTf's bits); the corrected α
                   // where a visible α changed (the scalar loop's last α), by lane_math::corrected_alpha
                   // on the lanes (exact_pow: std::pow lane by lane).
-                  VD ta, tr, tg, tb;
-                  lane_tfs[std::size_t(t)]->evaluate(fn, ta, tr, tg, tb);
+                  const LaneLinearTf& lane_tf = *lane_tfs[std::size_t(t)];
+                  LaneLinearTf::Seg seg;
+                  const VD ta = lane_tf.alpha(fn, seg);
+                  if (!any(narrow(ws & (ta > 0)))) {  // none of its lanes visible: colour and α' unused
+                    a = select(ws, ta, a);
+                    continue;
+                  }
+                  VD tr, tg, tb;
+                  lane_tf.rgb(fn, seg, tr, tg, tb);
                   const VL corr = ws & (ta > 0) & (ex != 1.0);
                   const VL fresh = corr & (ta != last_a);
                   if (exact_pow) {
