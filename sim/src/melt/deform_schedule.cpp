@@ -76,11 +76,16 @@ void DeformSchedule::update(const TriMesh<Real>& m, const VertexTriangles& adj, 
 }
 
 template <class Real>
+bool DeformSchedule::has_foreign_corner(const TriMesh<Real>& m, std::size_t t, std::uint16_t part) const {
+  const Triangle& tri = m.triangle[t];
+  return m.triangle_alive[t] != 0 &&
+         ((owner_[static_cast<std::size_t>(tri[0])] != part) | (owner_[static_cast<std::size_t>(tri[1])] != part) |
+          (owner_[static_cast<std::size_t>(tri[2])] != part));
+}
+
+template <class Real>
 void DeformSchedule::find_foreign(const TriMesh<Real>& m, std::size_t t) {
-  const std::uint16_t part = block_part_[t / kTriangleBlock];
-  bool foreign = false;
-  if (m.triangle_alive[t])
-    for (Index v : m.triangle[t]) foreign = foreign || owner_[static_cast<std::size_t>(v)] != part;
+  const bool foreign = has_foreign_corner(m, t, block_part_[t / kTriangleBlock]);
   if (foreign != (foreign_[t] != 0)) {
     foreign_[t] = foreign ? 1 : 0;
     std::atomic_ref<std::uint32_t> count(block_foreign_[t / kTriangleBlock]);
@@ -112,20 +117,17 @@ void DeformSchedule::rebuild(const TriMesh<Real>& m, const VertexTriangles& adj,
     for (std::size_t t = b * kTriangleBlock; t < end; ++t) live += m.triangle_alive[t] != 0 ? 1 : 0;
     block_work_[b] = static_cast<double>(live);
   }
-  std::vector<std::size_t>& owned = block_owned_;
-  owned.assign(blocks_, 0);
+  // (Multiples of 0.5 below 2^52: exact in any grouping, as the additions one at a time were.)
   std::size_t run_block = 0, run = 0;
   for (std::size_t v = 0; v < vertices_; ++v) {
     if (!m.vertex_alive[v]) continue;
     const auto list = adj.of(static_cast<Index>(v));
     if (list.empty()) continue;
     const std::size_t b = static_cast<std::size_t>(list.front()) / kTriangleBlock;
-    if (b != run_block) owned[run_block] += run, run_block = b, run = 0;
+    if (b != run_block) block_work_[run_block] += kMoveWeight * static_cast<double>(run), run_block = b, run = 0;
     ++run;
   }
-  if (blocks_ > 0) owned[run_block] += run;
-  // Multiples of 0.5 below 2^52: exact, as the additions one at a time were.
-  for (std::size_t b = 0; b < blocks_; ++b) block_work_[b] += kMoveWeight * static_cast<double>(owned[b]);
+  if (blocks_ > 0) block_work_[run_block] += kMoveWeight * static_cast<double>(run);
   double total = 0;
   for (double w : block_work_) total += w;
   part_first_block_.assign(parts + 1, blocks_);
@@ -165,10 +167,7 @@ void DeformSchedule::rebuild(const TriMesh<Real>& m, const VertexTriangles& adj,
           std::uint32_t count = 0;
           const std::size_t end = std::min(triangles_, (b + 1) * kTriangleBlock);
           for (std::size_t t = b * kTriangleBlock; t < end; ++t) {
-            const Triangle& tri = m.triangle[t];
-            const bool foreign = m.triangle_alive[t] != 0 && ((owner_[static_cast<std::size_t>(tri[0])] != part) |
-                                                              (owner_[static_cast<std::size_t>(tri[1])] != part) |
-                                                              (owner_[static_cast<std::size_t>(tri[2])] != part));
+            const bool foreign = has_foreign_corner(m, t, part);
             foreign_[t] = foreign ? 1 : 0;
             count += foreign ? 1u : 0u;
           }

@@ -87,6 +87,9 @@ class DeformSchedule {
   template <class Real>
   void classify(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t g);
   void build_buckets();
+  /// Whether live triangle t has a corner not owned by `part` (false for a dead slot).
+  template <class Real>
+  bool has_foreign_corner(const TriMesh<Real>& m, std::size_t t, std::uint16_t part) const;
   /// foreign_[t] (and its block's count, atomically: tasks update different triangles of one
   /// block) from triangle t's corners and their owners.
   template <class Real>
@@ -109,7 +112,6 @@ class DeformSchedule {
   std::vector<std::uint8_t> vertex_seen_;     ///< update() scratch: 1 for a vertex in touched_vertices_
   std::vector<std::uint8_t> group_seen_;      ///< update() scratch: 1 for a group in touched_groups_
   std::vector<double> block_work_;            ///< rebuild() scratch
-  std::vector<std::size_t> block_owned_;      ///< rebuild() scratch: vertices whose first triangle is in the block
   std::vector<Index> touched_;
 };
 
