@@ -312,7 +312,6 @@ struct WalkGrid {
   std::array<int, 3> dims{};
   int bricks_x = 0, bricks_y = 0;
   TilePlanes* planes = nullptr;  ///< null: every plane
-  bool front_to_back = false;    ///< u = -k (else u = k)
 };
 
 /// One packet's lanes as the walk keeps them (packet::kLanes rays of a pixel block).
@@ -326,27 +325,46 @@ struct WalkLanes {
 };
 
 /// The first plane u' >= u (in the walk's order) that the tile's planes may hold samples on, or
-/// u_last + 1.
-inline int next_plane(const WalkGrid& grid, int u, int u_last) {
-  if (grid.planes == nullptr || u > u_last) return u;
-  TilePlanes& planes = *grid.planes;
-  if (!grid.front_to_back) {  // k = u rising
+/// u_last + 1; `rest` gets the planes after u' in its word of 64 that the tile's planes may hold
+/// samples on (bit j: plane k = 64 w + j), and `word_index` that word's index w. Without tile planes
+/// every plane may. kFrontToBack: u = -k (else u = k).
+template <bool kFrontToBack>
+inline int next_plane(const WalkGrid& grid, int u, int u_last, std::uint64_t& rest, int& word_index) {
+  if (u > u_last) return u;
+  const bool all = grid.planes == nullptr;
+  if constexpr (!kFrontToBack) {  // k = u rising
     int w = u >> 6;
-    std::uint64_t word = planes.word(w) & (~std::uint64_t(0) << (u & 63));
+    std::uint64_t word = (all ? ~std::uint64_t(0) : grid.planes->word(w)) & (~std::uint64_t(0) << (u & 63));
     while (word == 0) {
       if (++w > (u_last >> 6)) return u_last + 1;
-      word = planes.word(w);
+      word = grid.planes->word(w);
     }
+    rest = word & (word - 1), word_index = w;
     return std::min(64 * w + __builtin_ctzll(word), u_last + 1);
   }
   const int k = -u, k_last = -u_last;  // k falling to k_last
   int w = k >> 6;
-  std::uint64_t word = planes.word(w) & (~std::uint64_t(0) >> (63 - (k & 63)));
+  std::uint64_t word = (all ? ~std::uint64_t(0) : grid.planes->word(w)) & (~std::uint64_t(0) >> (63 - (k & 63)));
   while (word == 0) {
     if (--w < (k_last >> 6)) return u_last + 1;
-    word = planes.word(w);
+    word = grid.planes->word(w);
   }
-  return std::min(-(64 * w + 63 - __builtin_clzll(word)), u_last + 1);
+  const int top = 63 - __builtin_clzll(word);
+  rest = word & ~(std::uint64_t(1) << top), word_index = w;
+  return std::min(-(64 * w + top), u_last + 1);
+}
+
+/// The next plane of `rest` (next_plane's) in the walk's order, taken out of it.
+template <bool kFrontToBack>
+inline int pop_plane(std::uint64_t& rest, int word_index) {
+  if constexpr (!kFrontToBack) {
+    const int j = __builtin_ctzll(rest);
+    rest &= rest - 1;
+    return 64 * word_index + j;
+  }
+  const int top = 63 - __builtin_clzll(rest);
+  rest &= ~(std::uint64_t(1) << top);
+  return -(64 * word_index + top);
 }
 
 /// The walk of a packet (phase A of SlicingRenderer's packets): from plane w.u on, over the planes
@@ -356,6 +374,7 @@ inline int next_plane(const WalkGrid& grid, int u, int u_last) {
 /// `visited` counts the walk per lane; with `snapshots`, each queued plane's counter after it (early
 /// termination keeps a lane's count up to its last plane). Not inlined: the walk keeps its state in
 /// registers apart from the fetch phase's.
+template <bool kFrontToBack>
 [[gnu::noinline]] int walk_planes(const WalkGrid& grid, WalkLanes& w, int max, int* queue_u, unsigned* queue_lanes,
                                   packet::VI* snapshots) {
   using namespace packet;
@@ -371,8 +390,13 @@ inline int next_plane(const WalkGrid& grid, int u, int u_last) {
   int u = w.u;
   const int u_last = w.u_last;
   int queued = 0;
+  // The planes come from a word of the tile's planes in a register (next_plane, then pop_plane):
+  // the walk's next plane waits on no load.
+  std::uint64_t rest = 0;
+  int word_index = 0;
   while (queued < max) {
-    const int next = next_plane(grid, u, u_last);
+    const int next = rest != 0 ? std::min(pop_plane<kFrontToBack>(rest, word_index), u_last + 1)
+                               : next_plane<kFrontToBack>(grid, u, u_last, rest, word_index);
     if (next > u_last) {
       u = u_last + 1;
       break;
@@ -1000,7 +1024,6 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
       // rounding of both) touches a live cell, clamped as the samples' voxels are. Each packet then
       // walks these planes only (with skipping; every plane without it or with a distorted camera).
       WalkGrid tile_grid = grid;
-      tile_grid.front_to_back = kFrontToBack;
       // The planes of the pixels [x_lo, x_hi] x [y_lo, y_hi] (inclusive) from their corner rays.
       auto bound_planes = [&](TilePlanes& tile_planes, int x_lo, int y_lo, int x_hi, int y_hi) {
         tile_planes.stack = &stack, tile_planes.live_sums = live_sums_.data(), tile_planes.dims = dims;
@@ -1168,8 +1191,9 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
           VI& done = walk.done;
           while (walk.u <= walk.u_last) {
             // Phase A: the walk, until the queue is full or the lanes' planes end.
-            const int queued = walk_planes(tile_grid, walk, kFrontToBack ? kQueueFrontToBack : kQueue, queue_u.data(),
-                                           queue_lanes.data(), kFrontToBack ? queue_counts.data() : nullptr);
+            const int queued =
+                walk_planes<kFrontToBack>(tile_grid, walk, kFrontToBack ? kQueueFrontToBack : kQueue, queue_u.data(),
+                                          queue_lanes.data(), kFrontToBack ? queue_counts.data() : nullptr);
             // Phase B: the queued planes' samples.
             for (int q = 0; q < queued; ++q) {
               const int Uq = queue_u[std::size_t(q)];
