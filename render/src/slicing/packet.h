@@ -96,6 +96,18 @@ inline VD select(VL m, VD a, VD b) { return m ? a : b; }
 inline VI select(VI m, VI a, VI b) { return m ? a : b; }
 inline VF select(VI m, VF a, VF b) { return m ? a : b; }
 
+/// i clamped to [0, hi] per lane (hi >= 0): select(i < 0, 0, select(i > hi, hi, i)), by one max
+/// and one min where the target has them.
+inline VI clamp(VI i, VI hi) {
+#if defined(__AVX2__) && MELTLAB_PACKET_LANES == 8
+  return VI(_mm256_min_epi32(_mm256_max_epi32(__m256i(i), _mm256_setzero_si256()), __m256i(hi)));
+#elif defined(__AVX2__)
+  return VI(_mm_min_epi32(_mm_max_epi32(__m128i(i), _mm_setzero_si128()), __m128i(hi)));
+#else
+  return select(i < 0, splati(0), select(i > hi, hi, i));
+#endif
+}
+
 /// std::fma per lane (one rounding).
 inline VD fma(VD a, VD b, VD c) {
 #if defined(__AVX512F__)

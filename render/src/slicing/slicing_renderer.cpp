@@ -380,7 +380,6 @@ template <bool kFrontToBack>
   using namespace packet;
   const VI zero = splati(0);
   const VI dmax[3] = {splati(grid.dims[0] - 1), splati(grid.dims[1] - 1), splati(grid.dims[2] - 1)};
-  auto clampv = [](VI i, VI hi) { return select(i < 0, splati(0), select(i > hi, hi, i)); };
   const std::uint64_t* const bits_data = grid.fetch_bits;
   const int bx = grid.bricks_x, by = grid.bricks_y;
   VU g[3] = {w.g[0], w.g[1], w.g[2]};
@@ -408,8 +407,8 @@ template <bool kFrontToBack>
     visited -= inr;
     VI sample = inr;
     if (bits_data != nullptr) {
-      const VI ic[3] = {clampv(fixed::floor_voxel(g[0]), dmax[0]), clampv(fixed::floor_voxel(g[1]), dmax[1]),
-                        clampv(fixed::floor_voxel(g[2]), dmax[2])};
+      const VI ic[3] = {clamp(fixed::floor_voxel(g[0]), dmax[0]), clamp(fixed::floor_voxel(g[1]), dmax[1]),
+                        clamp(fixed::floor_voxel(g[2]), dmax[2])};
       const VI brick = (ic[0] >> 2) + bx * ((ic[1] >> 2) + by * (ic[2] >> 2));
       const VI half = gather_i32(reinterpret_cast<const std::int32_t*>(bits_data),
                                  select(inr, 2 * brick + ((ic[2] >> 1) & 1), zero));
@@ -1006,7 +1005,6 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                          splati(std::int32_t(samples.sz))};
       const VI zero = splati(0), one = splati(1);
       const VI gstr[3] = {splati(1), splati(dims[0]), splati(dims[0] * dims[1])};  // grad_words_ (voxels)
-      auto clampv = [](VI i, VI hi) { return select(i < 0, splati(0), select(i > hi, hi, i)); };
       const VI lane_bit = lane_bits();
       // The queue of phase A: planes where some lane fetches, and which lanes.
       // Planes queued per walk: front to back fewer, since the walk runs ahead of a lane's
@@ -1116,8 +1114,8 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                                  VD& cg, VD& cb) {
             VI o0[3], o1[3];
             for (int a = 0; a < 3; ++a) {
-              o0[a] = select(vis, clampv(ii[a], cell_max[a]) * gstr[a], zero);
-              o1[a] = select(vis, clampv(ii[a] + 1, cell_max[a]) * gstr[a], zero);
+              o0[a] = select(vis, clamp(ii[a], cell_max[a]) * gstr[a], zero);
+              o1[a] = select(vis, clamp(ii[a] + 1, cell_max[a]) * gstr[a], zero);
             }
             const VF one_f = splatf(1.0f);
             VF vx[2][2][2][3];  // [x][y][z][channel]
@@ -1206,7 +1204,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               const std::uint64_t s = std::uint64_t(std::int64_t(Uq) - u_first);
               const VU gq[3] = {GS[0] + s * DQ[0], GS[1] + s * DQ[1], GS[2] + s * DQ[2]};
               const VI ii[3] = {fixed::floor_voxel(gq[0]), fixed::floor_voxel(gq[1]), fixed::floor_voxel(gq[2])};
-              const VI ic[3] = {clampv(ii[0], cell_max[0]), clampv(ii[1], cell_max[1]), clampv(ii[2], cell_max[2])};
+              const VI ic[3] = {clamp(ii[0], cell_max[0]), clamp(ii[1], cell_max[1]), clamp(ii[2], cell_max[2])};
               n_fetched -= sample;
               const int k = kFrontToBack ? -Uq : Uq;  // the plane (the same for every lane)
               VI m = one;
@@ -1240,7 +1238,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               VI o0[3], o1[3];
               for (int a = 0; a < 3; ++a) {
                 o0[a] = select(sample, ic[a] * str[a], zero);
-                o1[a] = select(sample, clampv(ii[a] + 1, cell_max[a]) * str[a], zero);
+                o1[a] = select(sample, clamp(ii[a] + 1, cell_max[a]) * str[a], zero);
               }
               const VF one_f = splatf(1.0f);
               // The corners v[y][z] at x0 and x1 (offsets y0/y1, z0/z1). Float samples with x fastest
