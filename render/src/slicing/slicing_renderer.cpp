@@ -371,7 +371,7 @@ inline int pop_plane(std::uint64_t& rest, int word_index) {
 /// the tile may hold samples on, each plane's lane positions and fetch bits (one gather of the bricks'
 /// words); the planes where some lane fetches are queued with the lanes' mask (bit l: lane l), until
 /// `max` are queued or the lanes' planes end (then w.u > w.u_last). Returns the number queued;
-/// `visited` counts the walk per lane; with `snapshots`, each queued plane's counter after it (early
+/// `visited` counts the walk per lane; front to back, `snapshots` gets each queued plane's counter after it (early
 /// termination keeps a lane's count up to its last plane). Not inlined: the walk keeps its state in
 /// registers apart from the fetch phase's.
 template <bool kFrontToBack>
@@ -400,9 +400,11 @@ template <bool kFrontToBack>
       u = u_last + 1;
       break;
     }
-    const std::uint64_t move = std::uint64_t(std::int64_t(next - u));
-    for (int a = 0; a < 3; ++a) g[a] += move * dg[a];
-    u = next;
+    if (next != u) {  // a gap in the tile's planes (the planes of a run follow one another)
+      const std::uint64_t move = std::uint64_t(std::int64_t(next - u));
+      for (int a = 0; a < 3; ++a) g[a] += move * dg[a];
+      u = next;
+    }
     const VI inr = (u0 <= u) & (uend > u) & live;
     visited -= inr;
     VI sample = inr;
@@ -417,7 +419,7 @@ template <bool kFrontToBack>
     const unsigned lanes = bits(sample);
     queue_u[queued] = u;
     queue_lanes[queued] = lanes;
-    if (snapshots != nullptr) snapshots[queued] = visited;
+    if constexpr (kFrontToBack) snapshots[queued] = visited;
     queued += lanes != 0 ? 1 : 0;
     ++u;
     for (int a = 0; a < 3; ++a) g[a] += dg[a];
