@@ -31,8 +31,15 @@ inline double to_double(std::uint64_t g) { return double(std::int64_t(g)) * 0x1p
 
 /// The same per lane.
 inline packet::VI floor_voxel(packet::VU g) {
-  using VS = std::int64_t __attribute__((vector_size(sizeof(packet::VU))));
-  return __builtin_convertvector(VS(g) >> 32, packet::VI);
+  // The high 32 bits of each 64-bit lane (little endian: 32-bit element 2l + 1), by one permute:
+  // the bits of int(std::int64_t(g) >> 32).
+  using V32 = std::int32_t __attribute__((vector_size(sizeof(packet::VU))));
+  const V32 w = V32(g);
+#if MELTLAB_PACKET_LANES == 8
+  return __builtin_shufflevector(w, w, 1, 3, 5, 7, 9, 11, 13, 15);
+#else
+  return __builtin_shufflevector(w, w, 1, 3, 5, 7);
+#endif
 }
 inline packet::VF weight(packet::VU g) {
   return __builtin_convertvector(__builtin_convertvector((g & 0xffffffffu) >> 8, packet::VI), packet::VF) * 0x1p-24f;
