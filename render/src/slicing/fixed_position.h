@@ -42,7 +42,16 @@ inline packet::VI floor_voxel(packet::VU g) {
 #endif
 }
 inline packet::VF weight(packet::VU g) {
-  return __builtin_convertvector(__builtin_convertvector((g & 0xffffffffu) >> 8, packet::VI), packet::VF) * 0x1p-24f;
+  // The low 32 bits of each lane (32-bit element 2l) by one permute, then their top 24 bits.
+  using U32 = std::uint32_t __attribute__((vector_size(sizeof(packet::VU))));
+  using VUI = std::uint32_t __attribute__((vector_size(sizeof(packet::VI))));
+  const U32 w = U32(g);
+#if MELTLAB_PACKET_LANES == 8
+  const VUI low = __builtin_shufflevector(w, w, 0, 2, 4, 6, 8, 10, 12, 14);
+#else
+  const VUI low = __builtin_shufflevector(w, w, 0, 2, 4, 6);
+#endif
+  return __builtin_convertvector(packet::VI(low >> 8), packet::VF) * 0x1p-24f;
 }
 /// g's fraction (g - floor(g)) in units of 2⁻³² voxel, as a double (exact).
 inline packet::VD fraction(packet::VU g) { return __builtin_convertvector(g & 0xffffffffu, packet::VD); }
