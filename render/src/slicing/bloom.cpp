@@ -101,7 +101,7 @@ ImageF add_upsampled(const ImageF& base, const ImageF& half, double gain) {
   return out;
 }
 
-void apply_bloom(const ImageF& image, const BloomSettings& s, ImageF& out) {
+void check_bloom_settings(const BloomSettings& s) {
   if (!(s.adjust.gamma > 0 && std::isfinite(s.adjust.gamma) && std::isfinite(s.adjust.contrast) &&
         std::isfinite(s.adjust.brightness)))
     throw InputError("slicing: bloom: gamma must be > 0 and contrast, brightness finite");
@@ -109,6 +109,14 @@ void apply_bloom(const ImageF& image, const BloomSettings& s, ImageF& out) {
     throw InputError(fmt::format("slicing: bloom: sigma must be in (0, 64] (got {})", s.sigma));
   if (!(s.gain >= 0 && std::isfinite(s.gain) && std::isfinite(s.threshold)))
     throw InputError("slicing: bloom: gain must be >= 0 and the threshold finite");
+}
+
+bool bloom_is_clamp(const BloomSettings& s) {
+  return !s.enabled && s.adjust.contrast == 1 && s.adjust.brightness == 0 && s.adjust.gamma == 1;
+}
+
+void apply_bloom(const ImageF& image, const BloomSettings& s, ImageF& out) {
+  check_bloom_settings(s);
   if (image.channels() < 3) throw InvariantError("apply_bloom: an RGB image is needed");
   adjust_colours(image, s.adjust, out);
   if (!s.enabled) return;

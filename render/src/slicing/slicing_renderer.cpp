@@ -658,6 +658,19 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   // they are.
   frame.raw.reshape(W, H, 3);
   frame.alpha.reshape(W, H, 1);
+  // A post chain that only clamps (no bloom, the identity adjustment: the scenes' default) is
+  // applied as each pixel is written, instead of by a second pass over the frame.
+  check_bloom_settings(s_.post);
+  const bool post_clamp = bloom_is_clamp(s_.post);
+  if (post_clamp) frame.rgb.reshape(W, H, 3);
+  auto write_pixel = [&frame, post_clamp](int x, int y, const Eigen::Vector3d& out, double alpha) {
+    for (int ch = 0; ch < 3; ++ch) {
+      const float v = float(out[ch]);
+      frame.raw.at(x, y, ch) = v;
+      if (post_clamp) frame.rgb.at(x, y, ch) = std::clamp(v, 0.0f, 1.0f);  // adjust_colours' identity
+    }
+    frame.alpha.at(x, y) = float(alpha);
+  };
   frame.stats = SlicingStats{};
   frame.stats.slices = stack.count;
   frame.stats.slice_spacing = stack.spacing;
@@ -971,8 +984,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             out = acc.C + (1 - acc.A) * background;
           else
             out = acc.A > 0 ? acc.C : background;
-          for (int ch = 0; ch < 3; ++ch) frame.raw.at(x, y, ch) = float(out[ch]);
-          frame.alpha.at(x, y) = float(acc.A);
+          write_pixel(x, y, out, acc.A);
         }
       counts[std::size_t(ty) * tiles_x + tx] = cnt;
     };
@@ -1381,8 +1393,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             const Eigen::Vector3d C(Cr[l], Cg[l], Cb[l]);
             const Eigen::Vector3d out = mode == SlicingMode::kBlend ? Eigen::Vector3d(C + (1 - A[l]) * background)
                                                                     : (A[l] > 0 ? C : background);
-            for (int ch = 0; ch < 3; ++ch) frame.raw.at(x, y, ch) = float(out[ch]);
-            frame.alpha.at(x, y) = float(A[l]);
+            write_pixel(x, y, out, A[l]);
           }
         }
       for (const auto& b : block_planes) cnt.cell_tests += b.tests;
@@ -1434,7 +1445,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
     frame.stats.cell_tests += c.cell_tests;
   }
   const auto t1 = std::chrono::steady_clock::now();
-  apply_bloom(frame.raw, s_.post, frame.rgb);
+  if (!post_clamp) apply_bloom(frame.raw, s_.post, frame.rgb);
   frame.stats.post_ms = ms_since(t1);
 }
 

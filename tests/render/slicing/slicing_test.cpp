@@ -377,6 +377,29 @@ TEST(SlicingRender, FramesRenderedIntoUsedImagesEqualFreshFrames) {
   }
 }
 
+// A post chain that only clamps (no bloom, the identity adjustment) is applied as the pixels are
+// written: the frame's rgb is the chain applied to its raw image, bit for bit, in the packets and one
+// ray at a time, with values above 1 (additive, a bright background) that the clamp changes.
+TEST(SlicingRender, ClampOnlyPostChainIsWrittenWithThePixels) {
+  const Volume v = make_test_field(TestField::kSphere, 24);
+  const Camera cam = camera_30deg(40, 30, v.domain(), Eigen::Vector3d(1.5, -2.0, 1.0));
+  SlicingSettings s;
+  s.value_range = std::make_pair(0.0, 1.0);
+  s.tfs[0] = linear_tf(1.0, 0.8, 0.6, 0.4);
+  s.blend = BlendOperator::kAdditive;
+  s.background = Eigen::Vector3d(0.9, 0.95, 1.0);
+  ASSERT_TRUE(bloom_is_clamp(s.post));
+  for (const bool simd : {false, true}) {
+    s.simd = simd;
+    const SlicingFrame f = SlicingRenderer(v, s).render(cam);
+    EXPECT_EQ(f.rgb, apply_bloom(f.raw, s.post)) << simd;
+    EXPECT_GT(*std::max_element(f.raw.values().begin(), f.raw.values().end()), 1.0f) << "the clamp must matter";
+  }
+  // The chain's settings are still checked when the chain only clamps.
+  s.post.sigma = 0;
+  EXPECT_THROW(SlicingRenderer(v, s).render(cam), InputError);
+}
+
 // ---------------------------------------------------------------- the mask
 
 TEST(SlicingMask, AllOnesEqualsUnmaskedAndIndexZeroEqualsZeroAlpha) {

@@ -46,8 +46,14 @@ ImageF gaussian_blur(const ImageF& image, double sigma);
 /// Step 4: base + gain · bilinear upsample of `half` to base's size.
 ImageF add_upsampled(const ImageF& base, const ImageF& half, double gain);
 
-/// The whole chain (steps 1-4; with bloom disabled, step 1 only). Throws InputError for σ <= 0,
-/// γ <= 0 or a non-finite parameter.
+/// Throws InputError for σ outside (0, 64], γ <= 0, a gain < 0 or a non-finite parameter (what
+/// apply_bloom refuses).
+void check_bloom_settings(const BloomSettings& settings);
+/// Whether the chain only clamps channels 0-2 to [0, 1] (bloom disabled, the identity
+/// adjustment): a renderer may then write its pixels clamped and skip the chain (the same bits).
+bool bloom_is_clamp(const BloomSettings& settings);
+
+/// The whole chain (steps 1-4; with bloom disabled, step 1 only); check_bloom_settings first.
 ImageF apply_bloom(const ImageF& image, const BloomSettings& settings);
 /// The chain into `out` (another image than `image`; its storage reused as by adjust_colours).
 void apply_bloom(const ImageF& image, const BloomSettings& settings, ImageF& out);
