@@ -17,7 +17,7 @@ namespace meltlab::render {
 void adjust_colours(const ImageF& image, const ColorAdjust& a, ImageF& out) {
   if (&out == &image) throw InvariantError("adjust_colours: the output must be another image");
   out.reshape(image.width(), image.height(), image.channels());  // every value is written below
-  const bool identity = a.contrast == 1 && a.brightness == 0 && a.gamma == 1;
+  const bool identity = a.identity();
   const int nc = image.channels(), adjusted = std::min(3, nc);
   auto adjust = [&](float v) {
     if (identity) return std::clamp(v, 0.0f, 1.0f);
@@ -112,7 +112,7 @@ void check_bloom_settings(const BloomSettings& s) {
 }
 
 bool bloom_is_clamp(const BloomSettings& s) {
-  return !s.enabled && s.adjust.contrast == 1 && s.adjust.brightness == 0 && s.adjust.gamma == 1;
+  return !s.enabled && s.adjust.identity();
 }
 
 void apply_bloom(const ImageF& image, const BloomSettings& s, ImageF& out) {

@@ -20,6 +20,8 @@ namespace meltlab::render {
 
 struct ColorAdjust {
   double contrast = 1, brightness = 0, gamma = 1;
+  /// The defaults: step 1 only clamps to [0, 1].
+  bool identity() const { return contrast == 1 && brightness == 0 && gamma == 1; }
 };
 
 struct BloomSettings {
