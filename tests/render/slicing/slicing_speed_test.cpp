@@ -479,11 +479,7 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
   for (int variant : {0, 5, 6}) {
     SlicingSettings s = variant_settings(v, variant == 6 ? 0 : variant);
     if (variant == 6) s.tfs[0] = highlight();
-    s.simd = false;
-    const SlicingRenderer scalar_renderer(v, s);
-    const SlicingFrame scalar = scalar_renderer.render(distorted);
-    s.simd = true;
-    const SlicingFrame packets = render_reusing_gradients(v, s, scalar_renderer, distorted);
+    const auto [scalar, packets] = off_then_on(v, s, &SlicingSettings::simd, distorted);
     const std::string what = "distorted, variant " + std::to_string(variant);
     EXPECT_EQ(packets.raw, scalar.raw) << what << ", max diff " << max_abs_diff(packets.raw, scalar.raw);
     EXPECT_EQ(packets.alpha, scalar.alpha) << what;
