@@ -180,13 +180,16 @@ inline VF gather(const T* data, VI offset) {
 inline void gather_pairs(const float* data, VI offset, VF& first, VF& second) {
 #if defined(__AVX512F__)
   // (The masked forms with a zero source: GCC 12 flags the unmasked ones' undefined source.)
-  const VL p = VL(_mm512_mask_i32gather_epi64(_mm512_setzero_si512(), 0xFF, __m256i(offset), data, 4));
-  first = VF(__builtin_convertvector(p, VI));  // the low halves' bits: data[offset]
-  second = VF(__builtin_convertvector(p >> 32, VI));
+  // The pairs' 32-bit halves split by one permute each (element 2l: data[offset], 2l + 1: the next).
+  using V16 = float __attribute__((vector_size(64)));
+  const V16 p = V16(_mm512_mask_i32gather_epi64(_mm512_setzero_si512(), 0xFF, __m256i(offset), data, 4));
+  first = __builtin_shufflevector(p, p, 0, 2, 4, 6, 8, 10, 12, 14);
+  second = __builtin_shufflevector(p, p, 1, 3, 5, 7, 9, 11, 13, 15);
 #elif defined(__AVX2__)
-  const VL p = VL(_mm256_i32gather_epi64(reinterpret_cast<const long long*>(data), __m128i(offset), 4));
-  first = VF(__builtin_convertvector(p, VI));
-  second = VF(__builtin_convertvector(p >> 32, VI));
+  using V8 = float __attribute__((vector_size(32)));
+  const V8 p = V8(_mm256_i32gather_epi64(reinterpret_cast<const long long*>(data), __m128i(offset), 4));
+  first = __builtin_shufflevector(p, p, 0, 2, 4, 6);
+  second = __builtin_shufflevector(p, p, 1, 3, 5, 7);
 #else
   for (int l = 0; l < kLanes; ++l) first[l] = data[offset[l]], second[l] = data[offset[l] + 1];
 #endif
