@@ -111,9 +111,7 @@ void check_bloom_settings(const BloomSettings& s) {
     throw InputError("slicing: bloom: gain must be >= 0 and the threshold finite");
 }
 
-bool bloom_is_clamp(const BloomSettings& s) {
-  return !s.enabled && s.adjust.identity();
-}
+bool bloom_is_clamp(const BloomSettings& s) { return !s.enabled && s.adjust.identity(); }
 
 void apply_bloom(const ImageF& image, const BloomSettings& s, ImageF& out) {
   check_bloom_settings(s);
