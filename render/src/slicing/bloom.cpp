@@ -20,7 +20,7 @@ void adjust_colours(const ImageF& image, const ColorAdjust& a, ImageF& out) {
   const bool identity = a.identity();
   const int nc = image.channels(), adjusted = std::min(3, nc);
   auto adjust = [&](float v) {
-    if (identity) return std::clamp(v, 0.0f, 1.0f);
+    if (identity) return ColorAdjust::identity_value(v);
     const double t = std::clamp((double(v) - 0.5) * a.contrast + 0.5 + a.brightness, 0.0, 1.0);
     return float(a.gamma == 1 ? t : std::pow(t, 1.0 / a.gamma));
   };

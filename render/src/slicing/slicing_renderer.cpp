@@ -394,7 +394,7 @@ template <bool kFrontToBack>
   std::uint64_t rest = 0;
   int word_index = 0;
   while (queued < max) {
-    const int next = rest != 0 ? std::min(pop_plane<kFrontToBack>(rest, word_index), u_last + 1)
+    const int next = rest != 0 ? pop_plane<kFrontToBack>(rest, word_index)
                                : next_plane<kFrontToBack>(grid, u, u_last, rest, word_index);
     if (next > u_last) {
       u = u_last + 1;
@@ -667,7 +667,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
     for (int ch = 0; ch < 3; ++ch) {
       const float v = float(out[ch]);
       frame.raw.at(x, y, ch) = v;
-      if (post_clamp) frame.rgb.at(x, y, ch) = std::clamp(v, 0.0f, 1.0f);  // adjust_colours' identity
+      if (post_clamp) frame.rgb.at(x, y, ch) = ColorAdjust::identity_value(v);
     }
     frame.alpha.at(x, y) = float(alpha);
   };

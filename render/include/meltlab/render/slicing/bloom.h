@@ -14,14 +14,17 @@
 
 #include <meltlab/core/image.h>
 
+#include <algorithm>
 #include <vector>
 
 namespace meltlab::render {
 
 struct ColorAdjust {
   double contrast = 1, brightness = 0, gamma = 1;
-  /// The defaults: step 1 only clamps to [0, 1].
+  /// The defaults: step 1 only clamps to [0, 1] (identity_value).
   bool identity() const { return contrast == 1 && brightness == 0 && gamma == 1; }
+  /// Step 1 of one colour value under the identity adjustment.
+  static float identity_value(float v) { return std::clamp(v, 0.0f, 1.0f); }
 };
 
 struct BloomSettings {
