@@ -366,8 +366,10 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
   // (exact_pow, lane by lane), 16 and 17: Blend and combined on a two-valued copy of the volume
   // (0 and 1: trilinear samples in uniform regions are exactly 0 or 1) with constant-TF ranges
   // [0.5, 1) and [1, 1] (the lanes' float range tests at a bound that most samples of the
-  // object hit exactly, from both sides); tiles of 16, 5 and 10 pixels (packets cut at the tile's edge;
-  // 10: fifteen 4 x 2 blocks, so the packets' pairs cross block rows and one packet runs alone) and no skipping.
+  // object hit exactly, from both sides), 18-20: the two-valued copy with a linear TF from 0 to 1
+  // (its end rows at equality) in Blend, combined, and Blend with a colour of -0; tiles of 16, 5 and 10 pixels (packets
+  // cut at the tile's edge; 10: fifteen 4 x 2 blocks, so the packets' pairs cross block rows and one packet runs alone)
+  // and no skipping.
   const Volume& v = phantom();
   TransferFunction bone_only;
   {
@@ -405,9 +407,22 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
     r[2] = {1.0, 1.0, true, true, Eigen::Vector3d(40, 70, 255), 0.6};
     edges = TransferFunction(r, "edges");
   }
+  // A linear TF from 0 to 1 (shared points; α > 0 at both ends): on the two-valued copy every
+  // sample is at the first point (0) or the last (1), where both paths take the end values; the
+  // same with a colour of -0 at the first point (kept as -0 by both).
+  TransferFunction ends_tf, ends_tf_neg_zero;
+  {
+    const double rows[3][5] = {{0.0, 0.9, 0.2, 0.1, 0.15}, {0.4, 0.3, 0.8, 0.2, 0.5}, {1.0, 0.2, 0.3, 0.9, 0.6}};
+    std::array<TfCurve, 4> c;
+    for (const auto& r : rows)
+      for (int ch = 0; ch < 4; ++ch) c[std::size_t(ch)].points.emplace_back(r[0], r[ch + 1]);
+    ends_tf = TransferFunction::piecewise_linear(c, "ends");
+    c[2].points[0].y() = -0.0;
+    ends_tf_neg_zero = TransferFunction::piecewise_linear(c, "ends_neg_zero");
+  }
   int compared = 0;
   for (const Camera& cam : cameras(v.domain()))
-    for (int variant = 0; variant < 18; ++variant)
+    for (int variant = 0; variant < 21; ++variant)
       for (int tile : {16, 5, 10})
         for (bool skip : {true, false}) {
           if (!skip && tile != 16) continue;
@@ -433,6 +448,10 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
             s.tfs[0] = edges, s.value_range = std::make_pair(0.0, 1.0);  // fn = f: the bounds are the samples'
             s.mode = variant == 16 ? SlicingMode::kBlend : SlicingMode::kCombined;
           }
+          if (variant >= 18) {  // the linear TF's end rows at v equal to the first and the last point
+            s.tfs[0] = variant == 20 ? ends_tf_neg_zero : ends_tf, s.value_range = std::make_pair(0.0, 1.0);
+            s.mode = variant == 19 ? SlicingMode::kCombined : SlicingMode::kBlend;
+          }
           s.tile = tile;
           s.skip_empty = skip;
           s.simd = false;
@@ -453,8 +472,10 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
           // per ray).
           EXPECT_LE(packets.stats.visited, packets.stats.samples) << what;
           if (skip) {
-            EXPECT_LT(packets.stats.visited, packets.stats.samples) << what;  // the packets skip planes
-            EXPECT_GT(packets.stats.cell_tests, 0) << what;                   // planes bounded per block
+            if (variant < 18) {  // (18-20 see every value: no empty space)
+              EXPECT_LT(packets.stats.visited, packets.stats.samples) << what;  // the packets skip planes
+            }
+            EXPECT_GT(packets.stats.cell_tests, 0) << what;  // planes bounded per block
           } else {
             EXPECT_EQ(packets.stats.visited, scalar.stats.visited) << what;
             EXPECT_EQ(packets.stats.cell_tests, 0) << what;
@@ -466,7 +487,7 @@ TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
           }
           ++compared;
         }
-  EXPECT_EQ(compared, 3 * 18 * 4);
+  EXPECT_EQ(compared, 3 * 21 * 4);
   const auto h = all_index_mask(v).histogram();
   for (int i = 0; i < 5; ++i) EXPECT_GT(h[std::size_t(i)], 0) << "mask index " << i;
   EXPECT_TRUE(SlicingSettings{}.simd);
