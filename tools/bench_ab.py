@@ -12,8 +12,12 @@ a serial benchmark includes the time the scheduler gave the core to other proces
 CPU time does not (it still includes the cost of caches shared with them). For a parallel
 benchmark the CPU time is the work of all threads, not how long the cycle took.
 
+--side-by-side 0,1 runs OLD and NEW at the same time, each pinned to one of the two CPUs (swapped
+every round): both then see the same spell of the host, at one thread each (TBB follows the
+affinity mask), which makes the per-round ratios steadier than runs one after the other.
+
   tools/bench_ab.py OLD_BENCH NEW_BENCH [--rounds 4] [--repetitions 3] [--json OUT]
-                    [--taskset CPUS] [--time real|cpu] -- [benchmark args, e.g. --benchmark_filter=...]
+                    [--taskset CPUS | --side-by-side A,B] [--time real|cpu] -- [benchmark args, e.g. --benchmark_filter=...]
 """
 import argparse
 import json
@@ -24,13 +28,34 @@ import tempfile
 from pathlib import Path
 
 
+def command(binary, args, taskset, out_name):
+    return ([] if not taskset else ["taskset", "-c", taskset]) + [
+        binary, *args, "--benchmark_enable_random_interleaving=true",
+        f"--benchmark_out={out_name}", "--benchmark_out_format=json"]
+
+
 def run(binary, args, taskset, time_key):
     with tempfile.NamedTemporaryFile(suffix=".json") as out:
-        cmd = ([] if not taskset else ["taskset", "-c", taskset]) + [
-            binary, *args, "--benchmark_enable_random_interleaving=true",
-            f"--benchmark_out={out.name}", "--benchmark_out_format=json"]
-        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-        doc = json.loads(Path(out.name).read_text())
+        subprocess.run(command(binary, args, taskset, out.name), check=True, stdout=subprocess.DEVNULL)
+        return rows_of(json.loads(Path(out.name).read_text()), time_key)
+
+
+def run_side_by_side(jobs, args, time_key):
+    """jobs: [(tag, binary, cpu)], all started at once, each pinned to its CPU; rows per tag."""
+    with tempfile.TemporaryDirectory() as tmp:
+        procs = []
+        for tag, binary, cpu in jobs:
+            out = str(Path(tmp) / f"{tag}.json")
+            procs.append((tag, out, subprocess.Popen(command(binary, args, cpu, out), stdout=subprocess.DEVNULL)))
+        got = {}
+        for tag, out, proc in procs:
+            if proc.wait() != 0:
+                raise SystemExit(f"bench_ab.py: {tag} exited with {proc.returncode}")
+            got[tag] = rows_of(json.loads(Path(out).read_text()), time_key)
+    return got
+
+
+def rows_of(doc, time_key):
     rows = {}
     for b in doc["benchmarks"]:
         if b.get("run_type") == "aggregate":
@@ -57,6 +82,9 @@ def main():
     ap.add_argument("--taskset", default="")
     ap.add_argument("--json")
     ap.add_argument("--time", choices=("real", "cpu"), default="real")
+    ap.add_argument("--side-by-side", default="",
+                    help="two CPUs 'A,B': OLD and NEW run at the same time, pinned to A and B (swapped every "
+                         "round), so that both see the same spell of the host (one thread each)")
     argv = sys.argv[1:]
     cut = argv.index("--") if "--" in argv else len(argv)
     a = ap.parse_args(argv[:cut])
@@ -65,6 +93,15 @@ def main():
     rounds = []
     for i in range(a.rounds):
         order = [("old", a.old), ("new", a.new)] if i % 2 == 0 else [("new", a.new), ("old", a.old)]
+        if a.side_by_side:
+            cpus = a.side_by_side.split(",")
+            if len(cpus) != 2:
+                raise SystemExit("bench_ab.py: --side-by-side wants two CPUs, e.g. 0,1")
+            got = run_side_by_side([(tag, binary, cpus[k]) for k, (tag, binary) in enumerate(order)], extra,
+                                   f"{a.time}_time")
+            print(f"round {i + 1}/{a.rounds}: both done ({order[0][0]} on CPU {cpus[0]})", file=sys.stderr)
+            rounds.append(got)
+            continue
         got = {}
         for tag, binary in order:
             got[tag] = run(binary, extra, a.taskset, f"{a.time}_time")
