@@ -50,6 +50,9 @@ def run_side_by_side(jobs, args, time_key):
         got = {}
         for tag, out, proc in procs:
             if proc.wait() != 0:
+                for _, _, other in procs:  # no benchmark left running on its CPU
+                    other.kill()
+                    other.wait()
                 raise SystemExit(f"bench_ab.py: {tag} exited with {proc.returncode}")
             got[tag] = rows_of(json.loads(Path(out).read_text()), time_key)
     return got
