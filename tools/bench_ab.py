@@ -82,24 +82,25 @@ def main():
     ap.add_argument("new")
     ap.add_argument("--rounds", type=int, default=4)
     ap.add_argument("--repetitions", type=int, default=3)
-    ap.add_argument("--taskset", default="")
+    pin = ap.add_mutually_exclusive_group()
+    pin.add_argument("--taskset", default="")
+    pin.add_argument("--side-by-side", default="",
+                     help="two CPUs 'A,B': OLD and NEW run at the same time, pinned to A and B (swapped every "
+                          "round), so that both see the same spell of the host (one thread each)")
     ap.add_argument("--json")
     ap.add_argument("--time", choices=("real", "cpu"), default="real")
-    ap.add_argument("--side-by-side", default="",
-                    help="two CPUs 'A,B': OLD and NEW run at the same time, pinned to A and B (swapped every "
-                         "round), so that both see the same spell of the host (one thread each)")
     argv = sys.argv[1:]
     cut = argv.index("--") if "--" in argv else len(argv)
     a = ap.parse_args(argv[:cut])
     a.bench_args = argv[cut + 1:]
     extra = [f"--benchmark_repetitions={a.repetitions}", *a.bench_args]
+    cpus = a.side_by_side.split(",") if a.side_by_side else []
+    if a.side_by_side and len(cpus) != 2:
+        raise SystemExit("bench_ab.py: --side-by-side wants two CPUs, e.g. 0,1")
     rounds = []
     for i in range(a.rounds):
         order = [("old", a.old), ("new", a.new)] if i % 2 == 0 else [("new", a.new), ("old", a.old)]
-        if a.side_by_side:
-            cpus = a.side_by_side.split(",")
-            if len(cpus) != 2:
-                raise SystemExit("bench_ab.py: --side-by-side wants two CPUs, e.g. 0,1")
+        if cpus:
             got = run_side_by_side([(tag, binary, cpus[k]) for k, (tag, binary) in enumerate(order)], extra,
                                    f"{a.time}_time")
             print(f"round {i + 1}/{a.rounds}: both done ({order[0][0]} on CPU {cpus[0]})", file=sys.stderr)
