@@ -1,7 +1,9 @@
 // The deformation sweep's schedule (sim/src/melt/deform_schedule.h), white box: a block it
 // lets add without testing owners (block_mixed false) must hold no live triangle with a corner
-// owned by another part, after every update across collapses, repairs and remnant checks. The
-// bitwise partition tests (simulator_test.cpp) cannot see a block wrongly called unmixed: a part
+// owned by another part, and in a mixed block every such triangle must be flagged (foreign(): only
+// flagged triangles test their owners), after every update across collapses, repairs and remnant
+// checks. The bitwise partition tests (simulator_test.cpp) cannot see a block wrongly called
+// unmixed or a triangle left unflagged: a part
 // then adds into a record it does not own, which in a serial sweep is the same addition in the
 // same order, and on threads a race that seldom shows on a small mesh.
 
@@ -32,18 +34,34 @@ bool has_foreign_corner(const DeformSchedule& s, const TriMesh<Real>& m, std::si
   return foreign;
 }
 
-// Blocks the schedule calls unmixed although a live triangle in them has a foreign corner (must
-// be 0; calling a block mixed that no longer is, after a triangle in it died, is allowed), for
-// `m` as it is; and a schedule built afresh must be exact.
+// Whether live triangle t has a corner s gives another part than t's.
+template <class Real>
+bool triangle_has_foreign_corner(const DeformSchedule& s, const TriMesh<Real>& m, std::size_t t) {
+  if (!m.triangle_alive[t]) return false;
+  bool foreign = false;
+  for (Index v : m.triangle[t]) foreign = foreign || s.owner(v) != s.part_of_triangle(t);
+  return foreign;
+}
+
+// Blocks the schedule calls unmixed although a live triangle in them has a foreign corner, and
+// live triangles with a foreign corner that it does not flag (foreign(), which in a mixed block
+// decides which triangles test their owners), for `m` as it is: both must be 0 (a block called
+// mixed that no longer is, or a dead slot still flagged, is allowed); a schedule built afresh must
+// be exact in both.
 template <class Real>
 std::size_t check_blocks(const DeformSchedule& s, const TriMesh<Real>& m, const VertexTriangles& adj,
                          std::size_t parts) {
   std::size_t wrong = 0;
   for (std::size_t b = 0; b < s.blocks(); ++b) wrong += !s.block_mixed(b) && has_foreign_corner(s, m, b);
+  for (std::size_t t = 0; t < m.triangle_slots(); ++t)
+    wrong += s.foreign()[t] == 0 && triangle_has_foreign_corner(s, m, t);
   DeformSchedule fresh;
   fresh.update(m, adj, parts);
   for (std::size_t b = 0; b < fresh.blocks(); ++b)
     EXPECT_EQ(fresh.block_mixed(b), has_foreign_corner(fresh, m, b)) << "a fresh schedule is exact, block " << b;
+  for (std::size_t t = 0; t < m.triangle_slots(); ++t)
+    EXPECT_EQ(fresh.foreign()[t] != 0, triangle_has_foreign_corner(fresh, m, t))
+        << "a fresh schedule flags exactly, triangle " << t;
   return wrong;
 }
 
@@ -88,7 +106,7 @@ void check_cycles(const IndexedMesh& mesh, double kr_rel, std::size_t parts, int
   for (int c = 1; c <= cycles; ++c) {
     melt.deform();
     ASSERT_EQ(check_blocks(ws.schedule, m, ws.adj, parts), 0u)
-        << name << ", cycle " << c << ": blocks called unmixed with a foreign corner";
+        << name << ", cycle " << c << ": blocks called unmixed or triangles unflagged with a foreign corner";
     updates_after_merges += touched;
     for (std::size_t b = 0; b < ws.schedule.blocks(); ++b) mixed_blocks += ws.schedule.block_mixed(b);
     const auto [merges, lists_changed] = melt.after_deform();

@@ -227,23 +227,28 @@ void sweep_block(const Sweep<Real, ScaleAt>& w, std::size_t b, std::size_t part,
     }
   std::memcpy(w.min_edge2 + first, terms.min_edge2, count * sizeof(float));
   const std::uint16_t* const owner = w.plan.owners();
-  // kTest: some corner may be owned by another part (DeformSchedule::block_mixed).
+  // kTest: some corner may be owned by another part (DeformSchedule::block_mixed); then the
+  // triangles flagged foreign test the owner of each corner (a mixed block of the geodesic 32k's
+  // generated order holds about five of them in 64; testing every triangle cost 2-4 % of a
+  // two-thread cycle there, docs/melt-core.md, issue 20 step 20).
+  const std::uint8_t* const foreign = w.plan.foreign();
   auto add = [&](auto test_c) {
     constexpr bool kTest = decltype(test_c)::value;
     for (std::size_t i = 0; i < count; ++i) {
       const std::size_t t = first + i;
       if (!alive[t]) continue;
       const Triangle& tri = m.triangle[t];
+      const bool test = kTest && foreign[t] != 0;
       bool store = false;
       for (std::size_t k = 0; k < 3; ++k) {
-        if (kTest && owner[static_cast<std::size_t>(tri[k])] != part) {
+        if (test && owner[static_cast<std::size_t>(tri[k])] != part) {
           store = true;
           continue;
         }
         w.sums[static_cast<std::size_t>(tri[k])].lane +=
             Lanes<Real>{terms.nx[i], terms.ny[i], terms.nz[i], terms.ex[k][i], terms.ey[k][i], terms.ez[k][i], 0, 0};
       }
-      if (kTest && store) {
+      if (test && store) {
         TriangleTerms<Real>& out = w.stored_terms[t];
         out.normal = Vec3<Real>(terms.nx[i], terms.ny[i], terms.nz[i]);
         for (std::size_t k = 0; k < 3; ++k) out.edge[k] = Vec3<Real>(terms.ex[k][i], terms.ey[k][i], terms.ez[k][i]);

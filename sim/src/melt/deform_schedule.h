@@ -78,6 +78,10 @@ class DeformSchedule {
   /// owners (on the bunny, the tests cost about half of what a sweep in two parts costs more
   /// than one part, on one thread). Kept exact: never false for a block with such a triangle.
   bool block_mixed(std::size_t b) const { return block_foreign_[b] != 0; }
+  /// Per triangle slot: 1 if the triangle is live and has a corner owned by another part than
+  /// its block's, else 0 (exact for live triangles, as block_mixed(); a dead slot may keep its
+  /// flag until the next rebuild). In a mixed block only these triangles test their owners.
+  const std::uint8_t* foreign() const { return foreign_.data(); }
   /// At most this many parts (the owner of a vertex is stored in 16 bits).
   static constexpr std::size_t kMaxParts = 65535;
 
