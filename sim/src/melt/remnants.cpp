@@ -50,22 +50,30 @@ void unite_corners(const TriMesh<Real>& m, UnionFind& parts, Execution exec) {
       x = g;
     }
   };
+  // Joins the sets of a and b (any members); returns the root of the joined set when it was
+  // made (another thread may link it further since).
   auto unite = [&](Index a, Index b) {
     for (;;) {
       a = find(a);
       b = find(b);
-      if (a == b) return;
+      if (a == b) return a;
       if (a < b) std::swap(a, b);
       Index expected = a;
-      if (at(a).compare_exchange_strong(expected, b, std::memory_order_relaxed)) return;
+      if (at(a).compare_exchange_strong(expected, b, std::memory_order_relaxed)) return b;
     }
   };
   for_range(exec, nt, [&](std::size_t begin, std::size_t end) {
+    // As the serial loop: a corner of the task's last triangle starts its find from the root the
+    // last union returned (a member of its set, since sets only grow; usually still the root).
+    Triangle last = {-1, -1, -1};
+    Index last_root = -1;
+    auto start = [&](Index v) { return v == last[0] || v == last[1] || v == last[2] ? last_root : v; };
     for (std::size_t t = begin; t < end; ++t) {
       if (!m.triangle_alive[t]) continue;
       const Triangle& tri = m.triangle[t];
-      unite(tri[0], tri[1]);
-      unite(tri[0], tri[2]);
+      const Index r = unite(start(tri[0]), start(tri[1]));
+      last_root = unite(r, start(tri[2]));
+      last = tri;
     }
   });
 }
