@@ -780,7 +780,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
         const Eigen::Vector3d l = (light_pos - p).normalized();
         const Eigen::Vector3d h = (l + to_eye).normalized();
         const double diff = std::max(nrm.dot(l), 0.0);
-        const double spec = std::pow(std::max(nrm.dot(h), 0.0), light.exponent);
+        const double spec = lane_math::pow(std::max(nrm.dot(h), 0.0), light.exponent);
         c = c * (light.ambient + light.diffuse * diff) + Eigen::Vector3d::Constant(light.specular * spec);
       }
     };
@@ -1120,10 +1120,11 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
           // Blinn-Phong on the lanes (shade()'s arithmetic, Eigen's evaluation order written out:
           // sums of three squares or products as (x + y) + z, normalized() as v / sqrt(|v|²) where
           // |v|² > 0): the gradient's three encoded channels of each corner by one 32-bit gather
-          // (grad_words_), filtered as VolumeSamples::trilinear_cell filters each channel; std::pow
-          // of the specular term per lane (0 where its base is 0 and the exponent > 0: pow's exact
-          // +0; lane_math::pow on the lanes measured no faster here: 970/975 vs 968/989 ms CPU in
-          // the combined mode). Lanes in vis only; p the world points, v the rays' directions.
+          // (grad_words_), filtered as VolumeSamples::trilinear_cell filters each channel; the
+          // specular term by lane_math::pow on the lanes, as shade() computes it per ray (0 where its
+          // base is 0 and the exponent > 0: pow's exact +0; std::pow lane by lane was a fifth of the
+          // combined mode's frame, docs/volume-rendering.md, issue 17's twelfth round). Lanes in vis
+          // only; p the world points, v the rays' directions.
           auto shade_lanes = [&](VI vis, const VI(&ii)[3], const VF(&w)[3], const VD(&p)[3], const VD(&v)[3], VD& cr,
                                  VD& cg, VD& cb) {
             VI o0[3], o1[3];
@@ -1170,10 +1171,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             const VD base = select(nh < 0.0, splat(0), nh);
             VD spec = splat(0);
             const VL needs_pow = light.exponent > 0 ? lit_l & (base != 0.0) : lit_l;
-            for (unsigned b = bits(narrow(needs_pow)); b != 0; b &= b - 1) {
-              const int l = __builtin_ctz(b);
-              spec[l] = std::pow(base[l], light.exponent);
-            }
+            if (any(narrow(needs_pow))) spec = select(needs_pow, lane_math::pow(base, splat(light.exponent)), spec);
             const VD k = light.ambient + light.diffuse * diff, sp = light.specular * spec;
             cr = select(lit_l, cr * k + sp, cr), cg = select(lit_l, cg * k + sp, cg),
             cb = select(lit_l, cb * k + sp, cb);
