@@ -766,6 +766,8 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   auto correct = [exact_pow](double a, double e) {
     return exact_pow ? 1.0 - std::pow(1.0 - a, e) : lane_math::corrected_alpha(a, e);
   };
+  // The specular power (the same choice).
+  auto power = [exact_pow](double x, double y) { return exact_pow ? std::pow(x, y) : lane_math::pow(x, y); };
   visit_samples(volume_, [&](const auto samples) {
     // Blinn-Phong of a lit sample: colour c at the stencil (i0, j0, k0) with weights w, world point
     // p, unit vector towards the eye.
@@ -780,7 +782,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
         const Eigen::Vector3d l = (light_pos - p).normalized();
         const Eigen::Vector3d h = (l + to_eye).normalized();
         const double diff = std::max(nrm.dot(l), 0.0);
-        const double spec = lane_math::pow(std::max(nrm.dot(h), 0.0), light.exponent);
+        const double spec = power(std::max(nrm.dot(h), 0.0), light.exponent);
         c = c * (light.ambient + light.diffuse * diff) + Eigen::Vector3d::Constant(light.specular * spec);
       }
     };
@@ -1121,10 +1123,10 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
           // sums of three squares or products as (x + y) + z, normalized() as v / sqrt(|v|²) where
           // |v|² > 0): the gradient's three encoded channels of each corner by one 32-bit gather
           // (grad_words_), filtered as VolumeSamples::trilinear_cell filters each channel; the
-          // specular term by lane_math::pow on the lanes, as shade() computes it per ray (0 where its
-          // base is 0 and the exponent > 0: pow's exact +0; std::pow lane by lane was a fifth of the
-          // combined mode's frame, docs/volume-rendering.md, issue 17's twelfth round). Lanes in vis
-          // only; p the world points, v the rays' directions.
+          // specular term by lane_math::pow on the lanes, as shade() computes it per ray (exact_pow:
+          // std::pow lane by lane, which was a fifth of the combined mode's frame; 0 where its base is
+          // 0 and the exponent > 0: pow's exact +0). Lanes in vis only; p the world points, v the rays'
+          // directions.
           auto shade_lanes = [&](VI vis, const VI(&ii)[3], const VF(&w)[3], const VD(&p)[3], const VD(&v)[3], VD& cr,
                                  VD& cg, VD& cb) {
             VI o0[3], o1[3];
@@ -1171,7 +1173,14 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             const VD base = select(nh < 0.0, splat(0), nh);
             VD spec = splat(0);
             const VL needs_pow = light.exponent > 0 ? lit_l & (base != 0.0) : lit_l;
-            if (any(narrow(needs_pow))) spec = select(needs_pow, lane_math::pow(base, splat(light.exponent)), spec);
+            if (exact_pow) {
+              for (unsigned b = bits(narrow(needs_pow)); b != 0; b &= b - 1) {
+                const int l = __builtin_ctz(b);
+                spec[l] = std::pow(base[l], light.exponent);
+              }
+            } else if (any(narrow(needs_pow))) {
+              spec = select(needs_pow, lane_math::pow(base, splat(light.exponent)), spec);
+            }
             const VD k = light.ambient + light.diffuse * diff, sp = light.specular * spec;
             cr = select(lit_l, cr * k + sp, cr), cg = select(lit_l, cg * k + sp, cg),
             cb = select(lit_l, cb * k + sp, cb);
@@ -1520,7 +1529,8 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
                          : "off (one ray at a time)");
   add("cpu.pow", s.exact_pow ? "std::pow"
                              : "the TFs' corrected alpha by slicing_corrected_alpha (short series for alpha <= 1/32, "
-                               "else slicing_pow; within (4 + e) 2^-53 of 1 - std::pow(1 - a, e))");
+                               "else slicing_pow; within (4 + e) 2^-53 of 1 - std::pow(1 - a, e)), the specular "
+                               "power by slicing_pow");
   add("mode", slicing_mode_name(s.mode));
   add("blend.operator", s.blend == BlendOperator::kOver ? "over" : "additive");
   add("blend.opacity_correction", s.opacity_correction ? "on, dref = h0, along-ray spacing dd / cos psi" : "off");

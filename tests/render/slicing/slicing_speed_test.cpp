@@ -604,8 +604,9 @@ TEST(SlicingSpeed, CorrectedAlphaIsStdPowUpToRoundOffAndItsLanesGiveItsBits) {
 }
 
 TEST(SlicingSpeed, ExactPowChangesPixelsByAtMostOneFloatUlp) {
-  // slicing_corrected_alpha differs from 1 - std::pow(1 - a, e) by at most (4 + e) eps absolute (above), so
-  // a pixel's double sum differs by far less than half a float ulp and its float can differ by at
+  // slicing_corrected_alpha differs from 1 - std::pow(1 - a, e) by at most (4 + e) eps absolute (above), and
+  // the lit modes' specular power slicing_pow(base, exponent) from std::pow by (16 + 4 |t|) eps relative,
+  // so a pixel's double sum differs by far less than half a float ulp and its float can differ by at
   // most one ulp (where the double falls next to a rounding boundary): the bound checked per pixel.
   const Volume& v = phantom();
   int differing = 0, compared = 0;

@@ -138,8 +138,9 @@ struct SlicingSettings {
   /// round; for the constant TF since its seventh: eight lanes at a time in the packets, the same
   /// bits per lane as per ray; since the eighth a short series for α <= 1/32; within (4 + e) 2^-53
   /// of 1 - std::pow(1 - α, e), so pixels differ from std::pow's by at most one float ulp, see
-  /// slicing_speed_test). true: std::pow (lane by lane in the packets). The specular term is
-  /// std::pow either way.
+  /// slicing_speed_test). true: std::pow (lane by lane in the packets). The lit modes' specular
+  /// term likewise: slicing_pow (on the lanes in the packets, issue 17's twelfth round), or std::pow
+  /// with exact_pow.
   bool exact_pow = false;
 };
 
