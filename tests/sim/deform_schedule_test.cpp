@@ -2,10 +2,10 @@
 // lets add without testing owners (block_mixed false) must hold no live triangle with a corner
 // owned by another part, and in a mixed block every such triangle must be flagged (foreign(): only
 // flagged triangles test their owners), after every update across collapses, repairs and remnant
-// checks. The bitwise partition tests (simulator_test.cpp) cannot see a block wrongly called
-// unmixed or a triangle left unflagged: a part
-// then adds into a record it does not own, which in a serial sweep is the same addition in the
-// same order, and on threads a race that seldom shows on a small mesh.
+// checks. The bitwise partition tests (simulator_test.cpp) cannot be relied on to see a block wrongly
+// called unmixed or a triangle left unflagged: a part then adds into a record it does not own, which
+// in a serial sweep is the same addition in the same order, and on threads a race that seldom shows
+// on a small mesh (a broken flag update that cleared every changed flag did fail them too).
 
 #include "deform_schedule.h"
 #include "workspace.h"
