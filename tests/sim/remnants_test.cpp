@@ -7,10 +7,15 @@
 
 #include "hand_meshes.h"
 
+#include <meltlab/datasets/procedural.h>
 #include <meltlab/sim/melt.h>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <numeric>
+#include <random>
+#include <string>
 #include <vector>
 
 namespace meltlab::sim {
@@ -59,6 +64,72 @@ TEST(Remnants, ReusedPartsFollowTheTriangles) {
   for (std::size_t v = 0; v < 12; ++v) EXPECT_TRUE(m.vertex_alive[v]);
   for (std::size_t v = 18; v < 24; ++v) EXPECT_FALSE(m.vertex_alive[v]);
   expect_like_fresh(m, ws, 0, "nothing left to remove");
+}
+
+// The smallest vertex of each vertex's connected part (over the live triangles; a vertex in none is
+// its own), by repeated relaxation along the triangles' edges until nothing changes: a reference
+// that shares no code with the union-find.
+std::vector<Index> smallest_of_part(const TriMesh<double>& m) {
+  std::vector<Index> low(m.vertex_slots());
+  std::iota(low.begin(), low.end(), 0);
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t t = 0; t < m.triangle_slots(); ++t) {
+      if (!m.triangle_alive[t]) continue;
+      Index lo = low[static_cast<std::size_t>(m.triangle[t][0])];
+      for (Index v : m.triangle[t]) lo = std::min(lo, low[static_cast<std::size_t>(v)]);
+      for (Index v : m.triangle[t]) {
+        Index& l = low[static_cast<std::size_t>(v)];
+        if (l != lo) l = lo, changed = true;
+      }
+    }
+  }
+  return low;
+}
+
+// The parts the check finds (each slot's root after flatten: the smallest index of its part) against
+// the reference, serial and on the threads (more than 2 x 2048 triangles: the union-find splits), on
+// twelve spheres and forty strips with their vertices renumbered at random, in their generated
+// triangle order (the loops then take most corners' roots from the triangle before) and shuffled,
+// with every fifth triangle dead (a sphere may fall apart into pieces, a strip does).
+TEST(Remnants, PartsAreTheSmallestVertexOfEachComponent) {
+  IndexedMesh all;
+  for (int p = 0; p < 12; ++p)
+    all = test::disjoint_union(std::move(all), test::translated(datasets::icosphere(3, 1.0), {3.0 * p, 0, 0}));
+  // And 40 strips of 100 triangles (i, i + 1, i + 2): each edge in at most two triangles, so a wrong
+  // link is seldom mended by a later union as it is on a sphere.
+  for (int p = 0; p < 40; ++p) {
+    IndexedMesh strip;
+    for (int i = 0; i < 102; ++i) strip.V.emplace_back(0.1 * i, 5.0 + p, double(i % 2));
+    for (Index i = 0; i < 100; ++i) strip.F.push_back({i, i + 1, i + 2});
+    all = test::disjoint_union(std::move(all), strip);
+  }
+  ASSERT_GT(all.F.size(), 2u * 2048u);
+  std::vector<Index> new_index(all.V.size());
+  std::iota(new_index.begin(), new_index.end(), 0);
+  std::mt19937 rng(5);
+  std::shuffle(new_index.begin(), new_index.end(), rng);
+  const IndexedMesh renumbered = test::renumbered(all, new_index);
+  for (int order = 0; order < 2; ++order)
+    for (bool holes : {false, true}) {
+      IndexedMesh mesh = renumbered;
+      if (order == 1) std::shuffle(mesh.F.begin(), mesh.F.end(), rng);
+      TriMesh<double> base = TriMesh<double>::from_indexed(mesh);
+      if (holes)
+        for (std::size_t t = 0; t < base.triangle_slots(); t += 5) base.triangle_alive[t] = 0;
+      const std::vector<Index> expected = smallest_of_part(base);
+      for (Execution exec : {Execution::kSerial, Execution::kParallel}) {
+        TriMesh<double> m = base;
+        MeltWorkspace ws;
+        remove_inverted_parts_pass(m, ws, exec);
+        const std::string what = std::string(order == 0 ? "generated order" : "shuffled order") +
+                                 (holes ? ", holes" : "") + (exec == Execution::kSerial ? ", serial" : ", threads");
+        ASSERT_EQ(ws.remnant_parts.parent.size(), expected.size()) << what;
+        std::size_t wrong = 0;
+        for (std::size_t v = 0; v < expected.size(); ++v) wrong += ws.remnant_parts.parent[v] != expected[v];
+        EXPECT_EQ(wrong, 0u) << what;
+      }
+    }
 }
 
 }  // namespace
