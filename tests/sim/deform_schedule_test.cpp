@@ -23,23 +23,21 @@
 namespace meltlab::sim {
 namespace {
 
-// Whether block b of schedule s holds a live triangle with a corner s gives another part.
-template <class Real>
-bool has_foreign_corner(const DeformSchedule& s, const TriMesh<Real>& m, std::size_t b) {
-  bool foreign = false;
-  for (std::size_t t = b * kTriangleBlock; t < std::min(m.triangle_slots(), (b + 1) * kTriangleBlock); ++t) {
-    if (!m.triangle_alive[t]) continue;
-    for (Index v : m.triangle[t]) foreign = foreign || s.owner(v) != s.part_of_triangle(t);
-  }
-  return foreign;
-}
-
 // Whether live triangle t has a corner s gives another part than t's.
 template <class Real>
 bool triangle_has_foreign_corner(const DeformSchedule& s, const TriMesh<Real>& m, std::size_t t) {
   if (!m.triangle_alive[t]) return false;
   bool foreign = false;
   for (Index v : m.triangle[t]) foreign = foreign || s.owner(v) != s.part_of_triangle(t);
+  return foreign;
+}
+
+// Whether block b of schedule s holds a live triangle with a corner s gives another part.
+template <class Real>
+bool has_foreign_corner(const DeformSchedule& s, const TriMesh<Real>& m, std::size_t b) {
+  bool foreign = false;
+  for (std::size_t t = b * kTriangleBlock; t < std::min(m.triangle_slots(), (b + 1) * kTriangleBlock); ++t)
+    foreign = foreign || triangle_has_foreign_corner(s, m, t);
   return foreign;
 }
 

@@ -174,10 +174,10 @@ void DeformSchedule::rebuild(const TriMesh<Real>& m, const VertexTriangles& adj,
       const auto list = adj.of(static_cast<Index>(v));
       if (list.empty()) continue;
       const std::uint16_t own = owner_[v];
-      if (block_part_[static_cast<std::size_t>(list.back()) / kTriangleBlock] == own) continue;  // not split
+      if (part_of_triangle(static_cast<std::size_t>(list.back())) == own) continue;  // not split
       for (const Index t : list) {
         const auto ts = static_cast<std::size_t>(t);
-        if (block_part_[ts / kTriangleBlock] == own || foreign_[ts] != 0) continue;
+        if (part_of_triangle(ts) == own || foreign_[ts] != 0) continue;
         foreign_[ts] = 1;
         ++block_foreign_[ts / kTriangleBlock];
       }

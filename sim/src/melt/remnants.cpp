@@ -13,6 +13,15 @@ namespace meltlab::sim {
 
 namespace {
 
+// The corners of the last triangle a loop over the triangles united, and the root that union
+// returned: a corner of the next triangle that is one of them is in that set (consecutive triangles
+// share a corner nearly always, two about half the time), so its find can start at that root.
+struct LastUnion {
+  Triangle corners = {-1, -1, -1};
+  Index root = -1;
+  bool has(Index v) const { return v == corners[0] || v == corners[1] || v == corners[2]; }
+};
+
 // Unites the corners of every live triangle. In parallel, a link is a compare-exchange of a root's
 // parent from itself to the smaller root, retried with fresh roots when another thread linked
 // first; a find halves its path with plain stores (each moves a non-root's parent to one of its
@@ -23,19 +32,18 @@ template <class Real>
 void unite_corners(const TriMesh<Real>& m, UnionFind& parts, Execution exec) {
   const std::size_t nt = m.triangle_slots();
   if (exec == Execution::kSerial || nt < 2 * kParallelGrain) {
-    // A corner of the last live triangle is in the set the last links left, whose root they
-    // returned: no find for it (consecutive triangles share a corner nearly always, two about
-    // half the time). The sets are the same, so are the roots (the smallest index of each).
-    Triangle last = {-1, -1, -1};
-    Index last_root = -1;
-    auto root = [&](Index v) { return v == last[0] || v == last[1] || v == last[2] ? last_root : parts.find(v); };
+    // A corner of the last live triangle needs no find: serially, the root the last links
+    // returned is still its root. The sets are the same, so are the roots (the smallest index of
+    // each).
+    LastUnion last;
+    auto root = [&](Index v) { return last.has(v) ? last.root : parts.find(v); };
     for (std::size_t t = 0; t < nt; ++t) {
       if (!m.triangle_alive[t]) continue;
       const Triangle& tri = m.triangle[t];
       // The two unions share the first corner's root: one find fewer than two unite() calls.
       const Index r = parts.link(root(tri[0]), root(tri[1]));
-      last_root = parts.link(r, root(tri[2]));
-      last = tri;
+      last.root = parts.link(r, root(tri[2]));
+      last.corners = tri;
     }
     return;
   }
@@ -63,17 +71,16 @@ void unite_corners(const TriMesh<Real>& m, UnionFind& parts, Execution exec) {
     }
   };
   for_range(exec, nt, [&](std::size_t begin, std::size_t end) {
-    // As the serial loop: a corner of the task's last triangle starts its find from the root the
-    // last union returned (a member of its set, since sets only grow; usually still the root).
-    Triangle last = {-1, -1, -1};
-    Index last_root = -1;
-    auto start = [&](Index v) { return v == last[0] || v == last[1] || v == last[2] ? last_root : v; };
+    // A corner of the task's last triangle starts its find from the root the last union returned
+    // (another thread may have linked it since, but it stays a member of the set: sets only grow).
+    LastUnion last;
+    auto start = [&](Index v) { return last.has(v) ? last.root : v; };
     for (std::size_t t = begin; t < end; ++t) {
       if (!m.triangle_alive[t]) continue;
       const Triangle& tri = m.triangle[t];
       const Index r = unite(start(tri[0]), start(tri[1]));
-      last_root = unite(r, start(tri[2]));
-      last = tri;
+      last.root = unite(r, start(tri[2]));
+      last.corners = tri;
     }
   });
 }

@@ -33,6 +33,8 @@
 //     early_termination: 0        # Blend over only: > 0 composites front to back and stops at A >= it
 //     exact_positions: false      # true: o + t_k v per sample (a division each) instead of g0 + j dg
 //                                 # per ray; equal to float round-off (tested within 1e-5 voxel)
+//     exact_pow: false            # true: std::pow for the corrected α and the specular power instead of
+//                                 # slicing_pow (pixels within one float ulp, tested)
 //     simd: true                  # packets of 8 pixels on SIMD lanes; false: one ray at a time (the
 //                                 # reference; the same image bit for bit, tested)
 
