@@ -1,8 +1,9 @@
 #pragma once
-// x^y, and the opacity correction 1 - (1 - α)^e built on it (corrected_alpha, at the end), on one
-// double or on eight lanes (packet::VD) with the same operations in the same order, so that a lane
-// computes the bits of the scalar call: the slicing renderer's corrected α per sample of the linear
-// TF (e = Δ/h0 along the ray), which the packets would otherwise compute with std::pow lane by lane.
+// x^y, and the opacity correction 1 - (1 - α)^e built on it (corrected_alpha; corrected_alpha_f in
+// float, at the end), on one double (float) or on eight lanes (packet::VD, packet::VF) with the same
+// operations in the same order, so that a lane computes the bits of the scalar call: the slicing
+// renderer's corrected α per sample of the linear TF (e = Δ/h0 along the ray; in float) and per ray
+// and piece of the constant TF, which the packets would otherwise compute with std::pow lane by lane.
 // pow is not std::pow's bits: within (16 + 4 |y ln x|) 2^-53 of it relative while the result is
 // normal (slicing_speed_test).
 //
@@ -35,6 +36,8 @@ namespace detail {
 inline double floor_(double x) { return std::floor(x); }
 inline double fma_(double a, double b, double c) { return std::fma(a, b, c); }
 inline packet::VD fma_(packet::VD a, packet::VD b, packet::VD c) { return packet::fma(a, b, c); }
+inline float fma_(float a, float b, float c) { return std::fma(a, b, c); }
+inline packet::VF fma_(packet::VF a, packet::VF b, packet::VF c) { return packet::fma(a, b, c); }
 inline packet::VD floor_(packet::VD x) { return packet::floor(x); }
 inline double sel(bool m, double a, double b) { return m ? a : b; }
 inline packet::VD sel(packet::VL m, packet::VD a, packet::VD b) { return m ? a : b; }
@@ -146,6 +149,53 @@ inline packet::VD corrected_alpha(packet::VD a, packet::VD e, packet::VL need) {
   const packet::VD fast = small_alpha_from_t(t);
   if (!packet::any(packet::narrow(need & ~small))) return fast;
   return sel(small, fast, 1.0 - pow(1.0 - a, e));
+}
+
+namespace detail {
+
+// The float form of the short branch (corrected_alpha_f): the same series, cut where float's
+// precision ends. ln(1 - a) = 2 s (1 + s²/3 + s⁴/5): the first term left out is s⁶/7 < 3e-12 of
+// the sum (|s| <= 1/63); e^t - 1 = t (1 + t/2! + t²/3! + t³/4! + t⁴/5!): the first term left out is
+// t⁵/6! < 2e-9 of the sum (|t| <= 1/16); float's unit round-off is 2^-24 ≈ 6e-8.
+template <class F>
+inline F small_alpha_t_f(F a, F e) {
+  const F s = a / (a - 2.0f), z = s * s;
+  const F q = fma_(fma_(F{} + 1.0f / 5, z, F{} + 1.0f / 3), z, F{} + 1.0f);
+  return e * ((2.0f * s) * q);
+}
+
+template <class F>
+inline F small_alpha_from_t_f(F t) {
+  F p = F{} + 1.0f / 120;
+  for (const float c : {1.0f / 24, 1.0f / 6, 1.0f / 2, 1.0f}) p = fma_(p, t, F{} + c);
+  return -(t * p);
+}
+
+}  // namespace detail
+
+/// corrected_alpha in float, for the linear TF's per-sample α (the sample and the TF are evaluated
+/// in float; issue 17's thirteenth round): the short series above where a <= 1/32 and |t| <= 1/16
+/// (within 8 2^-24 of -expm1(e log1p(-a)) relative, tested), else the double corrected_alpha rounded
+/// to float. One float, or the lanes (each lane the float's bits; `need` as above).
+inline float corrected_alpha_f(float a, float e) {
+  using namespace detail;
+  if (a <= float(kSmallAlpha)) {
+    const float t = small_alpha_t_f(a, e);
+    if (std::abs(t) <= float(kSmallT)) return small_alpha_from_t_f(t);
+  }
+  return float(corrected_alpha(double(a), double(e)));
+}
+
+inline packet::VF corrected_alpha_f(packet::VF a, packet::VF e, packet::VI need) {
+  using namespace detail;
+  const packet::VF t = small_alpha_t_f(a, e);
+  const packet::VI small = (a <= float(kSmallAlpha)) & (t <= float(kSmallT)) & (t >= -float(kSmallT));
+  const packet::VF fast = small_alpha_from_t_f(t);
+  const packet::VI slow = need & ~small;
+  if (!packet::any(slow)) return fast;
+  const packet::VD full = corrected_alpha(__builtin_convertvector(a, packet::VD),
+                                          __builtin_convertvector(e, packet::VD), packet::wide(slow));
+  return packet::select(small, fast, __builtin_convertvector(full, packet::VF));
 }
 
 }  // namespace meltlab::render::lane_math

@@ -121,6 +121,19 @@ inline VD fma(VD a, VD b, VD c) {
 #endif
 }
 
+/// std::fma per lane on floats (one rounding).
+inline VF fma(VF a, VF b, VF c) {
+#if defined(__FMA__) && MELTLAB_PACKET_LANES == 8
+  return VF(_mm256_fmadd_ps(__m256(a), __m256(b), __m256(c)));
+#elif defined(__FMA__)
+  return VF(_mm_fmadd_ps(__m128(a), __m128(b), __m128(c)));
+#else
+  VF r;
+  for (int l = 0; l < kLanes; ++l) r[l] = std::fma(a[l], b[l], c[l]);
+  return r;
+#endif
+}
+
 /// std::floor per lane for |x| < 2^31 (sample positions): truncate, then one down where that rose.
 inline VF floor(VF x) {
   const VF t = __builtin_convertvector(__builtin_convertvector(x, VI), VF);

@@ -37,26 +37,70 @@ struct TileCounts {
   std::int64_t rays = 0, samples = 0, classified = 0, skipped = 0, terminated = 0, visited = 0, cell_tests = 0;
 };
 
-/// A TF evaluated as TransferFunction::alpha_at and ::evaluate do, bit for bit, without their
-/// out-of-line calls: α first, the colour only for visible samples. The constant kind is looked up
-/// by "piece": 0 where no range contains the value, i + 1 for the first range i that does (a scan
+/// A curve of the piecewise-linear kind in float, for the sample's TF (issue 17's thirteenth round):
+/// the sample is a float (trilinear in float), so its TF is evaluated in float too — the control
+/// points and values rounded to float, y(v) = a.y + t (b.y - a.y), t = (v - a.x) / (b.x - a.x) in
+/// float (TfCurve::at's form; within a few 2^-24 of TfCurve::at at the same v), the end values beyond
+/// the ends. The differences are those of the rounded points, so v in [a.x, b.x) gives t in [0, 1].
+/// One value (InlineTf) and the lanes (LaneLinearTf) share these tables and their arithmetic: a lane
+/// computes the scalar's bits.
+struct FloatCurve {
+  FloatCurve() = default;
+  explicit FloatCurve(const TfCurve& c) : n(int(c.points.size())) {
+    if (n == 0) return;
+    std::vector<float> x, y;
+    for (const auto& p : c.points) x.push_back(float(p.x())), y.push_back(float(p.y()));
+    x_front = x.front(), y_front = y.front(), x_back = x.back(), y_back = y.back();
+    for (int i = 1; i + 1 < n; ++i) interior.push_back(x[std::size_t(i)]);
+    for (std::size_t i = 1; i < x.size(); ++i)
+      ax.push_back(x[i - 1]), dx.push_back(x[i] - x[i - 1]), ay.push_back(y[i - 1]), dy.push_back(y[i] - y[i - 1]);
+  }
+  /// Where v falls: i = -1 at or before the first point (NaN included), -2 at or after the last,
+  /// else segment i (between points i and i + 1) at t.
+  struct Segment {
+    int i = -1;
+    float t = 0;
+  };
+  Segment locate(float v) const {
+    if (!(v > x_front)) return {-1, 0};
+    if (v >= x_back) return {-2, 0};
+    std::size_t i = 0;
+    while (i < interior.size() && v >= interior[i]) ++i;
+    return {int(i), (v - ax[i]) / dx[i]};
+  }
+  float at(const Segment& s) const {
+    if (n == 0) return 0;
+    if (s.i == -1) return y_front;
+    if (s.i == -2) return y_back;
+    return ay[std::size_t(s.i)] + s.t * dy[std::size_t(s.i)];
+  }
+  int n = 0;
+  float x_front = 0, y_front = 0, x_back = 0, y_back = 0;
+  std::vector<float> interior, ax, dx, ay, dy;  // interior x; per segment a.x, b.x - a.x, a.y, b.y - a.y
+};
+
+/// A TF evaluated without TransferFunction's out-of-line calls: α first, the colour only for visible
+/// samples. The constant kind as TransferFunction::alpha_at and ::evaluate do, bit for bit, looked
+/// up by "piece": 0 where no range contains the value, i + 1 for the first range i that does (a scan
 /// over all ranges; GCC compiles the select to branches, which measured faster than a bitwise
-/// branch-free form: 1096 vs 1283 ms on the phantom), and its α and colour (divided by
-/// 255 once here, as evaluate divides it per call: the same quotient) read from tables.
+/// branch-free form: 1096 vs 1283 ms on the phantom), and its α and colour (divided by 255 once
+/// here, as evaluate divides it per call: the same quotient) read from tables. The linear kind in
+/// float (FloatCurve).
 class InlineTf {
  public:
   explicit InlineTf(const TransferFunction& tf) : linear_(tf.kind() == TfKind::kPiecewiseLinear) {
     if (linear_) {
-      curves_ = tf.curves();
+      const auto& curves = tf.curves();
       shared_x_ = true;
-      for (const auto& c : curves_) {
-        if (c.points.empty() || c.points.size() != curves_[0].points.size()) {
+      for (const auto& c : curves) {
+        if (c.points.empty() || c.points.size() != curves[0].points.size()) {
           shared_x_ = false;
           break;
         }
         for (std::size_t i = 0; i < c.points.size(); ++i)
-          shared_x_ = shared_x_ && c.points[i].x() == curves_[0].points[i].x();
+          shared_x_ = shared_x_ && c.points[i].x() == curves[0].points[i].x();
       }
+      for (std::size_t c = 0; c < 4; ++c) curves_[c] = FloatCurve(curves[c]);
     } else {
       alpha_.push_back(0.0);
       rgb01_.push_back(Eigen::Vector3d::Zero());
@@ -89,93 +133,56 @@ class InlineTf {
   double range_hi(int i) const { return hi_[std::size_t(i)]; }
   bool range_lo_closed(int i) const { return lo_closed_[std::size_t(i)] != 0; }
   bool range_hi_closed(int i) const { return hi_closed_[std::size_t(i)] != 0; }
-  /// Where a value falls among control points that the four curves share (the `points` rows of
-  /// a scene): i = -1 before the first, -2 at or after the last, else between i - 1 and i at t.
-  struct Segment {
-    int i = -1;
-    double t = 0;
-  };
-  /// α(v) of the linear kind; `seg` remembers where v fell when the curves share their points.
-  double alpha(double v, Segment& seg) const {
-    if (!shared_x_) return curve_at(curves_[3], v);
-    const auto& pts = curves_[3].points;
-    if (!(v > pts.front().x())) return seg.i = -1, pts.front().y();
-    if (v >= pts.back().x()) return seg.i = -2, pts.back().y();
-    std::size_t i = 1;
-    while (!(v < pts[i].x())) ++i;
-    seg.i = int(i), seg.t = (v - pts[i - 1].x()) / (pts[i].x() - pts[i - 1].x());
-    return at(curves_[3], seg);
+  /// The linear kind's curves (red, green, blue, α) and whether they share their control x (the
+  /// `points` rows of a scene: one segment search per sample).
+  const std::array<FloatCurve, 4>& curves() const { return curves_; }
+  bool shared_x() const { return shared_x_; }
+  /// α(v) of the linear kind; `seg` remembers where v fell (on the α curve).
+  float alpha(float v, FloatCurve::Segment& seg) const {
+    seg = curves_[3].locate(v);
+    return curves_[3].at(seg);
   }
-  /// The colour of the linear kind (the segment from alpha(): the same t, so the same bits as
-  /// curve_at per channel).
-  Eigen::Vector3d rgb(double v, const Segment& seg) const {
-    if (shared_x_) return {at(curves_[0], seg), at(curves_[1], seg), at(curves_[2], seg)};
-    return {curve_at(curves_[0], v), curve_at(curves_[1], v), curve_at(curves_[2], v)};
+  /// The colour of the linear kind (`seg` from alpha(): with shared points, the same segment).
+  Eigen::Vector3d rgb(float v, const FloatCurve::Segment& seg) const {
+    Eigen::Vector3d c;
+    for (std::size_t ch = 0; ch < 3; ++ch)
+      c[Eigen::Index(ch)] = curves_[ch].at(shared_x_ ? seg : curves_[ch].locate(v));
+    return c;
   }
 
  private:
-  /// TfCurve::at with a forward scan for the segment (the point upper_bound finds).
-  static double curve_at(const TfCurve& c, double x) {
-    const auto& pts = c.points;
-    if (pts.empty()) return 0;
-    if (!(x > pts.front().x())) return pts.front().y();
-    if (x >= pts.back().x()) return pts.back().y();
-    std::size_t i = 1;
-    while (!(x < pts[i].x())) ++i;
-    const Eigen::Vector2d& b = pts[i];
-    const Eigen::Vector2d& a = pts[i - 1];
-    const double t = (x - a.x()) / (b.x() - a.x());
-    return a.y() + t * (b.y() - a.y());
-  }
-  static double at(const TfCurve& c, const Segment& seg) {
-    const auto& pts = c.points;
-    if (seg.i == -1) return pts.front().y();
-    if (seg.i == -2) return pts.back().y();
-    const Eigen::Vector2d& b = pts[std::size_t(seg.i)];
-    const Eigen::Vector2d& a = pts[std::size_t(seg.i) - 1];
-    return a.y() + seg.t * (b.y() - a.y());
-  }
   bool linear_;
   bool shared_x_ = false;  // the four curves have the same control x (one segment search per sample)
-  std::array<TfCurve, 4> curves_;
+  std::array<FloatCurve, 4> curves_;
   std::vector<double> lo_, hi_, alpha_;
   std::vector<char> lo_closed_, hi_closed_;
   std::vector<Eigen::Vector3d> rgb01_;
 };
 
-/// The piecewise-linear kind on eight lanes (the packets): TfCurve::at's arithmetic per lane, bit
-/// for bit. A lane's segment i (between control points i - 1 and i) is 1 + the number of interior
-/// control points x_j (j = 1 .. n - 2) with v >= x_j: the point the scalar forward scan stops at,
-/// since the x increase strictly (TransferFunction::piecewise_linear checks). Per segment, a.x,
-/// b.x - a.x, a.y and b.y - a.y are precomputed: the same subtractions as at(), so the same
-/// t = (v - a.x) / (b.x - a.x) and a.y + t (b.y - a.y). Up to eight segments per curve are read
-/// with one permute (__builtin_shuffle), more lane by lane.
+/// The piecewise-linear kind on the lanes (the packets): FloatCurve's arithmetic per lane, bit for
+/// bit. A lane's segment i (between control points i and i + 1) is the number of interior control
+/// points x_j with v >= x_j: the segment the scalar forward scan stops at (the rounded x do not
+/// decrease). Up to kLanes segments per curve are read with one permute (__builtin_shuffle), more
+/// lane by lane.
 class LaneLinearTf {
  public:
-  using VD = packet::VD;
-  using VL = packet::VL;
-  explicit LaneLinearTf(const TransferFunction& tf) {
-    const auto& curves = tf.curves();
-    shared_ = true;
-    for (const auto& c : curves) {
-      shared_ = shared_ && !c.points.empty() && c.points.size() == curves[0].points.size();
-      for (std::size_t i = 0; shared_ && i < c.points.size(); ++i) shared_ = c.points[i].x() == curves[0].points[i].x();
-    }
-    for (int c = 0; c < 4; ++c) curves_[std::size_t(c)] = Curve(curves[std::size_t(c)]);
+  using VF = packet::VF;
+  using VI = packet::VI;
+  explicit LaneLinearTf(const InlineTf& tf) : shared_(tf.shared_x()) {
+    for (std::size_t c = 0; c < 4; ++c) curves_[c] = Curve(tf.curves()[c]);
   }
-  /// Where v falls on curve c (for the shared points: any curve).
+  /// Where v falls on a curve (for the shared points: any curve).
   struct Seg {
-    VL front, back, idx;
-    VD t;
+    VI front, back, idx;
+    VF t;
   };
   /// α (curve 3) of v, each lane as InlineTf::alpha computes it, and where v fell on curve 3.
-  [[gnu::always_inline]] VD alpha(VD v, Seg& seg) const {
+  [[gnu::always_inline]] VF alpha(VF v, Seg& seg) const {
     seg = curves_[3].locate(v);
     return curves_[3].at(seg);
   }
-  /// The colour of v, each lane as InlineTf::rgb computes it (`seg` from alpha(): the curves that
-  /// share their points share the segment).
-  [[gnu::always_inline]] void rgb(VD v, const Seg& seg, VD& r, VD& g, VD& b) const {
+  /// The colour of v, each lane as InlineTf::rgb computes it (`seg` from alpha()).
+  [[gnu::always_inline]] void rgb(VF v, const Seg& seg, VF& r, VF& g, VF& b) const {
     if (shared_) {
       r = curves_[0].at(seg), g = curves_[1].at(seg), b = curves_[2].at(seg);
     } else {
@@ -188,49 +195,39 @@ class LaneLinearTf {
   class Curve {
    public:
     Curve() = default;
-    explicit Curve(const TfCurve& c) : n_(int(c.points.size())) {
-      if (n_ == 0) return;
-      x_front_ = c.points.front().x(), y_front_ = c.points.front().y();
-      x_back_ = c.points.back().x(), y_back_ = c.points.back().y();
-      for (int i = 1; i + 1 < n_; ++i) interior_.push_back(c.points[std::size_t(i)].x());
-      for (int i = 1; i < n_; ++i) {
-        const Eigen::Vector2d& b = c.points[std::size_t(i)];
-        const Eigen::Vector2d& a = c.points[std::size_t(i) - 1];
-        ax_.push_back(a.x()), dx_.push_back(b.x() - a.x()), ay_.push_back(a.y()), dy_.push_back(b.y() - a.y());
-      }
-      small_ = ax_.size() <= std::size_t(packet::kLanes);
+    explicit Curve(const FloatCurve& c) : c_(c) {
+      small_ = c_.ax.size() <= std::size_t(packet::kLanes);
       if (small_)
-        for (std::size_t i = 0; i < ax_.size(); ++i)
-          tax_[i] = ax_[i], tdx_[i] = dx_[i], tay_[i] = ay_[i], tdy_[i] = dy_[i];
+        for (std::size_t i = 0; i < c_.ax.size(); ++i)
+          tax_[i] = c_.ax[i], tdx_[i] = c_.dx[i], tay_[i] = c_.ay[i], tdy_[i] = c_.dy[i];
     }
-    [[gnu::always_inline]] Seg locate(VD v) const {
+    [[gnu::always_inline]] Seg locate(VF v) const {
       Seg s;
-      s.front = ~VL(v > x_front_);  // !(v > x_0), NaN included
-      s.back = VL(v >= x_back_);
-      s.idx = VL{};
-      for (double x : interior_) s.idx -= VL(v >= x);
-      s.t = n_ > 1 ? (v - read(tax_, ax_, s.idx)) / read(tdx_, dx_, s.idx) : packet::splat(0);
+      s.front = ~VI(v > c_.x_front);  // !(v > x_0), NaN included
+      s.back = VI(v >= c_.x_back);
+      s.idx = VI{};
+      for (float x : c_.interior) s.idx -= VI(v >= x);
+      s.t = c_.n > 1 ? (v - read(tax_, c_.ax, s.idx)) / read(tdx_, c_.dx, s.idx) : packet::splatf(0);
       return s;
     }
-    [[gnu::always_inline]] VD at(const Seg& s) const {
-      if (n_ == 0) return packet::splat(0);
-      if (n_ == 1) return packet::splat(y_front_);
-      const VD mid = read(tay_, ay_, s.idx) + s.t * read(tdy_, dy_, s.idx);
-      return packet::select(s.front, packet::splat(y_front_), packet::select(s.back, packet::splat(y_back_), mid));
+    [[gnu::always_inline]] VF at(const Seg& s) const {
+      if (c_.n == 0) return packet::splatf(0);
+      if (c_.n == 1) return packet::splatf(c_.y_front);
+      const VF mid = read(tay_, c_.ay, s.idx) + s.t * read(tdy_, c_.dy, s.idx);
+      return packet::select(s.front, packet::splatf(c_.y_front),
+                            packet::select(s.back, packet::splatf(c_.y_back), mid));
     }
 
    private:
-    [[gnu::always_inline]] VD read(const VD& table, const std::vector<double>& values, VL idx) const {
+    [[gnu::always_inline]] VF read(const VF& table, const std::vector<float>& values, VI idx) const {
       if (small_) return __builtin_shuffle(table, idx);
-      VD r;
+      VF r;
       for (int l = 0; l < packet::kLanes; ++l) r[l] = values[std::size_t(idx[l])];
       return r;
     }
-    int n_ = 0;
-    double x_front_ = 0, y_front_ = 0, x_back_ = 0, y_back_ = 0;
-    std::vector<double> interior_, ax_, dx_, ay_, dy_;
+    FloatCurve c_;
     bool small_ = true;
-    VD tax_{}, tdx_{}, tay_{}, tdy_{};
+    VF tax_{}, tdx_{}, tay_{}, tdy_{};
   };
   bool shared_ = false;
   std::array<Curve, 4> curves_;
@@ -683,6 +680,8 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   const std::uint8_t* const live_reach = live_reach_.data();
   const std::array<int, 3> dims = volume_.dims();
   const double inv_range = 1.0 / (hi_ - lo_);
+  // The linear kind's sample value in float: (f - lo) / (hi - lo) with both rounded to float.
+  const float lo_f = float(lo_), inv_range_f = float(inv_range);
   const Eigen::Vector3d origin = volume_.origin(), inv_spacing = volume_.spacing().cwiseInverse();
   std::array<VolumeSamples<std::uint8_t>, 3> gch;
   double grad_scale = 0;
@@ -711,7 +710,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   // The packets' TF on eight lanes: the constant kind's range tests, the linear kind's segments.
   std::array<std::optional<LaneLinearTf>, 4> lane_tfs;
   for (std::size_t t = 0; t < 4; ++t)
-    if (tfs[t].linear()) lane_tfs[t].emplace(s_.tfs[t]);
+    if (tfs[t].linear()) lane_tfs[t].emplace(tfs[t]);
   // The fetch bits in bricks of 4³ voxels (null without empty-space skipping).
   const std::uint64_t* const fetch_bits = fetch_bits_.empty() ? nullptr : fetch_bits_.data();
   const int bricks_x = bricks_[0], bricks_y = bricks_[1];
@@ -765,6 +764,10 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   const bool exact_pow = s_.exact_pow;
   auto correct = [exact_pow](double a, double e) {
     return exact_pow ? 1.0 - std::pow(1.0 - a, e) : lane_math::corrected_alpha(a, e);
+  };
+  // The linear kind's, in float (corrected_alpha_f; exact_pow: std::pow in double, rounded).
+  auto correct_f = [exact_pow](float a, float e) {
+    return exact_pow ? float(1.0 - std::pow(1.0 - double(a), double(e))) : lane_math::corrected_alpha_f(a, e);
   };
   // The specular power (the same choice).
   auto power = [exact_pow](double x, double y) { return exact_pow ? std::pow(x, y) : lane_math::pow(x, y); };
@@ -821,13 +824,14 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             ++cnt.rays;
             ++ray_id;
             const double exponent = rr.exponent;
+            const float exponent_f = float(exponent);  // the linear kind's
             const Eigen::Vector3d to_eye = -ray.direction;
             // The move of g (index units) from one visited plane to the next (t_k is linear in k and
             // falls with k: back to front walks towards the eye).
             const Eigen::Vector3d delta =
                 (kFrontToBack ? 1.0 : -1.0) * (stack.spacing / rs.cos_psi) * ray.direction.cwiseProduct(inv_spacing);
             // The linear kind: the last α seen and its corrected value (std::pow only when α changes).
-            double last_a = -1, last_ac = 0;
+            float last_a = -1, last_ac = 0;
             const int n_samples = rs.k_last - rs.k_first + 1;
             std::int64_t n_visited = 0, n_skipped = 0, n_classified = 0, n_jumped = 0, n_cell_tests = 0;
             // The planes from the current sample on while g stays 0.01 index units inside the cube
@@ -925,19 +929,22 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               const float f = samples.trilinear_cell(i0, j0, k0, wx, wy, wz);
               const std::size_t ti = std::size_t(m - 1);
               const InlineTf& tf = tfs[ti];
-              const double fn = (double(f) - lo_) * inv_range;
               int piece = 0;
-              InlineTf::Segment seg;
+              FloatCurve::Segment seg;
+              float fn_f = 0;
               double a, ac;
               if (tf.linear()) {
-                a = tf.alpha(fn, seg);
-                if (!(a > 0)) continue;
-                ac = a;
-                if (exponent != 1.0) {
-                  if (a != last_a) last_a = a, last_ac = correct(a, exponent);
-                  ac = last_ac;
+                fn_f = (f - lo_f) * inv_range_f;
+                const float af = tf.alpha(fn_f, seg);
+                if (!(af > 0)) continue;
+                float acf = af;
+                if (exponent_f != 1.0f) {
+                  if (af != last_a) last_a = af, last_ac = correct_f(af, exponent_f);
+                  acf = last_ac;
                 }
+                a = af, ac = acf;
               } else {
+                const double fn = (double(f) - lo_) * inv_range;
                 piece = tf.piece(fn);
                 a = tf.piece_alpha(piece);
                 if (!blend_all && !(a > 0)) continue;
@@ -948,7 +955,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                   ac = ac_piece[slot];
                 }
               }
-              Eigen::Vector3d c = tf.linear() ? tf.rgb(fn, seg) : tf.piece_rgb(piece);
+              Eigen::Vector3d c = tf.linear() ? tf.rgb(fn_f, seg) : tf.piece_rgb(piece);
               if constexpr (kLit) shade(c, i0, j0, k0, wx, wy, wz, p, to_eye);
               if constexpr (kFrontToBack) {
                 const double w = (1 - acc.A) * ac;
@@ -1064,7 +1071,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
           VD ex = splat(1);
           VI u0 = zero, ns = zero, alive = zero;
           // The linear kind: each lane's last visible α and its corrected value (as per ray).
-          VD last_a = splat(-1), last_ac = splat(0);
+          VF last_a = splatf(-1), last_ac = splatf(0), ex_f = splatf(1);
           VD O[3] = {}, V[3] = {}, TOFF = splat(ray_frame.t_offset), COSPSI = splat(1);  // each lane's ray
           {
             // The lanes' rays and planes (ray_setup.h: each lane the bits of its ray alone).
@@ -1094,6 +1101,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             }
             COSPSI = select(live_l, rr.cos_psi, splat(1));
             ex = select(live_l, rr.exponent, splat(1));
+            ex_f = __builtin_convertvector(ex, VF);
             u0 = select(alive, kFrontToBack ? -rr.k_last : rr.k_first, zero);
             ns = select(alive, rr.k_last - rr.k_first + 1, zero);
           }
@@ -1288,7 +1296,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               const VF f =
                   ((c00 * (one_f - w[1]) + c10 * w[1]) * (one_f - w[2]) + (c01 * (one_f - w[1]) + c11 * w[1]) * w[2]) *
                   samples.scale;
-              const VD fn = (__builtin_convertvector(f, VD) - lo_) * inv_range;
+              const VF fn_f = (f - lo_f) * inv_range_f;  // the linear kind's
               VD a = splat(0), ac = splat(0), cr = splat(0), cg = splat(0), cb = splat(0);
               for (int t = 0; t < (kMasked ? 4 : 1); ++t) {
                 const VI sel = kMasked ? sample & (m == t + 1) : sample;
@@ -1296,33 +1304,37 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 const InlineTf& tf = tfs[std::size_t(t)];
                 const VL ws = wide(sel);
                 if (tf.linear()) {
-                  // The linear kind on the lanes (LaneLinearTf: InlineTf's bits); the corrected α
-                  // where a visible α changed (the scalar loop's last α), by lane_math::corrected_alpha
-                  // on the lanes (exact_pow: std::pow lane by lane).
+                  // The linear kind on the lanes in float (LaneLinearTf: InlineTf's bits); the corrected
+                  // α where a visible α changed (the scalar loop's last α), by
+                  // lane_math::corrected_alpha_f on the lanes (exact_pow: std::pow lane by lane).
                   const LaneLinearTf& lane_tf = *lane_tfs[std::size_t(t)];
                   LaneLinearTf::Seg seg;
-                  const VD ta = lane_tf.alpha(fn, seg);
-                  if (!any(narrow(ws & (ta > 0)))) {  // none of its lanes visible: colour and α' unused
-                    a = select(ws, ta, a);
+                  const VF ta = lane_tf.alpha(fn_f, seg);
+                  if (!any(sel & (ta > 0))) {  // none of its lanes visible: colour and α' unused
+                    a = select(ws, __builtin_convertvector(ta, VD), a);
                     continue;
                   }
-                  VD tr, tg, tb;
-                  lane_tf.rgb(fn, seg, tr, tg, tb);
-                  const VL corr = ws & (ta > 0) & (ex != 1.0);
-                  const VL fresh = corr & (ta != last_a);
+                  VF tr, tg, tb;
+                  lane_tf.rgb(fn_f, seg, tr, tg, tb);
+                  const VI corr = sel & (ta > 0) & (ex_f != 1.0f);
+                  const VI fresh = corr & (ta != last_a);
                   if (exact_pow) {
-                    for (unsigned b = bits(narrow(fresh)); b != 0; b &= b - 1) {
+                    for (unsigned b = bits(fresh); b != 0; b &= b - 1) {
                       const int l = __builtin_ctz(b);
-                      last_ac[l] = 1.0 - std::pow(1.0 - ta[l], ex[l]);
+                      last_ac[l] = float(1.0 - std::pow(1.0 - double(ta[l]), double(ex_f[l])));
                     }
-                  } else if (any(narrow(fresh))) {
-                    last_ac = select(fresh, lane_math::corrected_alpha(ta, ex, fresh), last_ac);
+                  } else if (any(fresh)) {
+                    last_ac = select(fresh, lane_math::corrected_alpha_f(ta, ex_f, fresh), last_ac);
                   }
                   last_a = select(fresh, ta, last_a);
-                  a = select(ws, ta, a), ac = select(ws, select(corr, last_ac, ta), ac);
-                  cr = select(ws, tr, cr), cg = select(ws, tg, cg), cb = select(ws, tb, cb);
+                  a = select(ws, __builtin_convertvector(ta, VD), a);
+                  ac = select(ws, __builtin_convertvector(select(corr, last_ac, ta), VD), ac);
+                  cr = select(ws, __builtin_convertvector(tr, VD), cr),
+                  cg = select(ws, __builtin_convertvector(tg, VD), cg);
+                  cb = select(ws, __builtin_convertvector(tb, VD), cb);
                   continue;
                 }
+                const VD fn = (__builtin_convertvector(f, VD) - lo_) * inv_range;
                 VD pa = splat(0), pr = splat(0), pg = splat(0), pb = splat(0), pac = acp[std::size_t(t * max_pieces)];
                 for (int i = tf.ranges() - 1; i >= 0; --i) {
                   const double rl = tf.range_lo(i), rh = tf.range_hi(i);
@@ -1471,6 +1483,32 @@ void slicing_corrected_alpha_lanes(std::span<const double> a, std::span<const do
     const packet::VD r = lane_math::corrected_alpha(av, ev, need);
     for (std::size_t l = 0; l < kLanes && i + l < a.size(); ++l) out[i + l] = r[l];
   }
+}
+
+float slicing_corrected_alpha_f(float a, float e) { return lane_math::corrected_alpha_f(a, e); }
+
+void slicing_corrected_alpha_f_lanes(std::span<const float> a, std::span<const float> e, std::span<float> out) {
+  if (e.size() != a.size() || out.size() != a.size())
+    throw std::invalid_argument("slicing_corrected_alpha_f_lanes: spans of different sizes");
+  using packet::kLanes;
+  for (std::size_t i = 0; i < a.size(); i += kLanes) {
+    packet::VF av = packet::splatf(0), ev = packet::splatf(1);
+    packet::VI need{};
+    for (std::size_t l = 0; l < kLanes && i + l < a.size(); ++l) av[l] = a[i + l], ev[l] = e[i + l], need[l] = -1;
+    const packet::VF r = lane_math::corrected_alpha_f(av, ev, need);
+    for (std::size_t l = 0; l < kLanes && i + l < a.size(); ++l) out[i + l] = r[l];
+  }
+}
+
+TfValue slicing_linear_tf_value(const TransferFunction& tf, float v) {
+  if (tf.kind() != TfKind::kPiecewiseLinear)
+    throw std::invalid_argument("slicing_linear_tf_value: the transfer function is not piecewise linear");
+  const InlineTf inline_tf(tf);
+  FloatCurve::Segment seg;
+  TfValue out;
+  out.alpha = inline_tf.alpha(v, seg);
+  out.rgb = inline_tf.rgb(v, seg);
+  return out;
 }
 
 SlicingFrame render_slicing(const Volume& volume, const Camera& camera, const SlicingSettings& settings) {

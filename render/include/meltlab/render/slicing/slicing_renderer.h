@@ -134,13 +134,15 @@ struct SlicingSettings {
   /// planes bounded per block). Not with exact_positions. false: one ray at a time (the reference).
   bool simd = true;
   /// The corrected α 1 - (1 - α)^(Δ/h0), a power per sample of the linear TF and per ray and
-  /// piece of the constant TF: false (default): slicing_corrected_alpha (issue 17's fourth speed
-  /// round; for the constant TF since its seventh: eight lanes at a time in the packets, the same
-  /// bits per lane as per ray; since the eighth a short series for α <= 1/32; within (4 + e) 2^-53
-  /// of 1 - std::pow(1 - α, e), so pixels differ from std::pow's by at most one float ulp, see
-  /// slicing_speed_test). true: std::pow (lane by lane in the packets). The lit modes' specular
-  /// term likewise: slicing_pow (on the lanes in the packets, issue 17's twelfth round), or std::pow
-  /// with exact_pow.
+  /// piece of the constant TF: false (default): for the constant TF slicing_corrected_alpha (issue
+  /// 17's fourth speed round; eight lanes at a time in the packets, the same bits per lane as per
+  /// ray; a short series for α <= 1/32; within (4 + e) 2^-53 of 1 - std::pow(1 - α, e)); for the
+  /// linear TF, which is evaluated in float (the sample is a float; the thirteenth round),
+  /// slicing_corrected_alpha_f (within 4 2^-24 of the exact value). true: std::pow (lane by lane
+  /// in the packets; for the linear TF in double, rounded to float). Pixels differ from std::pow's
+  /// by round-off only (one float ulp, plus 8 2^-24 with the linear TF; slicing_speed_test). The lit
+  /// modes' specular term likewise: slicing_pow (on the lanes in the packets, issue 17's twelfth
+  /// round), or std::pow with exact_pow.
   bool exact_pow = false;
 };
 
@@ -255,6 +257,19 @@ double slicing_corrected_alpha(double a, double e);
 /// packet padded): out[i] has the bits of
 /// slicing_corrected_alpha(a[i], e[i]) whatever branch the other lanes of its packet take.
 void slicing_corrected_alpha_lanes(std::span<const double> a, std::span<const double> e, std::span<double> out);
+
+/// The linear TF's opacity correction as the renderer computes it per sample, in float (issue 17's
+/// thirteenth round; SlicingSettings::exact_pow false): the short series of slicing_corrected_alpha cut
+/// to float's precision where a <= 1/32 and |e ln(1 - a)| <= 1/16 (within 8 2^-24 of the exact value
+/// relative), else slicing_corrected_alpha(a, e) rounded to float.
+float slicing_corrected_alpha_f(float a, float e);
+/// The same on the packets' lanes: out[i] has the bits of slicing_corrected_alpha_f(a[i], e[i]).
+void slicing_corrected_alpha_f_lanes(std::span<const float> a, std::span<const float> e, std::span<float> out);
+/// A TF of the piecewise-linear kind at the normalised sample value v as the renderer evaluates it:
+/// in float (the control points rounded to float; TfCurve::at's form), within a few 2^-24 of
+/// TransferFunction::evaluate(v) scaled by the curves' slopes (tested). Throws std::invalid_argument
+/// for the constant kind (evaluated as TransferFunction does, in double).
+TfValue slicing_linear_tf_value(const TransferFunction& tf, float v);
 
 /// One frame (builds a SlicingRenderer).
 SlicingFrame render_slicing(const Volume& volume, const Camera& camera, const SlicingSettings& settings);

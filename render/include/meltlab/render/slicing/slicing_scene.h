@@ -34,7 +34,7 @@
 //     exact_positions: false      # true: o + t_k v per sample (a division each) instead of g0 + j dg
 //                                 # per ray; equal to float round-off (tested within 1e-5 voxel)
 //     exact_pow: false            # true: std::pow for the corrected α and the specular power instead of
-//                                 # slicing_pow (pixels within one float ulp, tested)
+//                                 # slicing_pow / the float series (pixels equal up to round-off, tested)
 //     simd: true                  # packets of 8 pixels on SIMD lanes; false: one ray at a time (the
 //                                 # reference; the same image bit for bit, tested)
 
