@@ -171,6 +171,19 @@ inline VD sqrt(VD x) {
 #endif
 }
 
+/// std::sqrt per lane on floats (correctly rounded, as the scalar one).
+inline VF sqrt(VF x) {
+#if defined(__AVX__) && MELTLAB_PACKET_LANES == 8
+  return VF(_mm256_sqrt_ps(__m256(x)));
+#elif defined(__SSE__)
+  return VF(_mm_sqrt_ps(__m128(x)));
+#else
+  VF r;
+  for (int l = 0; l < kLanes; ++l) r[l] = std::sqrt(x[l]);
+  return r;
+#endif
+}
+
 /// data[offset] per lane as float (offset 0 in lanes that do not need a value: any valid index).
 template <class T>
 inline VF gather(const T* data, VI offset) {

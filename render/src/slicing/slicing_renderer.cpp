@@ -103,12 +103,12 @@ class InlineTf {
       for (std::size_t c = 0; c < 4; ++c) curves_[c] = FloatCurve(curves[c]);
     } else {
       alpha_.push_back(0.0);
-      rgb01_.push_back(Eigen::Vector3d::Zero());
+      rgb01_.push_back(Eigen::Vector3f::Zero());
       for (const auto& r : tf.ranges()) {
         lo_.push_back(r.lo), hi_.push_back(r.hi);
         lo_closed_.push_back(r.lo_closed), hi_closed_.push_back(r.hi_closed);
         alpha_.push_back(r.alpha);
-        rgb01_.push_back(r.rgb / 255.0);
+        rgb01_.push_back((r.rgb / 255.0).cast<float>());
       }
     }
   }
@@ -126,7 +126,7 @@ class InlineTf {
     return p;
   }
   double piece_alpha(int p) const { return alpha_[std::size_t(p)]; }
-  const Eigen::Vector3d& piece_rgb(int p) const { return rgb01_[std::size_t(p)]; }
+  const Eigen::Vector3f& piece_rgb(int p) const { return rgb01_[std::size_t(p)]; }
   /// The constant kind's ranges (range i is piece i + 1), for the packets' own range tests.
   int ranges() const { return int(lo_.size()); }
   double range_lo(int i) const { return lo_[std::size_t(i)]; }
@@ -143,8 +143,8 @@ class InlineTf {
     return curves_[3].at(seg);
   }
   /// The colour of the linear kind (`seg` from alpha(): with shared points, the same segment).
-  Eigen::Vector3d rgb(float v, const FloatCurve::Segment& seg) const {
-    Eigen::Vector3d c;
+  Eigen::Vector3f rgb(float v, const FloatCurve::Segment& seg) const {
+    Eigen::Vector3f c;
     for (std::size_t ch = 0; ch < 3; ++ch)
       c[Eigen::Index(ch)] = curves_[ch].at(shared_x_ ? seg : curves_[ch].locate(v));
     return c;
@@ -156,7 +156,7 @@ class InlineTf {
   std::array<FloatCurve, 4> curves_;
   std::vector<double> lo_, hi_, alpha_;
   std::vector<char> lo_closed_, hi_closed_;
-  std::vector<Eigen::Vector3d> rgb01_;
+  std::vector<Eigen::Vector3f> rgb01_;
 };
 
 /// The piecewise-linear kind on the lanes (the packets): FloatCurve's arithmetic per lane, bit for
@@ -693,7 +693,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   for (const auto& tf : s_.tfs) tfs.emplace_back(tf);
   const bool front_to_back =
       s_.early_termination > 0 && s_.mode == SlicingMode::kBlend && s_.blend == BlendOperator::kOver;
-  const double stop_alpha = s_.early_termination;
+  const float stop_alpha = float(s_.early_termination);  // compared with the float A
   const int T = s_.tile;
   const int tiles_x = (W + T - 1) / T, tiles_y = (H + T - 1) / T;
   std::vector<TileCounts> counts(std::size_t(tiles_x) * tiles_y);
@@ -771,22 +771,37 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   };
   // The specular power (the same choice).
   auto power = [exact_pow](double x, double y) { return exact_pow ? std::pow(x, y) : lane_math::pow(x, y); };
+  // The lighting's constants in float.
+  const Eigen::Vector3f light_pos_f = light_pos.cast<float>(), inv_spacing_f = inv_spacing.cast<float>();
+  const float grad_scale_f = float(grad_scale), gate_f = float(light.gate);
+  const float ambient_f = float(light.ambient), diffuse_f = float(light.diffuse), specular_f = float(light.specular);
   visit_samples(volume_, [&](const auto samples) {
     // Blinn-Phong of a lit sample: colour c at the stencil (i0, j0, k0) with weights w, world point
     // p, unit vector towards the eye.
-    auto shade = [&](Eigen::Vector3d& c, int i0, int j0, int k0, float wx, float wy, float wz, const Eigen::Vector3d& p,
-                     const Eigen::Vector3d& to_eye) {
-      Eigen::Vector3d e;
+    // In float, as the TF's colour it shades (issue 17's thirteenth round), but for the specular power
+    // (power() in double, rounded).
+    auto shade = [&](Eigen::Vector3f& c, int i0, int j0, int k0, float wx, float wy, float wz, const Eigen::Vector3f& p,
+                     const Eigen::Vector3f& to_eye) {
+      Eigen::Vector3f e;
       for (int ch = 0; ch < 3; ++ch) e[ch] = gch[std::size_t(ch)].trilinear_cell(i0, j0, k0, wx, wy, wz);
-      const Eigen::Vector3d gd = (2.0 * e - Eigen::Vector3d::Ones()) * grad_scale;
-      const Eigen::Vector3d gw = gd.cwiseProduct(inv_spacing);  // index units -> world direction
-      if (gd.norm() > light.gate && gw.norm() > 0) {
-        const Eigen::Vector3d nrm = -gw.normalized();
-        const Eigen::Vector3d l = (light_pos - p).normalized();
-        const Eigen::Vector3d h = (l + to_eye).normalized();
-        const double diff = std::max(nrm.dot(l), 0.0);
-        const double spec = power(std::max(nrm.dot(h), 0.0), light.exponent);
-        c = c * (light.ambient + light.diffuse * diff) + Eigen::Vector3d::Constant(light.specular * spec);
+      // (The sums of three terms written out as (x + y) + z, the lanes' order: Eigen's float
+      // reductions of a Vector3f add in another order.)
+      auto dot = [](const Eigen::Vector3f& x, const Eigen::Vector3f& y) {
+        return (x[0] * y[0] + x[1] * y[1]) + x[2] * y[2];
+      };
+      auto normalized = [&](const Eigen::Vector3f& x) {
+        const float z = dot(x, x);
+        return z > 0 ? Eigen::Vector3f(x / std::sqrt(z)) : x;
+      };
+      const Eigen::Vector3f gd = (2.0f * e - Eigen::Vector3f::Ones()) * grad_scale_f;
+      const Eigen::Vector3f gw = gd.cwiseProduct(inv_spacing_f);  // index units -> world direction
+      if (std::sqrt(dot(gd, gd)) > gate_f && std::sqrt(dot(gw, gw)) > 0) {
+        const Eigen::Vector3f nrm = -normalized(gw);
+        const Eigen::Vector3f l = normalized(light_pos_f - p);
+        const Eigen::Vector3f h = normalized(l + to_eye);
+        const float diff = std::max(dot(nrm, l), 0.0f);
+        const float spec = float(power(double(std::max(dot(nrm, h), 0.0f)), light.exponent));
+        c = c * (ambient_f + diffuse_f * diff) + Eigen::Vector3f::Constant(specular_f * spec);
       }
     };
     // One tile, specialised on what changes per frame only (lit, masked, front to back), so that
@@ -800,7 +815,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
       TileCounts cnt;
       // Corrected α of each constant-kind piece, computed once per ray when first met (stamp: the
       // ray that computed it); std::pow with the same arguments as per sample: the same bits.
-      std::vector<double> ac_piece(std::size_t(4 * max_pieces), 0.0);
+      std::vector<float> ac_piece(std::size_t(4 * max_pieces), 0.0f);
       std::vector<std::int64_t> ac_stamp(std::size_t(4 * max_pieces), -1);
       std::int64_t ray_id = 0;
       for (int y = ty * T; y < std::min(H, (ty + 1) * T); ++y)
@@ -825,7 +840,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             ++ray_id;
             const double exponent = rr.exponent;
             const float exponent_f = float(exponent);  // the linear kind's
-            const Eigen::Vector3d to_eye = -ray.direction;
+            const Eigen::Vector3f to_eye_f = (-ray.direction).cast<float>();
             // The move of g (index units) from one visited plane to the next (t_k is linear in k and
             // falls with k: back to front walks towards the eye).
             const Eigen::Vector3d delta =
@@ -932,7 +947,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               int piece = 0;
               FloatCurve::Segment seg;
               float fn_f = 0;
-              double a, ac;
+              float a, ac;
               if (tf.linear()) {
                 fn_f = (f - lo_f) * inv_range_f;
                 const float af = tf.alpha(fn_f, seg);
@@ -946,19 +961,20 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               } else {
                 const double fn = (double(f) - lo_) * inv_range;
                 piece = tf.piece(fn);
-                a = tf.piece_alpha(piece);
+                a = float(tf.piece_alpha(piece));
                 if (!blend_all && !(a > 0)) continue;
                 ac = a;
                 if (exponent != 1.0 && piece != 0) {
                   const std::size_t slot = ti * std::size_t(max_pieces) + std::size_t(piece);
-                  if (ac_stamp[slot] != ray_id) ac_stamp[slot] = ray_id, ac_piece[slot] = correct(a, exponent);
+                  if (ac_stamp[slot] != ray_id)
+                    ac_stamp[slot] = ray_id, ac_piece[slot] = float(correct(tf.piece_alpha(piece), exponent));
                   ac = ac_piece[slot];
                 }
               }
-              Eigen::Vector3d c = tf.linear() ? tf.rgb(fn_f, seg) : tf.piece_rgb(piece);
-              if constexpr (kLit) shade(c, i0, j0, k0, wx, wy, wz, p, to_eye);
+              Eigen::Vector3f c = tf.linear() ? tf.rgb(fn_f, seg) : tf.piece_rgb(piece);
+              if constexpr (kLit) shade(c, i0, j0, k0, wx, wy, wz, p.cast<float>(), to_eye_f);
               if constexpr (kFrontToBack) {
-                const double w = (1 - acc.A) * ac;
+                const float w = (1 - acc.A) * ac;
                 acc.C += w * c;
                 acc.A += w;
                 if (acc.A >= stop_alpha) {
@@ -988,12 +1004,11 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             cnt.classified += n_classified;
             cnt.cell_tests += n_cell_tests;
           }
-          Eigen::Vector3d out;
-          if (mode == SlicingMode::kBlend)
-            out = acc.C + (1 - acc.A) * background;
-          else
-            out = acc.A > 0 ? acc.C : background;
-          write_pixel(x, y, out, acc.A);
+          const Eigen::Vector3d C = acc.C.cast<double>();
+          const double A = acc.A;
+          const Eigen::Vector3d out =
+              mode == SlicingMode::kBlend ? Eigen::Vector3d(C + (1 - A) * background) : (A > 0 ? C : background);
+          write_pixel(x, y, out, A);
         }
       counts[std::size_t(ty) * tiles_x + tx] = cnt;
     };
@@ -1022,7 +1037,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
       TileCounts cnt;
       // Corrected α per lane of each constant piece (slot t · max_pieces + piece), computed when a
       // lane first meets it (-1: not yet), as the scalar loop's per-ray table.
-      std::vector<VD> acp(std::size_t(4 * max_pieces));
+      std::vector<VF> acp(std::size_t(4 * max_pieces));
       const VI cell_max[3] = {splati(dims[0] - 1), splati(dims[1] - 1), splati(dims[2] - 1)};
       const VI str[3] = {splati(std::int32_t(samples.sx)), splati(std::int32_t(samples.sy)),
                          splati(std::int32_t(samples.sz))};
@@ -1110,7 +1125,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
           for (int t = 0; t < 4; ++t) {
             const InlineTf& tf = tfs[std::size_t(t)];
             if (!tf_used_[std::size_t(t)] || tf.linear()) continue;
-            acp[std::size_t(t * max_pieces)] = splat(0);
+            acp[std::size_t(t * max_pieces)] = splatf(0);
             for (int p = 1; p < tf.pieces(); ++p) {
               const double a = tf.piece_alpha(p);
               VD c = splat(a);
@@ -1121,10 +1136,10 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 const VL corr = ex != 1.0;
                 c = select(corr, lane_math::corrected_alpha(splat(a), ex, corr), c);
               }
-              acp[std::size_t(t * max_pieces + p)] = c;
+              acp[std::size_t(t * max_pieces + p)] = __builtin_convertvector(c, VF);
             }
           }
-          VD Cr = splat(0), Cg = splat(0), Cb = splat(0), A = splat(0);
+          VF Cr = splatf(0), Cg = splatf(0), Cb = splatf(0), A = splatf(0);
           // Counters per lane (a mask is -1 where true: subtracting it counts), summed after the packet.
           VI n_fetched = zero, n_classified = zero;
           // Blinn-Phong on the lanes (shade()'s arithmetic, Eigen's evaluation order written out:
@@ -1135,8 +1150,8 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
           // std::pow lane by lane, which was a fifth of the combined mode's frame; 0 where its base is
           // 0 and the exponent > 0: pow's exact +0). Lanes in vis only; p the world points, v the rays'
           // directions.
-          auto shade_lanes = [&](VI vis, const VI(&ii)[3], const VF(&w)[3], const VD(&p)[3], const VD(&v)[3], VD& cr,
-                                 VD& cg, VD& cb) {
+          auto shade_lanes = [&](VI vis, const VI(&ii)[3], const VF(&w)[3], const VF(&p)[3], const VF(&v)[3], VF& cr,
+                                 VF& cg, VF& cb) {
             VI o0[3], o1[3];
             for (int a = 0; a < 3; ++a) {
               o0[a] = select(vis, clamp(ii[a], cell_max[a]) * gstr[a], zero);
@@ -1152,7 +1167,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                   for (int ch = 0; ch < 3; ++ch)
                     vx[xx][yy][zz][ch] = __builtin_convertvector((word >> (8 * ch)) & 255, VF);
                 }
-            VD gd[3], gw[3];
+            VF gd[3], gw[3];
             for (int ch = 0; ch < 3; ++ch) {
               const VF c00 = vx[0][0][0][ch] * (one_f - w[0]) + vx[1][0][0][ch] * w[0];
               const VF c10 = vx[0][1][0][ch] * (one_f - w[0]) + vx[1][1][0][ch] * w[0];
@@ -1161,35 +1176,36 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               const VF e =
                   ((c00 * (one_f - w[1]) + c10 * w[1]) * (one_f - w[2]) + (c01 * (one_f - w[1]) + c11 * w[1]) * w[2]) *
                   grad_channel_scale;
-              gd[ch] = (2.0 * __builtin_convertvector(e, VD) - 1.0) * grad_scale;
-              gw[ch] = gd[ch] * inv_spacing[ch];
+              gd[ch] = (2.0f * e - 1.0f) * grad_scale_f;
+              gw[ch] = gd[ch] * inv_spacing_f[ch];
             }
-            auto sq = [](const VD(&x)[3]) { return (x[0] * x[0] + x[1] * x[1]) + x[2] * x[2]; };
-            auto dot = [](const VD(&x)[3], const VD(&y)[3]) { return (x[0] * y[0] + x[1] * y[1]) + x[2] * y[2]; };
-            const VD gw2 = sq(gw);
-            const VL lit_l = wide(vis) & (sqrt(sq(gd)) > light.gate) & (sqrt(gw2) > 0.0);
-            if (!any(narrow(lit_l))) return;
-            VD nrm[3], ld[3], hd[3];
-            const VD gwn = sqrt(gw2);
-            for (int a = 0; a < 3; ++a) nrm[a] = -(gw[a] / gwn), ld[a] = light_pos[a] - p[a];
-            const VD l2 = sq(ld), ln = sqrt(l2);
-            for (int a = 0; a < 3; ++a) ld[a] = select(l2 > 0.0, ld[a] / ln, ld[a]), hd[a] = ld[a] + -v[a];
-            const VD h2 = sq(hd), hn = sqrt(h2);
-            for (int a = 0; a < 3; ++a) hd[a] = select(h2 > 0.0, hd[a] / hn, hd[a]);
-            const VD nl = dot(nrm, ld), nh = dot(nrm, hd);
-            const VD diff = select(nl < 0.0, splat(0), nl);
-            const VD base = select(nh < 0.0, splat(0), nh);
-            VD spec = splat(0);
-            const VL needs_pow = light.exponent > 0 ? lit_l & (base != 0.0) : lit_l;
+            auto sq = [](const VF(&x)[3]) { return (x[0] * x[0] + x[1] * x[1]) + x[2] * x[2]; };
+            auto dot = [](const VF(&x)[3], const VF(&y)[3]) { return (x[0] * y[0] + x[1] * y[1]) + x[2] * y[2]; };
+            const VF gw2 = sq(gw);
+            const VI lit_l = vis & (sqrt(sq(gd)) > gate_f) & (sqrt(gw2) > 0.0f);
+            if (!any(lit_l)) return;
+            VF nrm[3], ld[3], hd[3];
+            const VF gwn = sqrt(gw2);
+            for (int a = 0; a < 3; ++a) nrm[a] = -(gw[a] / gwn), ld[a] = light_pos_f[a] - p[a];
+            const VF l2 = sq(ld), ln = sqrt(l2);
+            for (int a = 0; a < 3; ++a) ld[a] = select(l2 > 0.0f, ld[a] / ln, ld[a]), hd[a] = ld[a] + -v[a];
+            const VF h2 = sq(hd), hn = sqrt(h2);
+            for (int a = 0; a < 3; ++a) hd[a] = select(h2 > 0.0f, hd[a] / hn, hd[a]);
+            const VF nl = dot(nrm, ld), nh = dot(nrm, hd);
+            const VF diff = select(nl < 0.0f, splatf(0), nl);
+            const VF base = select(nh < 0.0f, splatf(0), nh);
+            VF spec = splatf(0);
+            const VI needs_pow = light.exponent > 0 ? lit_l & (base != 0.0f) : lit_l;
             if (exact_pow) {
-              for (unsigned b = bits(narrow(needs_pow)); b != 0; b &= b - 1) {
+              for (unsigned b = bits(needs_pow); b != 0; b &= b - 1) {
                 const int l = __builtin_ctz(b);
-                spec[l] = std::pow(base[l], light.exponent);
+                spec[l] = float(std::pow(double(base[l]), light.exponent));
               }
-            } else if (any(narrow(needs_pow))) {
-              spec = select(needs_pow, lane_math::pow(base, splat(light.exponent)), spec);
+            } else if (any(needs_pow)) {
+              const VD power_d = lane_math::pow(__builtin_convertvector(base, VD), splat(light.exponent));
+              spec = select(needs_pow, __builtin_convertvector(power_d, VF), spec);
             }
-            const VD k = light.ambient + light.diffuse * diff, sp = light.specular * spec;
+            const VF k = ambient_f + diffuse_f * diff, sp = specular_f * spec;
             cr = select(lit_l, cr * k + sp, cr), cg = select(lit_l, cg * k + sp, cg),
             cb = select(lit_l, cb * k + sp, cb);
           };
@@ -1297,12 +1313,11 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                   ((c00 * (one_f - w[1]) + c10 * w[1]) * (one_f - w[2]) + (c01 * (one_f - w[1]) + c11 * w[1]) * w[2]) *
                   samples.scale;
               const VF fn_f = (f - lo_f) * inv_range_f;  // the linear kind's
-              VD a = splat(0), ac = splat(0), cr = splat(0), cg = splat(0), cb = splat(0);
+              VF a = splatf(0), ac = splatf(0), cr = splatf(0), cg = splatf(0), cb = splatf(0);
               for (int t = 0; t < (kMasked ? 4 : 1); ++t) {
                 const VI sel = kMasked ? sample & (m == t + 1) : sample;
                 if (!any(sel)) continue;
                 const InlineTf& tf = tfs[std::size_t(t)];
-                const VL ws = wide(sel);
                 if (tf.linear()) {
                   // The linear kind on the lanes in float (LaneLinearTf: InlineTf's bits); the corrected
                   // α where a visible α changed (the scalar loop's last α), by
@@ -1311,7 +1326,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                   LaneLinearTf::Seg seg;
                   const VF ta = lane_tf.alpha(fn_f, seg);
                   if (!any(sel & (ta > 0))) {  // none of its lanes visible: colour and α' unused
-                    a = select(ws, __builtin_convertvector(ta, VD), a);
+                    a = select(sel, ta, a);
                     continue;
                   }
                   VF tr, tg, tb;
@@ -1327,51 +1342,56 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                     last_ac = select(fresh, lane_math::corrected_alpha_f(ta, ex_f, fresh), last_ac);
                   }
                   last_a = select(fresh, ta, last_a);
-                  a = select(ws, __builtin_convertvector(ta, VD), a);
-                  ac = select(ws, __builtin_convertvector(select(corr, last_ac, ta), VD), ac);
-                  cr = select(ws, __builtin_convertvector(tr, VD), cr),
-                  cg = select(ws, __builtin_convertvector(tg, VD), cg);
-                  cb = select(ws, __builtin_convertvector(tb, VD), cb);
+                  a = select(sel, ta, a), ac = select(sel, select(corr, last_ac, ta), ac);
+                  cr = select(sel, tr, cr), cg = select(sel, tg, cg), cb = select(sel, tb, cb);
                   continue;
                 }
+                // The constant kind: the range tests in double (TfRange::contains), the piece's
+                // values in float (InlineTf's), its corrected α per lane from the packet's table.
                 const VD fn = (__builtin_convertvector(f, VD) - lo_) * inv_range;
-                VD pa = splat(0), pr = splat(0), pg = splat(0), pb = splat(0), pac = acp[std::size_t(t * max_pieces)];
+                VF pa = splatf(0), pr = splatf(0), pg = splatf(0), pb = splatf(0),
+                   pac = acp[std::size_t(t * max_pieces)];
                 for (int i = tf.ranges() - 1; i >= 0; --i) {
                   const double rl = tf.range_lo(i), rh = tf.range_hi(i);
                   const VL above = tf.range_lo_closed(i) ? VL(fn >= rl) : VL(fn > rl);
                   const VL below = tf.range_hi_closed(i) ? VL(fn <= rh) : VL(fn < rh);
-                  const VL in = above & below;
-                  const Eigen::Vector3d& rgb = tf.piece_rgb(i + 1);
-                  pa = select(in, splat(tf.piece_alpha(i + 1)), pa);
-                  pr = select(in, splat(rgb.x()), pr), pg = select(in, splat(rgb.y()), pg);
-                  pb = select(in, splat(rgb.z()), pb);
+                  const VI in = narrow(above & below);
+                  const Eigen::Vector3f& rgb = tf.piece_rgb(i + 1);
+                  pa = select(in, splatf(float(tf.piece_alpha(i + 1))), pa);
+                  pr = select(in, splatf(rgb.x()), pr), pg = select(in, splatf(rgb.y()), pg);
+                  pb = select(in, splatf(rgb.z()), pb);
                   pac = select(in, acp[std::size_t(t * max_pieces + i + 1)], pac);
                 }
-                a = select(ws, pa, a), ac = select(ws, pac, ac);
-                cr = select(ws, pr, cr), cg = select(ws, pg, cg), cb = select(ws, pb, cb);
+                a = select(sel, pa, a), ac = select(sel, pac, ac);
+                cr = select(sel, pr, cr), cg = select(sel, pg, cg), cb = select(sel, pb, cb);
               }
-              const VI vis = sample & narrow(a > 0);
+              const VI vis = sample & (a > 0);
               if (!any(vis)) continue;
               if constexpr (kLit) {
+                // Blinn-Phong in float (shade()'s; the world points and directions rounded to float).
+                const VF pf[3] = {__builtin_convertvector(P[0], VF), __builtin_convertvector(P[1], VF),
+                                  __builtin_convertvector(P[2], VF)};
+                const VF vf[3] = {__builtin_convertvector(V[0], VF), __builtin_convertvector(V[1], VF),
+                                  __builtin_convertvector(V[2], VF)};
                 if (grad_words != nullptr) {
-                  shade_lanes(vis, ii, w, P, V, cr, cg, cb);
+                  shade_lanes(vis, ii, w, pf, vf, cr, cg, cb);
                 } else {
                   for (int l = 0; l < kLanes; ++l) {
                     if (!vis[l]) continue;
-                    Eigen::Vector3d c(cr[l], cg[l], cb[l]);
+                    Eigen::Vector3f c(cr[l], cg[l], cb[l]);
                     shade(c, ii[0][l], ii[1][l], ii[2][l], w[0][l], w[1][l], w[2][l],
-                          Eigen::Vector3d(P[0][l], P[1][l], P[2][l]), -Eigen::Vector3d(V[0][l], V[1][l], V[2][l]));
+                          Eigen::Vector3f(pf[0][l], pf[1][l], pf[2][l]),
+                          -Eigen::Vector3f(vf[0][l], vf[1][l], vf[2][l]));
                     cr[l] = c.x(), cg[l] = c.y(), cb[l] = c.z();
                   }
                 }
               }
-              const VL wv = wide(vis);
               if constexpr (kFrontToBack) {
-                const VD wgt = (1.0 - A) * ac;
-                Cr = select(wv, Cr + wgt * cr, Cr), Cg = select(wv, Cg + wgt * cg, Cg),
-                Cb = select(wv, Cb + wgt * cb, Cb);
-                A = select(wv, A + wgt, A);
-                const VI term = vis & narrow(A >= stop_alpha);
+                const VF wgt = (1.0f - A) * ac;
+                Cr = select(vis, Cr + wgt * cr, Cr), Cg = select(vis, Cg + wgt * cg, Cg),
+                Cb = select(vis, Cb + wgt * cb, Cb);
+                A = select(vis, A + wgt, A);
+                const VI term = vis & (A >= stop_alpha);
                 if (any(term)) {
                   cnt.terminated += count(term);
                   n_lane_samples = select(term, step + 1, n_lane_samples);
@@ -1382,19 +1402,19 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               }
               if (mode == SlicingMode::kBlend) {
                 if (blend_op == BlendOperator::kOver) {
-                  Cr = select(wv, ac * cr + (1.0 - ac) * Cr, Cr), Cg = select(wv, ac * cg + (1.0 - ac) * Cg, Cg);
-                  Cb = select(wv, ac * cb + (1.0 - ac) * Cb, Cb);
+                  Cr = select(vis, ac * cr + (1.0f - ac) * Cr, Cr), Cg = select(vis, ac * cg + (1.0f - ac) * Cg, Cg);
+                  Cb = select(vis, ac * cb + (1.0f - ac) * Cb, Cb);
                 } else {
-                  Cr = select(wv, Cr + ac * cr, Cr), Cg = select(wv, Cg + ac * cg, Cg),
-                  Cb = select(wv, Cb + ac * cb, Cb);
+                  Cr = select(vis, Cr + ac * cr, Cr), Cg = select(vis, Cg + ac * cg, Cg),
+                  Cb = select(vis, Cb + ac * cb, Cb);
                 }
-                A = select(wv, ac + (1.0 - ac) * A, A);
+                A = select(vis, ac + (1.0f - ac) * A, A);
               } else {
-                const VL wins = wv & (a >= A);
+                const VI wins = vis & (a >= A);
                 if (mode == SlicingMode::kCombined) {
-                  const VL rest = wv & ~wins;
-                  Cr = select(rest, ac * cr + (1.0 - ac) * Cr, Cr), Cg = select(rest, ac * cg + (1.0 - ac) * Cg, Cg);
-                  Cb = select(rest, ac * cb + (1.0 - ac) * Cb, Cb);
+                  const VI rest = vis & ~wins;
+                  Cr = select(rest, ac * cr + (1.0f - ac) * Cr, Cr), Cg = select(rest, ac * cg + (1.0f - ac) * Cg, Cg);
+                  Cb = select(rest, ac * cb + (1.0f - ac) * Cb, Cb);
                 }
                 Cr = select(wins, cr, Cr), Cg = select(wins, cg, Cg), Cb = select(wins, cb, Cb);
                 A = select(wins, a, A);
@@ -1410,9 +1430,10 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             const int x = x0 + l % kLanesX, y = y0 + l / kLanesX;
             if (x >= x_end || y >= y_end) continue;
             const Eigen::Vector3d C(Cr[l], Cg[l], Cb[l]);
-            const Eigen::Vector3d out = mode == SlicingMode::kBlend ? Eigen::Vector3d(C + (1 - A[l]) * background)
-                                                                    : (A[l] > 0 ? C : background);
-            write_pixel(x, y, out, A[l]);
+            const double A_l = A[l];  // (the background in double, as per ray)
+            const Eigen::Vector3d out =
+                mode == SlicingMode::kBlend ? Eigen::Vector3d(C + (1 - A_l) * background) : (A_l > 0 ? C : background);
+            write_pixel(x, y, out, A_l);
           }
         }
       for (const auto& b : block_planes) cnt.cell_tests += b.tests;
@@ -1507,7 +1528,7 @@ TfValue slicing_linear_tf_value(const TransferFunction& tf, float v) {
   FloatCurve::Segment seg;
   TfValue out;
   out.alpha = inline_tf.alpha(v, seg);
-  out.rgb = inline_tf.rgb(v, seg);
+  out.rgb = inline_tf.rgb(v, seg).cast<double>();
   return out;
 }
 

@@ -353,24 +353,21 @@ MaskVolume all_index_mask(const Volume& v) {
 
 TEST(SlicingSpeed, PacketsGiveTheScalarPathsPixelsAndFetchesBitForBit) {
   // The SIMD path (SlicingSettings::simd) runs each lane through its ray's scalar arithmetic (the
-  // same fma positions, float trilinear order, double TF tests and compositing; -ffp-contract=off
-  // keeps both free of fused operations) and fetches exactly the samples in live cells that the
-  // ray fetches, so pixels and the sample, skip, classification and termination counts must be
-  // equal, not close. Variants
-  // 0-5 as above, 6: the linear TF unmasked (classified lane by lane), 7: a mask with two constant
-  // TFs unlit (the eight-lane range tests under a mask), 8: opacity correction off and additive
-  // with a background, 9 and 10: Blend and combined on an 8-bit copy of the volume, 11 and 12: a
-  // mask using every index with TF 1 constant, TF 2 linear with curves of their own points, TF 3
-  // linear with 11 shared segments, TF 4 with 5 (the lanes' TF, mask and light together) in Blend
-  // and combined, 13: MIP with the 11-segment TF and a gate and exponent of its own (unlit lanes
-  // among lit ones), 14: lit Blend with the 5-segment TF, 15: variant 12 with std::pow
-  // (exact_pow, lane by lane), 16 and 17: Blend and combined on a two-valued copy of the volume
-  // (0 and 1: trilinear samples in uniform regions are exactly 0 or 1) with constant-TF ranges
-  // [0.5, 1) and [1, 1] (the lanes' float range tests at a bound that most samples of the
-  // object hit exactly, from both sides), 18-20: the two-valued copy with a linear TF from 0 to 1
-  // (its end rows at equality) in Blend, combined, and Blend with a colour of -0; tiles of 16, 5 and 10 pixels (packets
-  // cut at the tile's edge; 10: fifteen 4 x 2 blocks, so the packets' pairs cross block rows and one packet runs alone)
-  // and no skipping.
+  // same fma positions, float trilinear order, the TF's range tests in double, the linear TF, lighting and compositing
+  // in float; -ffp-contract=off keeps both free of fused operations) and fetches exactly the samples in live cells that
+  // the ray fetches, so pixels and the sample, skip, classification and termination counts must be equal, not close.
+  // Variants 0-5 as above, 6: the linear TF unmasked (classified lane by lane), 7: a mask with two constant TFs unlit
+  // (the eight-lane range tests under a mask), 8: opacity correction off and additive with a background, 9 and 10:
+  // Blend and combined on an 8-bit copy of the volume, 11 and 12: a mask using every index with TF 1 constant, TF 2
+  // linear with curves of their own points, TF 3 linear with 11 shared segments, TF 4 with 5 (the lanes' TF, mask and
+  // light together) in Blend and combined, 13: MIP with the 11-segment TF and a gate and exponent of its own (unlit
+  // lanes among lit ones), 14: lit Blend with the 5-segment TF, 15: variant 12 with std::pow (exact_pow, lane by lane),
+  // 16 and 17: Blend and combined on a two-valued copy of the volume (0 and 1: trilinear samples in uniform regions are
+  // exactly 0 or 1) with constant-TF ranges [0.5, 1) and [1, 1] (the lanes' float range tests at a bound that most
+  // samples of the object hit exactly, from both sides), 18-20: the two-valued copy with a linear TF from 0 to 1 (its
+  // end rows at equality) in Blend, combined, and Blend with a colour of -0; tiles of 16, 5 and 10 pixels (packets cut
+  // at the tile's edge; 10: fifteen 4 x 2 blocks, so the packets' pairs cross block rows and one packet runs alone) and
+  // no skipping.
   const Volume& v = phantom();
   TransferFunction bone_only;
   {
@@ -626,7 +623,7 @@ TEST(SlicingSpeed, FloatCorrectedAlphaIsExactToAFewFloatUlpsAndItsLanesGiveItsBi
   for (float e : {1.0f, 2.0f, 4.0f, 8.0f, 16.0f, 40.0f})
     for (int i = 0; i <= 500; ++i) {
       const double tau = (1.0 / 32) * (1 + i / 500.0);
-      as.push_back(float(-std::expm1(-tau / e))), es.push_back(e);
+      as.push_back(float(-std::expm1(-tau / double(e)))), es.push_back(e);
     }
   int short_branch = 0;
   double worst_short = 0;
@@ -641,7 +638,7 @@ TEST(SlicingSpeed, FloatCorrectedAlphaIsExactToAFewFloatUlpsAndItsLanesGiveItsBi
       worst_short = std::max(worst_short, err / (kUlp * double(exact)));
       ASSERT_LE(err, kShort * kUlp * double(exact)) << a << " " << e;
     } else {
-      ASSERT_LE(err, kUlp * double(exact) + (4 + e) * kEps) << a << " " << e;
+      ASSERT_LE(err, kUlp * double(exact) + (4 + double(e)) * kEps) << a << " " << e;
     }
   }
   EXPECT_GT(short_branch, 8000);
@@ -714,7 +711,8 @@ TEST(SlicingSpeed, LinearTfInFloatIsTransferFunctionUpToFloatRoundOff) {
         for (float d : {-1.0f, 0.0f, 1.0f}) vs.push_back(std::nextafter(float(p.x()), d * 2.0f + float(p.x())));
     int near_steps = 0;
     for (float v : vs) {
-      if (std::any_of(steps.begin(), steps.end(), [&](double x) { return std::abs(v - x) <= 8 * 0x1p-24 * x_max; })) {
+      if (std::any_of(steps.begin(), steps.end(),
+                      [&](double x) { return std::abs(double(v) - x) <= 8 * 0x1p-24 * x_max; })) {
         ++near_steps;
         continue;
       }
@@ -727,7 +725,9 @@ TEST(SlicingSpeed, LinearTfInFloatIsTransferFunctionUpToFloatRoundOff) {
       ASSERT_LE(got.alpha, 1.0);
       ++checked;
     }
-    if (trial % 7 == 3 && n > 1) EXPECT_GT(near_steps, 0) << trial;
+    if (trial % 7 == 3 && n > 1) {
+      EXPECT_GT(near_steps, 0) << trial;
+    }
   }
   EXPECT_GT(checked, 80000);
   EXPECT_THROW(slicing_linear_tf_value(skin_bone(), 0.5f), std::invalid_argument);
@@ -736,14 +736,14 @@ TEST(SlicingSpeed, LinearTfInFloatIsTransferFunctionUpToFloatRoundOff) {
 TEST(SlicingSpeed, ExactPowChangesPixelsOnlyByRoundOff) {
   // The constant TF's corrected α (slicing_corrected_alpha, double) differs from 1 - std::pow(1 - a, e)
   // by at most (4 + e) eps absolute (above), and the lit modes' specular power slicing_pow(base,
-  // exponent) from std::pow by (16 + 4 |t|) eps relative, so a pixel's double sum differs by far less
-  // than half a float ulp and its float can differ by at most one ulp (where the double falls next to
-  // a rounding boundary). The linear TF's corrected α is a float (slicing_corrected_alpha_f within
-  // 4 2^-24 of the exact value relative, the exact_pow one within half an ulp): the two differ by
-  // at most 4.5 2^-24 α', and the over operator moves a pixel (and its opacity) by at most
+  // exponent) from std::pow by (16 + 4 |t|) eps relative; both are rounded to float for the float
+  // compositing, where two doubles that close can fall on neighbouring floats (2^-24 relative). The
+  // linear TF's corrected α is a float (slicing_corrected_alpha_f within 4 2^-24 of the exact value
+  // relative, the exact_pow one within half an ulp). So the two α' (and lit colours) differ by at most
+  // 4.5 2^-24 relative, and the over operator moves a pixel (and its opacity) by at most
   // Σ_k |δα'_k| T_k |c_k - C| <= 4.5 2^-24 c_max Σ_k α'_k T_k <= 4.5 2^-24 c_max, c_max <= 1.2 (the
-  // colours times ambient + diffuse + specular): one ulp plus kLinear 2^-24 per value there.
-  constexpr double kLinear = 8;
+  // colours times ambient + diffuse + specular): one ulp of the pixel plus kRoundOff 2^-24 per value.
+  constexpr double kRoundOff = 8;
   const Volume& v = phantom();
   int differing = 0, compared = 0;
   double worst_ulps = 0;
@@ -770,7 +770,7 @@ TEST(SlicingSpeed, ExactPowChangesPixelsOnlyByRoundOff) {
         for (std::size_t i = 0; i < img->size(); ++i) {
           const float a = img->values()[i], b = other.values()[i];
           const float hi = std::max(std::abs(a), std::abs(b));
-          const double tol = (std::nextafter(hi, 2 * hi + 1) - hi) + (variant < 4 ? kLinear * 0x1p-24 : 0.0);
+          const double tol = double(std::nextafter(hi, 2 * hi + 1) - hi) + kRoundOff * 0x1p-24;
           ASSERT_LE(std::abs(a - b), tol) << "variant " << variant << ", value " << i;
           worst_ulps = std::max(worst_ulps, double(std::abs(a - b)) / double(std::nextafter(hi, 2 * hi + 1) - hi));
           differing += a != b;

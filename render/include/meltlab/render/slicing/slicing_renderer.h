@@ -173,22 +173,25 @@ struct SlicingFrame {
   SlicingStats stats;
 };
 
-/// Back-to-front compositing of one sample (exposed for the closed-form tests).
+/// Back-to-front compositing of one sample (exposed for the closed-form tests), in float: the TF's
+/// values are floats (the linear kind is evaluated in float, the constant kind's rounded), and a
+/// pixel's sum over its planes rounds once per plane, each rounding damped by the later planes'
+/// transmittance (issue 17's thirteenth round; the packets composite eight lanes in one register).
 struct SliceAccumulator {
-  Eigen::Vector3d C = Eigen::Vector3d::Zero();
-  double A = 0;  ///< Blend: accumulated opacity; MIP/combined: A_max
-  void blend_over(const Eigen::Vector3d& c, double a) {
+  Eigen::Vector3f C = Eigen::Vector3f::Zero();
+  float A = 0;  ///< Blend: accumulated opacity; MIP/combined: A_max
+  void blend_over(const Eigen::Vector3f& c, float a) {
     C = a * c + (1 - a) * C;
     A = a + (1 - a) * A;
   }
-  void blend_additive(const Eigen::Vector3d& c, double a) {
+  void blend_additive(const Eigen::Vector3f& c, float a) {
     C += a * c;
     A = a + (1 - a) * A;
   }
-  void mip(const Eigen::Vector3d& c_lit, double a) {
+  void mip(const Eigen::Vector3f& c_lit, float a) {
     if (a >= A) C = c_lit, A = a;
   }
-  void combined(const Eigen::Vector3d& c_lit, double a, double a_corrected) {
+  void combined(const Eigen::Vector3f& c_lit, float a, float a_corrected) {
     if (a >= A)
       C = c_lit, A = a;
     else
