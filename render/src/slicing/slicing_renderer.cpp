@@ -1493,32 +1493,39 @@ double slicing_pow(double x, double y) { return lane_math::pow(x, y); }
 
 double slicing_corrected_alpha(double a, double e) { return lane_math::corrected_alpha(a, e); }
 
-void slicing_corrected_alpha_lanes(std::span<const double> a, std::span<const double> e, std::span<double> out) {
+namespace {
+
+/// out[i] = the i-th lane of correct(a, e, need) over packets of kLanes (V: VD or VF, M its mask;
+/// the last packet padded with a = 0, e = 1 and its idle lanes not needed).
+template <class V, class M, class T, class Correct>
+void corrected_alpha_on_lanes(const char* name, std::span<const T> a, std::span<const T> e, std::span<T> out,
+                              Correct correct) {
   if (e.size() != a.size() || out.size() != a.size())
-    throw std::invalid_argument("slicing_corrected_alpha_lanes: spans of different sizes");
+    throw std::invalid_argument(fmt::format("{}: spans of different sizes", name));
   using packet::kLanes;
   for (std::size_t i = 0; i < a.size(); i += kLanes) {
-    packet::VD av = packet::splat(0), ev = packet::splat(1);
-    packet::VL need{};
+    V av = V{}, ev = V{} + T(1);
+    M need{};
     for (std::size_t l = 0; l < kLanes && i + l < a.size(); ++l) av[l] = a[i + l], ev[l] = e[i + l], need[l] = -1;
-    const packet::VD r = lane_math::corrected_alpha(av, ev, need);
+    const V r = correct(av, ev, need);
     for (std::size_t l = 0; l < kLanes && i + l < a.size(); ++l) out[i + l] = r[l];
   }
+}
+
+}  // namespace
+
+void slicing_corrected_alpha_lanes(std::span<const double> a, std::span<const double> e, std::span<double> out) {
+  corrected_alpha_on_lanes<packet::VD, packet::VL>(
+      "slicing_corrected_alpha_lanes", a, e, out,
+      [](packet::VD x, packet::VD y, packet::VL need) { return lane_math::corrected_alpha(x, y, need); });
 }
 
 float slicing_corrected_alpha_f(float a, float e) { return lane_math::corrected_alpha_f(a, e); }
 
 void slicing_corrected_alpha_f_lanes(std::span<const float> a, std::span<const float> e, std::span<float> out) {
-  if (e.size() != a.size() || out.size() != a.size())
-    throw std::invalid_argument("slicing_corrected_alpha_f_lanes: spans of different sizes");
-  using packet::kLanes;
-  for (std::size_t i = 0; i < a.size(); i += kLanes) {
-    packet::VF av = packet::splatf(0), ev = packet::splatf(1);
-    packet::VI need{};
-    for (std::size_t l = 0; l < kLanes && i + l < a.size(); ++l) av[l] = a[i + l], ev[l] = e[i + l], need[l] = -1;
-    const packet::VF r = lane_math::corrected_alpha_f(av, ev, need);
-    for (std::size_t l = 0; l < kLanes && i + l < a.size(); ++l) out[i + l] = r[l];
-  }
+  corrected_alpha_on_lanes<packet::VF, packet::VI>(
+      "slicing_corrected_alpha_f_lanes", a, e, out,
+      [](packet::VF x, packet::VF y, packet::VI need) { return lane_math::corrected_alpha_f(x, y, need); });
 }
 
 TfValue slicing_linear_tf_value(const TransferFunction& tf, float v) {
