@@ -771,7 +771,10 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   };
   // The specular power (the same choice).
   auto power = [exact_pow](double x, double y) { return exact_pow ? std::pow(x, y) : lane_math::pow(x, y); };
-  // The lighting's constants in float.
+  // The lighting's constants in float, and its sums of three products in the one order both paths
+  // use, (x + y) + z (Eigen's float reductions of a Vector3f add in another): x, y a Vector3f or the
+  // lanes' three VF.
+  auto dot3 = [](const auto& x, const auto& y) { return (x[0] * y[0] + x[1] * y[1]) + x[2] * y[2]; };
   const Eigen::Vector3f light_pos_f = light_pos.cast<float>(), inv_spacing_f = inv_spacing.cast<float>();
   const float grad_scale_f = float(grad_scale), gate_f = float(light.gate);
   const float ambient_f = float(light.ambient), diffuse_f = float(light.diffuse), specular_f = float(light.specular);
@@ -784,23 +787,18 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                      const Eigen::Vector3f& to_eye) {
       Eigen::Vector3f e;
       for (int ch = 0; ch < 3; ++ch) e[ch] = gch[std::size_t(ch)].trilinear_cell(i0, j0, k0, wx, wy, wz);
-      // (The sums of three terms written out as (x + y) + z, the lanes' order: Eigen's float
-      // reductions of a Vector3f add in another order.)
-      auto dot = [](const Eigen::Vector3f& x, const Eigen::Vector3f& y) {
-        return (x[0] * y[0] + x[1] * y[1]) + x[2] * y[2];
-      };
       auto normalized = [&](const Eigen::Vector3f& x) {
-        const float z = dot(x, x);
+        const float z = dot3(x, x);
         return z > 0 ? Eigen::Vector3f(x / std::sqrt(z)) : x;
       };
       const Eigen::Vector3f gd = (2.0f * e - Eigen::Vector3f::Ones()) * grad_scale_f;
       const Eigen::Vector3f gw = gd.cwiseProduct(inv_spacing_f);  // index units -> world direction
-      if (std::sqrt(dot(gd, gd)) > gate_f && std::sqrt(dot(gw, gw)) > 0) {
+      if (std::sqrt(dot3(gd, gd)) > gate_f && std::sqrt(dot3(gw, gw)) > 0) {
         const Eigen::Vector3f nrm = -normalized(gw);
         const Eigen::Vector3f l = normalized(light_pos_f - p);
         const Eigen::Vector3f h = normalized(l + to_eye);
-        const float diff = std::max(dot(nrm, l), 0.0f);
-        const float spec = float(power(double(std::max(dot(nrm, h), 0.0f)), light.exponent));
+        const float diff = std::max(dot3(nrm, l), 0.0f);
+        const float spec = float(power(double(std::max(dot3(nrm, h), 0.0f)), light.exponent));
         c = c * (ambient_f + diffuse_f * diff) + Eigen::Vector3f::Constant(specular_f * spec);
       }
     };
@@ -1088,6 +1086,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
           // The linear kind: each lane's last visible α and its corrected value (as per ray).
           VF last_a = splatf(-1), last_ac = splatf(0), ex_f = splatf(1);
           VD O[3] = {}, V[3] = {}, TOFF = splat(ray_frame.t_offset), COSPSI = splat(1);  // each lane's ray
+          VF TO_EYE[3] = {};                                                             // -V in float (the lighting's)
           {
             // The lanes' rays and planes (ray_setup.h: each lane the bits of its ray alone).
             VD xs, ys;
@@ -1117,6 +1116,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             COSPSI = select(live_l, rr.cos_psi, splat(1));
             ex = select(live_l, rr.exponent, splat(1));
             ex_f = __builtin_convertvector(ex, VF);
+            for (int a = 0; a < 3; ++a) TO_EYE[a] = -__builtin_convertvector(V[a], VF);
             u0 = select(alive, kFrontToBack ? -rr.k_last : rr.k_first, zero);
             ns = select(alive, rr.k_last - rr.k_first + 1, zero);
           }
@@ -1142,16 +1142,16 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
           VF Cr = splatf(0), Cg = splatf(0), Cb = splatf(0), A = splatf(0);
           // Counters per lane (a mask is -1 where true: subtracting it counts), summed after the packet.
           VI n_fetched = zero, n_classified = zero;
-          // Blinn-Phong on the lanes (shade()'s arithmetic, Eigen's evaluation order written out:
-          // sums of three squares or products as (x + y) + z, normalized() as v / sqrt(|v|²) where
+          // Blinn-Phong on the lanes (shade()'s arithmetic: sums of three squares or products by
+          // dot3, normalisation as v / sqrt(|v|²) where
           // |v|² > 0): the gradient's three encoded channels of each corner by one 32-bit gather
           // (grad_words_), filtered as VolumeSamples::trilinear_cell filters each channel; the
           // specular term by lane_math::pow on the lanes, as shade() computes it per ray (exact_pow:
           // std::pow lane by lane, which was a fifth of the combined mode's frame; 0 where its base is
-          // 0 and the exponent > 0: pow's exact +0). Lanes in vis only; p the world points, v the rays'
-          // directions.
-          auto shade_lanes = [&](VI vis, const VI(&ii)[3], const VF(&w)[3], const VF(&p)[3], const VF(&v)[3], VF& cr,
-                                 VF& cg, VF& cb) {
+          // 0 and the exponent > 0: pow's exact +0). Lanes in vis only; p the world points, to_eye the rays'
+          // directions negated.
+          auto shade_lanes = [&](VI vis, const VI(&ii)[3], const VF(&w)[3], const VF(&p)[3], const VF(&to_eye)[3],
+                                 VF& cr, VF& cg, VF& cb) {
             VI o0[3], o1[3];
             for (int a = 0; a < 3; ++a) {
               o0[a] = select(vis, clamp(ii[a], cell_max[a]) * gstr[a], zero);
@@ -1179,8 +1179,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               gd[ch] = (2.0f * e - 1.0f) * grad_scale_f;
               gw[ch] = gd[ch] * inv_spacing_f[ch];
             }
-            auto sq = [](const VF(&x)[3]) { return (x[0] * x[0] + x[1] * x[1]) + x[2] * x[2]; };
-            auto dot = [](const VF(&x)[3], const VF(&y)[3]) { return (x[0] * y[0] + x[1] * y[1]) + x[2] * y[2]; };
+            auto sq = [&](const VF(&x)[3]) { return dot3(x, x); };
             const VF gw2 = sq(gw);
             const VI lit_l = vis & (sqrt(sq(gd)) > gate_f) & (sqrt(gw2) > 0.0f);
             if (!any(lit_l)) return;
@@ -1188,10 +1187,10 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             const VF gwn = sqrt(gw2);
             for (int a = 0; a < 3; ++a) nrm[a] = -(gw[a] / gwn), ld[a] = light_pos_f[a] - p[a];
             const VF l2 = sq(ld), ln = sqrt(l2);
-            for (int a = 0; a < 3; ++a) ld[a] = select(l2 > 0.0f, ld[a] / ln, ld[a]), hd[a] = ld[a] + -v[a];
+            for (int a = 0; a < 3; ++a) ld[a] = select(l2 > 0.0f, ld[a] / ln, ld[a]), hd[a] = ld[a] + to_eye[a];
             const VF h2 = sq(hd), hn = sqrt(h2);
             for (int a = 0; a < 3; ++a) hd[a] = select(h2 > 0.0f, hd[a] / hn, hd[a]);
-            const VF nl = dot(nrm, ld), nh = dot(nrm, hd);
+            const VF nl = dot3(nrm, ld), nh = dot3(nrm, hd);
             const VF diff = select(nl < 0.0f, splatf(0), nl);
             const VF base = select(nh < 0.0f, splatf(0), nh);
             VF spec = splatf(0);
@@ -1199,7 +1198,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
             if (exact_pow) {
               for (unsigned b = bits(needs_pow); b != 0; b &= b - 1) {
                 const int l = __builtin_ctz(b);
-                spec[l] = float(std::pow(double(base[l]), light.exponent));
+                spec[l] = float(power(double(base[l]), light.exponent));
               }
             } else if (any(needs_pow)) {
               const VD power_d = lane_math::pow(__builtin_convertvector(base, VD), splat(light.exponent));
@@ -1336,7 +1335,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                   if (exact_pow) {
                     for (unsigned b = bits(fresh); b != 0; b &= b - 1) {
                       const int l = __builtin_ctz(b);
-                      last_ac[l] = float(1.0 - std::pow(1.0 - double(ta[l]), double(ex_f[l])));
+                      last_ac[l] = correct_f(ta[l], ex_f[l]);
                     }
                   } else if (any(fresh)) {
                     last_ac = select(fresh, lane_math::corrected_alpha_f(ta, ex_f, fresh), last_ac);
@@ -1371,17 +1370,15 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 // Blinn-Phong in float (shade()'s; the world points and directions rounded to float).
                 const VF pf[3] = {__builtin_convertvector(P[0], VF), __builtin_convertvector(P[1], VF),
                                   __builtin_convertvector(P[2], VF)};
-                const VF vf[3] = {__builtin_convertvector(V[0], VF), __builtin_convertvector(V[1], VF),
-                                  __builtin_convertvector(V[2], VF)};
                 if (grad_words != nullptr) {
-                  shade_lanes(vis, ii, w, pf, vf, cr, cg, cb);
+                  shade_lanes(vis, ii, w, pf, TO_EYE, cr, cg, cb);
                 } else {
                   for (int l = 0; l < kLanes; ++l) {
                     if (!vis[l]) continue;
                     Eigen::Vector3f c(cr[l], cg[l], cb[l]);
                     shade(c, ii[0][l], ii[1][l], ii[2][l], w[0][l], w[1][l], w[2][l],
                           Eigen::Vector3f(pf[0][l], pf[1][l], pf[2][l]),
-                          -Eigen::Vector3f(vf[0][l], vf[1][l], vf[2][l]));
+                          Eigen::Vector3f(TO_EYE[0][l], TO_EYE[1][l], TO_EYE[2][l]));
                     cr[l] = c.x(), cg[l] = c.y(), cb[l] = c.z();
                   }
                 }
