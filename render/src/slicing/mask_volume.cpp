@@ -12,6 +12,8 @@ namespace meltlab::render {
 
 namespace {
 
+constexpr std::size_t kPadding = 3;  // MaskVolume::cells()'s bytes after the last cell
+
 Eigen::Matrix3d rotation(const Eigen::Vector3d& deg) {
   const Eigen::Vector3d r = deg * (M_PI / 180.0);
   return (Eigen::AngleAxisd(r.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(r.y(), Eigen::Vector3d::UnitY()) *
@@ -39,7 +41,19 @@ MaskVolume::MaskVolume(const std::array<int, 3>& dims, const Box3& box, int inde
   if (index < 0 || index > 4) throw InputError(fmt::format("slicing: a mask index is 0-4 (got {})", index));
   if (!(box.size().minCoeff() > 0)) throw InputError("slicing: the mask's box is empty");
   inv_size_ = box.size().cwiseInverse();
-  cells_.assign(std::size_t(dims[0]) * dims[1] * dims[2], std::uint8_t(index));
+  cells_.assign(std::size_t(dims[0]) * dims[1] * dims[2] + kPadding, std::uint8_t(index));
+}
+
+MaskIndexLookup MaskVolume::index_lookup(const Eigen::Vector3d& origin, const Eigen::Vector3d& spacing) const {
+  MaskIndexLookup m;
+  for (int a = 0; a < 3; ++a) {
+    const double cells_per_unit = n_[std::size_t(a)] * inv_size_[a];
+    m.scale[std::size_t(a)] = float(spacing[a] * cells_per_unit);
+    m.offset[std::size_t(a)] = float((origin[a] - box_.lo[a]) * cells_per_unit);
+  }
+  m.n = n_;
+  m.cells = cells_.data();
+  return m;
 }
 
 std::int64_t MaskVolume::apply(const MaskEdit& e) {
@@ -66,7 +80,7 @@ std::int64_t MaskVolume::apply(const MaskEdit& e) {
 
 std::array<std::int64_t, 5> MaskVolume::histogram() const {
   std::array<std::int64_t, 5> h{0, 0, 0, 0, 0};
-  for (auto c : cells_) ++h[c];
+  for (std::size_t i = 0; i + kPadding < cells_.size(); ++i) ++h[cells_[i]];
   return h;
 }
 

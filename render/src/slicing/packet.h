@@ -234,6 +234,19 @@ inline VI gather_i32(const std::int32_t* data, VI offset) {
 #endif
 }
 
+/// data[offset] per lane (bytes; each offset must be followed by 3 readable bytes: one 32-bit gather).
+inline VI gather_u8(const std::uint8_t* data, VI offset) {
+#if defined(__AVX2__) && MELTLAB_PACKET_LANES == 8
+  return VI(_mm256_i32gather_epi32(reinterpret_cast<const int*>(data), __m256i(offset), 1)) & 255;
+#elif defined(__AVX2__)
+  return VI(_mm_i32gather_epi32(reinterpret_cast<const int*>(data), __m128i(offset), 1)) & 255;
+#else
+  VI r;
+  for (int l = 0; l < kLanes; ++l) r[l] = data[offset[l]];
+  return r;
+#endif
+}
+
 /// data[index] per lane (64-bit words).
 inline VU gather_u64(const std::uint64_t* data, VI index) {
 #if defined(__AVX512F__) && MELTLAB_PACKET_LANES == 8

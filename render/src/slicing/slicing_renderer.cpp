@@ -701,7 +701,6 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   const SlicingMode mode = s_.mode;
   const BlendOperator blend_op = s_.blend;
   const BlinnPhong light = s_.light;
-  const MaskVolume& mask = s_.mask;
   const Eigen::Vector3d background = s_.background;
   const bool exact_positions = s_.exact_positions;
   const bool live_runs = s_.live_runs;
@@ -746,11 +745,8 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   // The gradient for the packets' lighting: the three encoded channels of a voxel in one word.
   const std::int32_t* const grad_words = grad_words_.empty() ? nullptr : grad_words_.data();
   const float grad_channel_scale = lit ? grad_->channel(0).scale : 1.0f;
-  // The mask for the packets' lookups.
-  const std::uint8_t* const mask_cells = use_mask ? mask.cells() : nullptr;
-  const std::array<int, 3> mask_dims = use_mask ? mask.dims() : std::array<int, 3>{1, 1, 1};
-  const Eigen::Vector3d mask_lo = use_mask ? mask.box().lo : Eigen::Vector3d::Zero();
-  const Eigen::Vector3d mask_inv_size = use_mask ? mask.inv_size() : Eigen::Vector3d::Ones();
+  // The mask in the samples' index coordinates (MaskIndexLookup: the same bits per ray and on the lanes).
+  const MaskIndexLookup mask_index = use_mask ? s_.mask.index_lookup(origin, volume_.spacing()) : MaskIndexLookup{};
   // Packets index the samples with 32-bit element offsets (and read 32-bit cell records).
   const auto st = volume_.strides();
   const bool offsets_fit =
@@ -876,7 +872,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               const int k = kFrontToBack ? rs.k_last - step : rs.k_first + step;
               ++n_visited;
               // g: the sample's index coordinates (i0, j0, k0 its stencil's lower corner, w the
-              // weights); p (world) where the mask or the light needs it.
+              // weights); p (world) where the light needs it.
               Eigen::Vector3d g, p;
               int i0, j0, k0;
               float wx, wy, wz;
@@ -894,7 +890,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 i0 = fixed::floor_voxel(q[0]), j0 = fixed::floor_voxel(q[1]), k0 = fixed::floor_voxel(q[2]);
                 wx = fixed::weight(q[0]), wy = fixed::weight(q[1]), wz = fixed::weight(q[2]);
                 g = Eigen::Vector3d(fixed::to_double(q[0]), fixed::to_double(q[1]), fixed::to_double(q[2]));
-                if constexpr (kMasked || kLit) p = ray.origin + rs.t(stack, k) * ray.direction;
+                if constexpr (kLit) p = ray.origin + rs.t(stack, k) * ray.direction;
               }
               const int ic0 = std::clamp(i0, 0, dims[0] - 1), ic1 = std::clamp(j0, 0, dims[1] - 1),
                         ic2 = std::clamp(k0, 0, dims[2] - 1);
@@ -935,7 +931,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               }
               int m = 1;
               if constexpr (kMasked) {
-                m = mask.lookup(p);
+                m = mask_index.lookup(i0, j0, k0, wx, wy, wz);
                 if (m == 0) continue;
               }
               ++n_classified;
@@ -1148,14 +1144,15 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
           // (grad_words_), filtered as VolumeSamples::trilinear_cell filters each channel; the
           // specular term by lane_math::pow on the lanes, as shade() computes it per ray (exact_pow:
           // std::pow lane by lane, which was a fifth of the combined mode's frame; 0 where its base is
-          // 0 and the exponent > 0: pow's exact +0). Lanes in vis only; p the world points, to_eye the rays'
+          // 0 and the exponent > 0: pow's exact +0). Lanes in vis only, the gradient read in the lanes `read`
+          // (a superset of vis that does not wait for the sample's TF); p the world points, to_eye the rays'
           // directions negated.
-          auto shade_lanes = [&](VI vis, const VI(&ii)[3], const VF(&w)[3], const VF(&p)[3], const VF(&to_eye)[3],
-                                 VF& cr, VF& cg, VF& cb) {
+          auto shade_lanes = [&](VI vis, VI read, const VI(&ii)[3], const VF(&w)[3], const VF(&p)[3],
+                                 const VF(&to_eye)[3], VF& cr, VF& cg, VF& cb) {
             VI o0[3], o1[3];
             for (int a = 0; a < 3; ++a) {
-              o0[a] = select(vis, clamp(ii[a], cell_max[a]) * gstr[a], zero);
-              o1[a] = select(vis, clamp(ii[a] + 1, cell_max[a]) * gstr[a], zero);
+              o0[a] = select(read, clamp(ii[a], cell_max[a]) * gstr[a], zero);
+              o1[a] = select(read, clamp(ii[a] + 1, cell_max[a]) * gstr[a], zero);
             }
             const VF one_f = splatf(1.0f);
             VF vx[2][2][2][3];  // [x][y][z][channel]
@@ -1252,37 +1249,38 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               n_fetched -= sample;
               const int k = kFrontToBack ? -Uq : Uq;  // the plane (the same for every lane)
               VI m = one;
-              // The world point o + t_k v of each lane (the scalar loop's p) where the mask or the light
-              // needs it.
+              // The world point o + t_k v of each lane (the scalar loop's p) where the light needs it.
               VD P[3];
-              if constexpr (kMasked || kLit) {
+              if constexpr (kLit) {
                 const VD tk = (splat(stack.depth(k)) - TOFF) / COSPSI;
                 for (int a = 0; a < 3; ++a) P[a] = O[a] + tk * V[a];
               }
+              const VF w[3] = {fixed::weight(gq[0]), fixed::weight(gq[1]), fixed::weight(gq[2])};
+              // The lanes whose stencil is read: those of the walk, the mask's cuts included, so that
+              // the volume's gathers need not wait for the mask's (a cut lane's values are not used).
+              const VI read = sample;
               if constexpr (kMasked) {
-                // MaskVolume::lookup on the lanes: cell floor(u n) clamped, u = (p - lo) / size.
+                // MaskIndexLookup::lookup on the lanes (its float arithmetic; the bytes by one gather).
                 VI cell = zero;
                 for (int a = 2; a >= 0; --a) {
-                  const double n = double(mask_dims[a]);
-                  const VD f = floor((P[a] - mask_lo[a]) * mask_inv_size[a] * n);
-                  const VD c = select(f < 0.0, splat(0), select(f >= n, splat(n - 1), f));
-                  const VI ci = __builtin_convertvector(select(c >= 0.0, c, splat(0)), VI);  // (NaN: cell 0)
-                  cell = a == 2 ? ci : ci + mask_dims[a] * cell;
+                  const std::size_t ax = std::size_t(a);
+                  const float n = float(mask_index.n[ax]);
+                  const VF f =
+                      floor((__builtin_convertvector(ii[a], VF) + w[a]) * mask_index.scale[ax] + mask_index.offset[ax]);
+                  const VI ci =
+                      __builtin_convertvector(select(f < 0.0f, splatf(0), select(f >= n, splatf(n - 1), f)), VI);
+                  cell = a == 2 ? ci : ci + mask_index.n[ax] * cell;
                 }
-                cell = select(sample, cell, zero);
-                VI looked;
-                for (int l = 0; l < kLanes; ++l) looked[l] = mask_cells[cell[l]];
-                m = select(sample, looked, one);
+                m = select(sample, gather_u8(mask_index.cells, select(sample, cell, zero)), one);
                 sample &= m != 0;
               }
               n_classified -= sample;
               if (!any(sample)) continue;
               // Trilinear fetch (VolumeSamples::trilinear_cell's arithmetic; offset 0 in idle lanes).
-              const VF w[3] = {fixed::weight(gq[0]), fixed::weight(gq[1]), fixed::weight(gq[2])};
               VI o0[3], o1[3];
               for (int a = 0; a < 3; ++a) {
-                o0[a] = select(sample, ic[a] * str[a], zero);
-                o1[a] = select(sample, clamp(ii[a] + 1, cell_max[a]) * str[a], zero);
+                o0[a] = select(read, ic[a] * str[a], zero);
+                o1[a] = select(read, clamp(ii[a] + 1, cell_max[a]) * str[a], zero);
               }
               const VF one_f = splatf(1.0f);
               // The corners v[y][z] at x0 and x1 (offsets y0/y1, z0/z1). Float samples with x fastest
@@ -1290,7 +1288,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               VF vx0[2][2], vx1[2][2];
               bool paired = false;
               if constexpr (std::is_same_v<std::remove_cv_t<std::remove_pointer_t<decltype(samples.data)>>, float>) {
-                paired = x_packed && !any(sample & ((ii[0] < 0) | (ii[0] >= cell_max[0])));
+                paired = x_packed && !any(read & ((ii[0] < 0) | (ii[0] >= cell_max[0])));
                 if (paired)
                   for (int yy = 0; yy < 2; ++yy)
                     for (int zz = 0; zz < 2; ++zz)
@@ -1371,7 +1369,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 const VF pf[3] = {__builtin_convertvector(P[0], VF), __builtin_convertvector(P[1], VF),
                                   __builtin_convertvector(P[2], VF)};
                 if (grad_words != nullptr) {
-                  shade_lanes(vis, ii, w, pf, TO_EYE, cr, cg, cb);
+                  shade_lanes(vis, read, ii, w, pf, TO_EYE, cr, cg, cb);
                 } else {
                   for (int l = 0; l < kLanes; ++l) {
                     if (!vis[l]) continue;

@@ -442,6 +442,70 @@ TEST(SlicingMask, AllOnesEqualsUnmaskedAndIndexZeroEqualsZeroAlpha) {
   }
 }
 
+TEST(SlicingMask, IndexLookupIsTheWorldLookupUpToFloatCellFaces) {
+  // MaskIndexLookup (the renderer's lookup from a sample's stencil corner i and weight w) against
+  // MaskVolume::lookup of the world point origin + (i + w) spacing, over random volumes (origin,
+  // spacing), mask boxes that are not the volume's, mask resolutions and contents, and samples in
+  // and around the box (clamped cells). The two may differ only where the exact mask coordinate
+  // lies within kFace cells of a cell face: the float rounding of i + w (2^-24 |g|), of s and o
+  // (2^-24 each, times |g| and 1) and of the product and sum, about 2^-22 (|g| s + |o|) at most.
+  std::mt19937 rng(20261129);
+  std::uniform_real_distribution<double> U(0, 1);
+  std::int64_t checked = 0, near_face = 0, differ = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const std::array<int, 3> dims{2 + int(U(rng) * 300), 2 + int(U(rng) * 300), 2 + int(U(rng) * 200)};
+    const Eigen::Vector3d origin(200 * U(rng) - 100, 200 * U(rng) - 100, 200 * U(rng) - 100);
+    const Eigen::Vector3d spacing(0.1 + 3 * U(rng), 0.1 + 3 * U(rng), 0.1 + 3 * U(rng));
+    Box3 box;
+    box.lo = origin - Eigen::Vector3d::Constant(2 * U(rng));
+    box.hi = origin + spacing.cwiseProduct(Eigen::Vector3d(dims[0] - 1, dims[1] - 1, dims[2] - 1)) +
+             Eigen::Vector3d::Constant(2 * U(rng));
+    MaskVolume mask({1 + int(U(rng) * 60), 1 + int(U(rng) * 60), 1 + int(U(rng) * 60)}, box, 1);
+    for (int e = 0; e < 8; ++e) {
+      MaskEdit edit;
+      edit.centre = Eigen::Vector3d(U(rng), U(rng), U(rng));
+      edit.half_size = Eigen::Vector3d(0.02 + 0.2 * U(rng), 0.02 + 0.2 * U(rng), 0.02 + 0.2 * U(rng));
+      edit.index = int(U(rng) * 5);
+      mask.apply(edit);
+    }
+    const MaskIndexLookup lut = mask.index_lookup(origin, spacing);
+    const auto n = mask.dims();
+    for (int q = 0; q < 4000; ++q) {
+      int i[3];
+      float w[3];
+      bool near = false;
+      for (int a = 0; a < 3; ++a) {
+        i[a] = -2 + int(U(rng) * (dims[std::size_t(a)] + 3));
+        w[a] = float(int(U(rng) * 16777216.0)) * 0x1p-24f;
+        // Half the samples on a cell face of the mask (then rounded to the weight's 2^-24).
+        if (q % 2 == 0) {
+          const double face = std::floor(U(rng) * (n[std::size_t(a)] + 1));
+          const double g = ((face / n[std::size_t(a)]) * box.size()[a] + box.lo[a] - origin[a]) / spacing[a];
+          i[a] = int(std::floor(g));
+          w[a] = float(std::floor((g - i[a]) * 16777216.0)) * 0x1p-24f;
+        }
+        const double g = i[a] + double(w[a]);
+        const double u = ((origin[a] + g * spacing[a]) - box.lo[a]) / box.size()[a] * n[std::size_t(a)];
+        const double kFace = 0x1p-21 * (std::abs(g) * spacing[a] * n[std::size_t(a)] / box.size()[a] +
+                                        std::abs(origin[a] - box.lo[a]) * n[std::size_t(a)] / box.size()[a] + 1);
+        near = near || std::abs(u - std::round(u)) <= kFace;
+      }
+      const Eigen::Vector3d p =
+          origin + spacing.cwiseProduct(Eigen::Vector3d(i[0] + double(w[0]), i[1] + double(w[1]), i[2] + double(w[2])));
+      const int world = mask.lookup(p), index = lut.lookup(i[0], i[1], i[2], w[0], w[1], w[2]);
+      ++checked;
+      near_face += near;
+      if (world != index) {
+        ++differ;
+        EXPECT_TRUE(near) << "trial " << trial << " sample " << q << ": index lookup " << index << ", world " << world;
+      }
+    }
+  }
+  std::printf("%lld samples, %lld within the float tolerance of a cell face, %lld differ there\n", (long long)checked,
+              (long long)near_face, (long long)differ);
+  EXPECT_GT(near_face, checked / 4) << "the faces must be exercised";
+}
+
 TEST(SlicingMask, ResolutionChangesOnlyPixelsNearRegionBoundaries) {
   const Volume v = make_test_field(TestField::kSphere, 32);
   const Box3 box = v.domain();

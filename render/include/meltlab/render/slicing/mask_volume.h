@@ -17,6 +17,7 @@
 #include <Eigen/Geometry>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -36,6 +37,31 @@ struct MaskEdit {
 };
 
 std::string mask_shape_name(MaskShape s);
+
+/// MaskVolume::lookup in a volume's index coordinates, as the slicing renderer's samples carry them:
+/// the sample at g = i + w (i its trilinear stencil's lower corner, w in [0, 1) its weight; the world
+/// point origin + g ∘ spacing) is in cell ⌊(float(i) + w) s_a + o_a⌋ clamped to [0, n_a - 1] per axis,
+/// s_a = spacing_a n_a / L_a and o_a = (origin_a - lo_a) n_a / L_a rounded to float (L the mask box's
+/// size). In float, where lookup() takes the world point in double: a cell's face moves by about
+/// 2⁻²³ (|g_a| s_a + |o_a|) cells (2⁻¹⁶ of a cell for a 256-voxel axis), below anything a region mask
+/// of nearest cells resolves, and eight lanes compute the same bits (no division, no double).
+struct MaskIndexLookup {
+  std::array<float, 3> scale{1, 1, 1}, offset{0, 0, 0};
+  std::array<int, 3> n{1, 1, 1};
+  const std::uint8_t* cells = nullptr;  ///< x fastest, followed by 3 readable bytes (32-bit gathers)
+
+  /// The cell along axis a of the sample at i + w.
+  int axis_cell(int a, int i, float w) const {
+    const std::size_t k = std::size_t(a);
+    const float f = std::floor((float(i) + w) * scale[k] + offset[k]);
+    return f < 0 ? 0 : (f >= float(n[k]) ? n[k] - 1 : int(f));
+  }
+  /// The index (0-4) at the sample i + wx, j + wy, k + wz.
+  int lookup(int i, int j, int k, float wx, float wy, float wz) const {
+    const int c0 = axis_cell(0, i, wx), c1 = axis_cell(1, j, wy), c2 = axis_cell(2, k, wz);
+    return cells[std::size_t(c0 + n[0] * (c1 + n[1] * c2))];
+  }
+};
 
 class MaskVolume {
  public:
@@ -61,10 +87,10 @@ class MaskVolume {
     }
     return at(c[0], c[1], c[2]);
   }
-  /// The cells (x fastest) and 1 / the box's size per axis: lookup's inputs, for the slicing
-  /// renderer's packets (the same arithmetic on eight lanes).
+  /// The cells (x fastest), followed by 3 padding bytes (MaskIndexLookup's 32-bit gathers).
   const std::uint8_t* cells() const { return cells_.data(); }
-  const Eigen::Vector3d& inv_size() const { return inv_size_; }
+  /// lookup() for the samples of a volume with this index origin and spacing (MaskIndexLookup).
+  MaskIndexLookup index_lookup(const Eigen::Vector3d& origin, const Eigen::Vector3d& spacing) const;
   /// Writes the edit's index into the cells whose centres are inside it (InputError for an index
   /// outside [0, 4] or a non-positive size); returns the number of cells written.
   std::int64_t apply(const MaskEdit& edit);
@@ -75,7 +101,7 @@ class MaskVolume {
   std::array<int, 3> n_{0, 0, 0};
   Box3 box_;
   Eigen::Vector3d inv_size_ = Eigen::Vector3d::Ones();
-  std::vector<std::uint8_t> cells_;
+  std::vector<std::uint8_t> cells_;  ///< n_[0] n_[1] n_[2] cells and 3 padding bytes
 };
 
 }  // namespace meltlab::render
