@@ -1559,7 +1559,9 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
         tf.kind() == TfKind::kPiecewiseLinear ? "piecewise_linear" : "piecewise_constant");
     add(fmt::format("tf{}.name", i + 1), tf.name());
   }
-  add("tf.resolution/curve", "exact: control points evaluated per sample (no table), piecewise linear");
+  add("tf.resolution/curve",
+      "exact: control points evaluated per sample (no table), piecewise linear, in float "
+      "(the sample's precision; within 8 2^-24 of the curve in double)");
   if (s.mask.empty()) {
     add("mask.resolution", "none (TF 1 everywhere)");
   } else {
@@ -1568,7 +1570,9 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
     const auto h = s.mask.histogram();
     add("mask.histogram", fmt::format("[{}, {}, {}, {}, {}]", h[0], h[1], h[2], h[3], h[4]));
   }
-  add("mask.filter", "nearest");
+  add("mask.filter",
+      "nearest, the cell from the sample's index coordinates in float (its faces within ~2^-23 "
+      "(|g| s + |o|) cells of the world point's)");
   add("mask.object_shape", "box | sphere | ellipsoid (normalised box coordinates)");
   add("slice.normal", "centre - camera");
   add("slice.normalise_n", "true");
@@ -1588,10 +1592,14 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
                                        "image as one ray at a time)",
                                        packet::kLanesX, packet::kLanes)
                          : "off (one ray at a time)");
-  add("cpu.pow", s.exact_pow ? "std::pow"
-                             : "the TFs' corrected alpha by slicing_corrected_alpha (short series for alpha <= 1/32, "
-                               "else slicing_pow; within (4 + e) 2^-53 of 1 - std::pow(1 - a, e)), the specular "
-                               "power by slicing_pow");
+  add("cpu.pow", s.exact_pow
+                     ? "std::pow in double, rounded to float"
+                     : "the linear TFs' corrected alpha by slicing_corrected_alpha_f in float (within 4 2^-24), "
+                       "the constant TFs' per ray and piece by slicing_corrected_alpha (within (4 + e) 2^-53 "
+                       "of 1 - std::pow(1 - a, e)), the specular power by slicing_pow, rounded to float");
+  add("cpu.precision",
+      "float: the TF, the corrected alpha, Blinn-Phong and the compositing (C, A); the "
+      "background added in double");
   add("mode", slicing_mode_name(s.mode));
   add("blend.operator", s.blend == BlendOperator::kOver ? "over" : "additive");
   add("blend.opacity_correction", s.opacity_correction ? "on, dref = h0, along-ray spacing dd / cos psi" : "off");
