@@ -765,8 +765,11 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   auto correct_f = [exact_pow](float a, float e) {
     return exact_pow ? float(1.0 - std::pow(1.0 - double(a), double(e))) : lane_math::corrected_alpha_f(a, e);
   };
-  // The specular power (the same choice).
-  auto power = [exact_pow](double x, double y) { return exact_pow ? std::pow(x, y) : lane_math::pow(x, y); };
+  // The specular power (the same choice; an integer exponent by lane_math::int_pow).
+  const int int_exponent = lane_math::int_exponent(light.exponent);
+  auto power = [exact_pow, int_exponent](double x, double y) {
+    return exact_pow ? std::pow(x, y) : int_exponent > 0 ? lane_math::int_pow(x, int_exponent) : lane_math::pow(x, y);
+  };
   // The lighting's constants in float, and its sums of three products in the one order both paths
   // use, (x + y) + z (Eigen's float reductions of a Vector3f add in another): x, y a Vector3f or the
   // lanes' three VF.
@@ -1142,7 +1145,8 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
           // dot3, normalisation as v / sqrt(|v|²) where
           // |v|² > 0): the gradient's three encoded channels of each corner by one 32-bit gather
           // (grad_words_), filtered as VolumeSamples::trilinear_cell filters each channel; the
-          // specular term by lane_math::pow on the lanes, as shade() computes it per ray (exact_pow:
+          // specular term by lane_math::int_pow (an integer exponent) or lane_math::pow on the lanes, as
+          // shade() computes it per ray (slicing_specular_power; exact_pow:
           // std::pow lane by lane, which was a fifth of the combined mode's frame; 0 where its base is
           // 0 and the exponent > 0: pow's exact +0). Lanes in vis only, the gradient read in the lanes `read`
           // (a superset of vis that does not wait for the sample's TF); p the world points, to_eye the rays'
@@ -1198,7 +1202,9 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
                 spec[l] = float(power(double(base[l]), light.exponent));
               }
             } else if (any(needs_pow)) {
-              const VD power_d = lane_math::pow(__builtin_convertvector(base, VD), splat(light.exponent));
+              const VD base_d = __builtin_convertvector(base, VD);
+              const VD power_d = int_exponent > 0 ? lane_math::int_pow(base_d, int_exponent)
+                                                  : lane_math::pow(base_d, splat(light.exponent));
               spec = select(needs_pow, __builtin_convertvector(power_d, VF), spec);
             }
             const VF k = ambient_f + diffuse_f * diff, sp = specular_f * spec;
@@ -1491,7 +1497,8 @@ double slicing_corrected_alpha(double a, double e) { return lane_math::corrected
 namespace {
 
 /// out[i] = the i-th lane of correct(a, e, need) over packets of kLanes (V: VD or VF, M its mask;
-/// the last packet padded with a = 0, e = 1 and its idle lanes not needed).
+/// the last packet padded with a = 0, e = 1 and its idle lanes not needed). Also the specular power's
+/// lanes (a the base, e the exponent).
 template <class V, class M, class T, class Correct>
 void corrected_alpha_on_lanes(const char* name, std::span<const T> a, std::span<const T> e, std::span<T> out,
                               Correct correct) {
@@ -1513,6 +1520,19 @@ void slicing_corrected_alpha_lanes(std::span<const double> a, std::span<const do
   corrected_alpha_on_lanes<packet::VD, packet::VL>(
       "slicing_corrected_alpha_lanes", a, e, out,
       [](packet::VD x, packet::VD y, packet::VL need) { return lane_math::corrected_alpha(x, y, need); });
+}
+
+double slicing_specular_power(double x, double y) {
+  const int n = lane_math::int_exponent(y);
+  return n > 0 ? lane_math::int_pow(x, n) : lane_math::pow(x, y);
+}
+
+void slicing_specular_power_lanes(std::span<const double> x, double y, std::span<double> out) {
+  const std::vector<double> ys(x.size(), y);
+  const int n = lane_math::int_exponent(y);
+  corrected_alpha_on_lanes<packet::VD, packet::VL>(
+      "slicing_specular_power_lanes", x, std::span<const double>(ys), out,
+      [n](packet::VD b, packet::VD e, packet::VL) { return n > 0 ? lane_math::int_pow(b, n) : lane_math::pow(b, e); });
 }
 
 float slicing_corrected_alpha_f(float a, float e) { return lane_math::corrected_alpha_f(a, e); }
@@ -1596,7 +1616,8 @@ std::vector<std::pair<std::string, std::string>> describe_vsi(const SlicingSetti
                      ? "std::pow in double, rounded to float"
                      : "the linear TFs' corrected alpha by slicing_corrected_alpha_f in float (within 4 2^-24), "
                        "the constant TFs' per ray and piece by slicing_corrected_alpha (within (4 + e) 2^-53 "
-                       "of 1 - std::pow(1 - a, e)), the specular power by slicing_pow, rounded to float");
+                       "of 1 - std::pow(1 - a, e)), the specular power by slicing_specular_power (x^n by "
+                       "squarings for an integer n, else slicing_pow), rounded to float");
   add("cpu.precision",
       "float: the TF, the corrected alpha, Blinn-Phong and the compositing (C, A); the "
       "background added in double");

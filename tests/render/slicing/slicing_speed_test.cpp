@@ -554,6 +554,49 @@ TEST(SlicingSpeed, SlicingPowIsStdPowUpToRoundOff) {
   std::printf("worst error: %.3f of the bound\n", worst);
 }
 
+TEST(SlicingSpeed, SpecularPowerIsStdPowUpToRoundOffAndItsLanesGiveItsBits) {
+  // slicing_specular_power: x^n for an integer n in [1, 1024] by binary exponentiation, each product
+  // one rounding: the relative error roughly doubles with each squaring and grows by one rounding per
+  // product, so it stays below 2 n eps (eps = 2^-53) against the long-double reference while the
+  // result is normal; other exponents are slicing_pow's. Lanes give the scalar's bits. After rounding
+  // to float (what the renderer keeps) it is std::pow's float but within 2 n eps of a float rounding
+  // boundary: counted, a handful at most.
+  constexpr double kEps = 0x1p-53;
+  std::mt19937_64 rng(1729);
+  std::uniform_real_distribution<double> U(0, 1);
+  double worst = 0;  // in units of the bound
+  int checked = 0, float_differs = 0;
+  for (int n : {1, 2, 3, 5, 8, 16, 31, 32, 33, 64, 100, 128, 255, 1000, 1024}) {
+    std::vector<double> x(4000), lanes(4000);
+    for (std::size_t i = 0; i < x.size(); ++i) x[i] = i < 2 ? double(i) : i < 200 ? 1 - U(rng) * 1e-6 : U(rng);
+    slicing_specular_power_lanes(x, double(n), lanes);
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const double p = slicing_specular_power(x[i], double(n));
+      ASSERT_EQ(std::bit_cast<std::uint64_t>(lanes[i]), std::bit_cast<std::uint64_t>(p)) << x[i] << "^" << n;
+      const long double ref = std::pow((long double)x[i], (long double)n);
+      if (!(ref > 0x1p-1000L)) {
+        ASSERT_LE(p, 0x1p-990) << x[i] << "^" << n;  // below the normal range: tiny
+        continue;
+      }
+      const double bound = 2 * n * kEps * double(ref);
+      const double err = double(std::abs((long double)p - ref));
+      worst = std::max(worst, err / bound);
+      ASSERT_LE(err, bound) << x[i] << "^" << n;
+      float_differs += float(p) != float(std::pow(x[i], double(n)));
+      ++checked;
+    }
+  }
+  EXPECT_EQ(slicing_specular_power(0.0, 32.0), 0.0);
+  EXPECT_EQ(slicing_specular_power(1.0, 32.0), 1.0);
+  EXPECT_EQ(slicing_specular_power(0.5, 10.0), 0x1p-10);  // exact powers of two stay exact
+  // Not an integer in [1, 1024]: slicing_pow's bits.
+  for (double y : {0.0, 0.5, 7.25, 1025.0, 2048.0})
+    EXPECT_EQ(slicing_specular_power(0.83, y), slicing_pow(0.83, y)) << y;
+  EXPECT_GT(checked, 40000);
+  EXPECT_LE(float_differs, checked / 10000);
+  std::printf("worst error: %.3f of the bound; %d of %d differ from std::pow's float\n", worst, float_differs, checked);
+}
+
 TEST(SlicingSpeed, CorrectedAlphaIsStdPowUpToRoundOffAndItsLanesGiveItsBits) {
   // slicing_corrected_alpha: a short series where a <= 1/32 and |e ln(1 - a)| <= 1/16, else 1 -
   // slicing_pow(1 - a, e). Against 1 - std::pow(1 - a, e) within (4 + e) eps absolute: the reference

@@ -141,8 +141,8 @@ struct SlicingSettings {
   /// slicing_corrected_alpha_f (within 4 2^-24 of the exact value). true: std::pow (lane by lane
   /// in the packets; for the linear TF in double, rounded to float). Pixels differ from std::pow's
   /// by round-off only (one float ulp, plus 8 2^-24 with the linear TF; slicing_speed_test). The lit
-  /// modes' specular term likewise: slicing_pow (on the lanes in the packets, issue 17's twelfth
-  /// round), or std::pow with exact_pow.
+  /// modes' specular term likewise: slicing_specular_power (on the lanes in the packets, issue 17's
+  /// twelfth and fourteenth rounds), or std::pow with exact_pow.
   bool exact_pow = false;
 };
 
@@ -251,6 +251,13 @@ class SlicingRenderer {
 /// x^y for x, y >= 0 finite as the renderer computes its per-sample powers (SlicingSettings::exact_pow
 /// false): within 1e-14 of std::pow relative (subnormal results within 1e-300 absolute).
 double slicing_pow(double x, double y);
+
+/// The specular power x^y (x in [0, 1], y >= 0 finite) as the renderer computes it (SlicingSettings::exact_pow
+/// false), in double before it is rounded to float: for an integer y in [1, 1024] by binary exponentiation
+/// (within 2 y 2^-53 of std::pow relative while normal), else slicing_pow.
+double slicing_specular_power(double x, double y);
+/// The same on the packets' lanes: out[i] has the bits of slicing_specular_power(x[i], y).
+void slicing_specular_power_lanes(std::span<const double> x, double y, std::span<double> out);
 
 /// The opacity correction 1 - (1 - a)^e as the renderer computes it (SlicingSettings::exact_pow false):
 /// short series for ln(1 - a) and e^t - 1 where a <= 1/32 and |e ln(1 - a)| <= 1/16, else 1 -
