@@ -121,6 +121,12 @@ inline D int_pow(D x, int n) {
   }
 }
 
+/// The lit modes' specular power x^y: int_pow(x, n) where n = int_exponent(y) > 0, else pow(x, y).
+template <class D>
+inline D specular_power(D x, int n, double y) {
+  return n > 0 ? int_pow(x, n) : pow(x, D{} + y);
+}
+
 namespace detail {
 
 // The small-α branch of corrected_alpha(): t = e ln(1 - a) and α' = -(e^t - 1), each by a short

@@ -768,7 +768,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
   // The specular power (the same choice; an integer exponent by lane_math::int_pow).
   const int int_exponent = lane_math::int_exponent(light.exponent);
   auto power = [exact_pow, int_exponent](double x, double y) {
-    return exact_pow ? std::pow(x, y) : int_exponent > 0 ? lane_math::int_pow(x, int_exponent) : lane_math::pow(x, y);
+    return exact_pow ? std::pow(x, y) : lane_math::specular_power(x, int_exponent, y);
   };
   // The lighting's constants in float, and its sums of three products in the one order both paths
   // use, (x + y) + z (Eigen's float reductions of a Vector3f add in another): x, y a Vector3f or the
@@ -1203,8 +1203,7 @@ void SlicingRenderer::render_into(const Camera& camera, SlicingFrame& frame) con
               }
             } else if (any(needs_pow)) {
               const VD base_d = __builtin_convertvector(base, VD);
-              const VD power_d = int_exponent > 0 ? lane_math::int_pow(base_d, int_exponent)
-                                                  : lane_math::pow(base_d, splat(light.exponent));
+              const VD power_d = lane_math::specular_power(base_d, int_exponent, light.exponent);
               spec = select(needs_pow, __builtin_convertvector(power_d, VF), spec);
             }
             const VF k = ambient_f + diffuse_f * diff, sp = specular_f * spec;
@@ -1523,8 +1522,7 @@ void slicing_corrected_alpha_lanes(std::span<const double> a, std::span<const do
 }
 
 double slicing_specular_power(double x, double y) {
-  const int n = lane_math::int_exponent(y);
-  return n > 0 ? lane_math::int_pow(x, n) : lane_math::pow(x, y);
+  return lane_math::specular_power(x, lane_math::int_exponent(y), y);
 }
 
 void slicing_specular_power_lanes(std::span<const double> x, double y, std::span<double> out) {
@@ -1532,7 +1530,7 @@ void slicing_specular_power_lanes(std::span<const double> x, double y, std::span
   const int n = lane_math::int_exponent(y);
   corrected_alpha_on_lanes<packet::VD, packet::VL>(
       "slicing_specular_power_lanes", x, std::span<const double>(ys), out,
-      [n](packet::VD b, packet::VD e, packet::VL) { return n > 0 ? lane_math::int_pow(b, n) : lane_math::pow(b, e); });
+      [n, y](packet::VD b, packet::VD, packet::VL) { return lane_math::specular_power(b, n, y); });
 }
 
 float slicing_corrected_alpha_f(float a, float e) { return lane_math::corrected_alpha_f(a, e); }
