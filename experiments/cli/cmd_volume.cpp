@@ -155,6 +155,11 @@ Run add_volume(CLI::App& app, const std::vector<std::string>& command_line) {
                    "256x256x113; --full adds 512x512x226)")
       ->delimiter(',');
   bench
+      ->add_option("--qcs", b->table3_qcs,
+                   "seed003-table3: quality classes, comma-separated, each in [0.01, 1000] (default: the source's "
+                   "0.2,0.4,0.8,1,1.5,2,2.5,3,3.5,4,5,6,7; --full adds 8)")
+      ->delimiter(',');
+  bench
       ->add_option("--large-size", b->large_size,
                    "seed001-large: the N of the N³ shapes volume (0: 800 quick, 2000 full)")
       ->default_val(0);

@@ -670,6 +670,10 @@ def clv_cases():
                                                     "1x1x1", "--out", "{out}"], {"s.yaml": sl}, names=["--sizes"]),
         Case("volume/bench_seed003_sizes_text", b + ["--study", "seed003-table4", "--slicing-scenes", "{f}", "--sizes",
                                                      "4x4", "--out", "{out}"], {"s.yaml": sl}, names=["--sizes"]),
+        Case("volume/bench_seed003_qcs_range", b + ["--study", "seed003-table3", "--slicing-scenes", "{f}", "--qcs",
+                                                    "1,0", "--out", "{out}"], {"s.yaml": sl}, names=["--qcs"]),
+        Case("volume/bench_seed003_qcs_twice", b + ["--study", "seed003-table3", "--slicing-scenes", "{f}", "--qcs",
+                                                    "2,1,2", "--out", "{out}"], {"s.yaml": sl}, names=["--qcs"]),
     ]
     return cases
 

@@ -290,8 +290,10 @@ for r in fig.values():
 past = {s: int(fig[('slicing_phantom_' + s, 'blend')]['samples_past_mask']) for s in ('ones', 'open', 'cavity')}
 assert past['open'] < past['ones'] == past['cavity'], past   # index 0 cuts samples away; index 2 does not
 t3 = {(r['mode'], float(r['qc'])): r for r in rd('slicing_table3.csv')}
-assert sorted({q for _, q in t3}) == [1, 2, 4, 8] and {m for m, _ in t3} == {'blend', 'combined'}
-for q in (1, 2, 4):   # halving the spacing doubles the planes (tight range, mid-interval planes: +-1)
+# quick: the source's 13 QCs
+assert sorted({q for _, q in t3}) == [0.2, 0.4, 0.8, 1, 1.5, 2, 2.5, 3, 3.5, 4, 5, 6, 7], t3.keys()
+assert {m for m, _ in t3} == {'blend', 'combined'}
+for q in (0.2, 0.4, 1, 1.5, 2, 2.5, 3, 3.5):   # halving the spacing doubles the planes (mid-interval planes: +-1)
     assert abs(int(t3[('blend', q)]['slices']) - 2 * int(t3[('blend', 2 * q)]['slices'])) <= 1, q
     assert int(t3[('blend', q)]['samples']) == int(t3[('combined', q)]['samples']), q
 assert 0 < float(t3[('blend', 1)]['coverage']) < 1
@@ -307,6 +309,15 @@ assert co[('mask', 'all_ones')]['same_image_as_off'] == 'yes', co
 assert float(co[('bloom', 'on')]['post_ms']) > 0
 j = json.load(open(B + 'bench.json'))
 assert {'seed003_figures', 'seed003_table3', 'seed003_table4', 'seed003_pareto'} <= set(j), j.keys()
+PY
+    # --qcs picks the grid (sorted; the bench record names it)
+    run_ok "$M" volume bench --study seed003-table3 --warmup 0 --repeats 1 --slicing-scenes "$scenes" --qcs 8,0.5 \
+      --out exp_qcs
+    py <<'PY'
+import csv, json
+assert [(r['mode'], float(r['qc'])) for r in csv.DictReader(open('exp_qcs/slicing_table3.csv'))] == \
+    [('blend', 0.5), ('combined', 0.5), ('blend', 8), ('combined', 8)]
+assert json.load(open('exp_qcs/bench.json'))['seed003_table3']['qcs'] == [0.5, 8]
 PY
     REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
     /usr/bin/python3 "$REPO/report/experiment_report.py" slicing_seed003 exp > rep.txt 2>&1 || fail "report: $(cat rep.txt)"

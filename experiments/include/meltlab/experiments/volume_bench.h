@@ -50,6 +50,8 @@ struct VolumeBenchOptions {
   /// the Pareto study); seed003-table4: volume sizes "NXxNYxNZ" (empty: the source's list).
   std::vector<std::filesystem::path> slicing_scenes;
   std::vector<std::string> table4_sizes;
+  /// seed003-table3: the quality classes timed (empty: the source's 13, 0.2 ... 7; full adds 8).
+  std::vector<double> table3_qcs;
   std::filesystem::path out_dir;
   bool overwrite = false;
   std::vector<std::string> command_line;
