@@ -200,7 +200,9 @@ def slicing_seed003(exp: Path, args):
     if len(low) >= 2:
         fq = [r[14] for r in low]
         verdicts.append("Blend (1000 / CPU ms)/QC for QC <= 1: " + ", ".join(f"{x:.3f}" for x in fq)
-                        + f" (source 3.35-3.24; spread {100 * (max(fq) - min(fq)) / max(fq):.0f} %)")
+                        + f" (source 3.35-3.24, spread 3 %; here {100 * (max(fq) - min(fq)) / max(fq):.0f} %: with "
+                        f"t = t0 + k/QC, fps/QC = 1/(k + t0 QC) falls with QC as t0/k, {fits['blend'][0] / fits['blend'][1]:.2f} "
+                        f"here against the source's {src_fit['blend'][0] / src_fit['blend'][1]:.2f}; not judged)")
     if 1.0 in qcs:
         tb1 = float(t[("blend", 1.0)]["median_ms"])
         cores = record["provenance"]["hardware"].get("tbb_default_concurrency") or 1
