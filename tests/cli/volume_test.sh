@@ -325,6 +325,17 @@ PY
       [ -s "exp/$f" ] || fail "report: exp/$f missing"
     done
     grep -q "GOAL Blend QC 1" exp/report.json || fail "no goal verdict"
+    # The report's statistics on hand-worked cases: Spearman's rho (reversed ranks -1; one tie: 0.9487,
+    # by hand with average ranks) and the t = t0 + k/QC fit (exact on a line: R² 1).
+    REPO="$REPO" /usr/bin/python3 - <<'PY' || fail "report statistics"
+import math, os, sys
+sys.path.insert(0, os.environ['REPO'] + '/report')
+from experiments.slicing_seed003 import spearman, fit_inverse
+assert spearman([1, 2, 3, 4], [4, 3, 2, 1]) == -1.0
+assert abs(spearman([1, 2, 2, 3], [1, 2, 3, 4]) - 4.5 / math.sqrt(22.5)) < 1e-12
+t0, k, r2 = fit_inverse([0.5, 1, 2, 4], [20 + 100 / q for q in (0.5, 1, 2, 4)])
+assert abs(t0 - 20) < 1e-9 and abs(k - 100) < 1e-9 and abs(r2 - 1) < 1e-12, (t0, k, r2)
+PY
     # Bad options: one line, exit 2, nothing written.
     expect_exit 2 "$M" volume bench --study seed003-table3 --out nb
     expect_err "--slicing-scenes"
