@@ -9,10 +9,10 @@
 // the corner's sum record (one SIMD addition); groups of eight vertex slots move eight
 // vertices at a time in SIMD lanes (lanes.h), each lane with the scalar formulas'
 // operations in their order, read the old positions from the packed copy and write the new
-// ones to it and to the columns. A one-part (serial) sweep clears all sum records first,
-// adds all triangles and then moves every group in ascending order. A sweep in parts
-// (deform_schedule.h), whose groups clear their records as they move, runs parts of the
-// blocks side by side; each part adds its triangles into the records of the vertices it
+// ones to it and to the columns; each group clears the records it read as it moves (zero
+// for the next cycle). A one-part (serial) sweep adds all triangles and then moves every
+// group in ascending order. A sweep in parts (deform_schedule.h) runs parts of the blocks
+// side by side; each part adds its triangles into the records of the vertices it
 // owns and then moves the groups interior to it; vertices with triangles in later parts
 // add those triangles' stored terms afterwards, in the same ascending triangle order as the
 // serial sweep adds them, and the groups not interior to one part move then. Every vertex
@@ -135,7 +135,6 @@ struct Sweep {
   TriMesh<Real>& m;
   MoveConstants<Real> c;
   VertexSums<Real>* sums;
-  bool clear_sums;      // the moves clear the records they read (a sweep in parts)
   bool record;          // write N, M and Nf (MeltWorkspace::record_vectors)
   const Index* counts;  // triangles per vertex (the list lengths)
   const VertexTriangles& adj;
@@ -176,9 +175,9 @@ template <class Real, DeformMode kMode, class ScaleAt>
   const std::size_t v = g * kLanes;
   const std::size_t n = std::min(kLanes, m.vertex_slots() - v);
   if (n == kLanes) {
-    const VertexGroup<Real> grp{&w.sums[v],      w.clear_sums, &w.counts[v], &m.vertex_alive[v], P[0] + v,
-                                P[1] + v,        P[2] + v,     w.record,     N[0] + v,           N[1] + v,
-                                N[2] + v,        D[0] + v,     D[1] + v,     D[2] + v,           &m.triangle_count[v],
+    const VertexGroup<Real> grp{&w.sums[v],      true,     &w.counts[v], &m.vertex_alive[v], P[0] + v,
+                                P[1] + v,        P[2] + v, w.record,     N[0] + v,           N[1] + v,
+                                N[2] + v,        D[0] + v, D[1] + v,     D[2] + v,           &m.triangle_count[v],
                                 w.packed + 3 * v};
     move_group<Real, kMode>(w.c, grp, scale(v, grp.count, grp.alive), mx.move, mx.coord);
     return;
@@ -189,7 +188,7 @@ template <class Real, DeformMode kMode, class ScaleAt>
   Real pad_p[3][kLanes], pad_n[3][kLanes], pad_d[3][kLanes];
   Real pad_packed[3 * kLanes] = {};
   std::copy_n(&w.sums[v], n, pad_sums);
-  if (w.clear_sums) std::fill_n(&w.sums[v], n, VertexSums<Real>{});
+  std::fill_n(&w.sums[v], n, VertexSums<Real>{});
   std::copy_n(&w.counts[v], n, pad_count);
   std::copy_n(&m.vertex_alive[v], n, pad_alive);
   std::copy_n(w.packed + 3 * v, 3 * n, pad_packed);
@@ -392,17 +391,16 @@ void deform_pass(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execu
     ws.schedule.invalidate();
   else
     ws.schedule.update(m, ws.adj, parts, exec);
-  // The sums start at zero. One part clears them all first (as one memset, which measured
-  // faster on the 75k bunny in double than clearing each group's records in its move: the
-  // records are written without being read); a sweep in parts clears each group's records
-  // when it moves (the records are then already zero at the next parallel cycle).
+  // The sums start at zero: every group's move clears the records it read, so they are zero at
+  // the next cycle (new slots are zero; the first cycle clears them all). One memset before a
+  // one-part sweep instead measured 1.01-1.07x slower on every mesh, serial, in both precisions
+  // (docs/melt-core.md, issue 20 step 22).
   std::vector<VertexSums<Real>>& sums = ws.vertex_sums<Real>();
-  const bool clear_in_moves = parts > 1;
-  if (!clear_in_moves || !ws.sums_zero)
+  if (!ws.sums_zero)
     sums.assign(m.vertex_slots(), VertexSums<Real>{});
   else
-    sums.resize(m.vertex_slots());  // new slots are zero
-  ws.sums_zero = clear_in_moves;
+    sums.resize(m.vertex_slots());
+  ws.sums_zero = false;  // true again once the sweep has moved (and so cleared) every group
   StoredTerms<Real>& stored = ws.triangle_terms<Real>();
   if (parts > 1 && !ws.schedule.halo_groups().empty()) stored.ensure(m.triangle_slots());
   const MoveConstants<Real> c{static_cast<Real>(p.kE), static_cast<Real>(p.kN), p.edge_sum == EdgeSumMode::kMean,
@@ -417,18 +415,20 @@ void deform_pass(TriMesh<Real>& m, const MeltParams& p, const KlField& kl, Execu
   // A constant kl costs nothing per vertex: s = kg·kl is folded into one number.
   if (kl.is_constant()) {
     const auto s = static_cast<Real>(p.kg * kl.value(Vec3<double>::Zero()));
-    const Sweep<Real, Real> w{m,      c,           sums.data(),   clear_in_moves,    ws.record_vectors, counts,
-                              ws.adj, ws.schedule, packed.data(), stored.slot.get(), min_edge2.data(),  s};
+    const Sweep<Real, Real> w{m,      c,           sums.data(),   ws.record_vectors, counts,
+                              ws.adj, ws.schedule, packed.data(), stored.slot.get(), min_edge2.data(),
+                              s};
     ws.cycle_move_bound = sweep(w, p.deform, parts, exec);
   } else {
     auto scale_at = [&](std::size_t v) {
       return static_cast<Real>(p.kg * kl.value(m.position[v].template cast<double>()));
     };
-    const Sweep<Real, decltype(scale_at)> w{
-        m,      c,           sums.data(),   clear_in_moves,    ws.record_vectors, counts,
-        ws.adj, ws.schedule, packed.data(), stored.slot.get(), min_edge2.data(),  scale_at};
+    const Sweep<Real, decltype(scale_at)> w{m,       c,           sums.data(),   ws.record_vectors, counts,
+                                            ws.adj,  ws.schedule, packed.data(), stored.slot.get(), min_edge2.data(),
+                                            scale_at};
     ws.cycle_move_bound = sweep(w, p.deform, parts, exec);
   }
+  ws.sums_zero = true;
 }
 
 template <class Real>

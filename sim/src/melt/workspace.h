@@ -80,8 +80,8 @@ struct MeltWorkspace {
   // corner owned by an earlier part, indexed by triangle slot (only those slots are written).
   StoredTerms<float> terms_f;
   StoredTerms<double> terms_d;
-  // Deform: per-vertex sums. A one-part sweep clears them first; a sweep in parts relies on
-  // them being zero (`sums_zero`: its groups clear their records when they move).
+  // Deform: per-vertex sums. The sweep relies on them being zero (`sums_zero`: its groups clear
+  // their records when they move; false until the first sweep, which clears them all).
   std::vector<VertexSums<float>> sums_f;
   std::vector<VertexSums<double>> sums_d;
   bool sums_zero = false;
