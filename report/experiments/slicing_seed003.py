@@ -182,7 +182,16 @@ def slicing_seed003(exp: Path, args):
     # source's range (QC 8) it is reported, not judged.
     in_range = [(q, x) for q, x in ratios if q <= max(SOURCE_T3)]
     beyond = [(q, x) for q, x in ratios if q > max(SOURCE_T3)]
-    in_tgt = bool(in_range) and all(RATIO_TARGET[0] <= x <= RATIO_TARGET[1] for _, x in in_range)
+    # Judged on the two modes' fits t = t0 + k/QC (Table 3's model, from every QC's frames) rather
+    # than on each QC's own pair of medians: at the high QCs a frame lasts 40-60 ms and one pair's
+    # ratio moves by +-3 % between runs, which near the window's edge decides the verdict by chance.
+    # The measured ratios are printed beside it, with any outside the window named.
+    def fitted_ratio(q):
+        (t0b, kb, _), (t0c, kc, _) = fits["blend"], fits["combined"]
+        return (t0c + kc / q) / (t0b + kb / q)
+    fitted = [(q, fitted_ratio(q)) for q, _ in in_range]
+    in_tgt = bool(fitted) and all(RATIO_TARGET[0] <= x <= RATIO_TARGET[1] for _, x in fitted)
+    outside = [(q, x) for q, x in in_range if not RATIO_TARGET[0] <= x <= RATIO_TARGET[1]]
     # "Shrinks as QC grows" as a trend over the grid, not step by step (neighbouring QCs differ by less
     # than a frame's timing noise): Spearman's rank correlation of the ratio with QC.
     rho = spearman([q for q, _ in ratios], [x for _, x in ratios]) if len(ratios) >= 3 else None
@@ -190,7 +199,10 @@ def slicing_seed003(exp: Path, args):
     verdicts.append("T5 combined/Blend (CPU) " + ", ".join(f"QC {q:g}: {x:.2f}" for q, x in ratios)
                     + " (wall " + ", ".join(f"{r[5]:.2f}" for r in rows) + ")"
                     + f"; in the source's [1.80, 2.19]: {yes(in_src)}; in the target's [1.5, 2.5] over the "
-                    f"source's QC range (<= {max(SOURCE_T3):g}): {yes(in_tgt)}"
+                    f"source's QC range (<= {max(SOURCE_T3):g}), on the fits: {yes(in_tgt)} ("
+                    + (f"{fitted[0][1]:.2f} at QC {fitted[0][0]:g} ... {fitted[-1][1]:.2f} at QC {fitted[-1][0]:g}"
+                       if fitted else "no QC") + "; measured outside it: "
+                    + (", ".join(f"QC {q:g} {x:.2f}" for q, x in outside) if outside else "none") + ")"
                     + (" (beyond it, not judged: " + ", ".join(f"QC {q:g} {x:.2f}" for q, x in beyond) + ")"
                        if beyond else "")
                     + f"; shrinks as QC grows (Spearman ρ <= -0.8): {yes(shrinks)}"
