@@ -416,6 +416,7 @@ void run_volume_bench(const VolumeBenchOptions& options) {
   VolumeBenchOptions o = options;
   if (o.large_size == 0) o.large_size = o.quick ? 800 : 2000;
   if (o.large_size < 16 || o.large_size > 4096) throw InputError("--large-size must be in [16, 4096]");
+  o.table3_qcs = slicing_bench::table3_qcs(o);
   const std::map<std::string, std::function<void(const VolumeBenchOptions&, const fs::path&, json&)>> run{
       {"tables", study_tables},
       {"scaling", study_scaling},

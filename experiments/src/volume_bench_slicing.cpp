@@ -206,8 +206,7 @@ void study_figures(const VolumeBenchOptions& o, const fs::path& dir, json& recor
 
 // ---- Table 3: time against QC, Blend and combined ---------------------------------------------------
 
-void study_table3(const VolumeBenchOptions& o, const fs::path& dir, json& record) {
-  const LoadedScene& l = reference_scene(o);
+std::vector<double> table3_qcs(const VolumeBenchOptions& o) {
   std::vector<double> qcs = o.table3_qcs;
   // The source's Table 3 grid (its 13 QCs, so each row sits beside the source's and the fit spans the
   // same 1/QC range; ~15 s a repeat here); full mode adds QC 8, past the source's range.
@@ -221,6 +220,12 @@ void study_table3(const VolumeBenchOptions& o, const fs::path& dir, json& record
   std::sort(qcs.begin(), qcs.end());
   if (std::adjacent_find(qcs.begin(), qcs.end()) != qcs.end())
     throw InputError("--qcs: a quality class is given twice");
+  return qcs;
+}
+
+void study_table3(const VolumeBenchOptions& o, const fs::path& dir, json& record) {
+  const LoadedScene& l = reference_scene(o);
+  const std::vector<double>& qcs = o.table3_qcs;  // resolved by table3_qcs() in run_volume_bench()
   const auto grads = gradients_of(l.volume, l.settings.gradient);
   CsvTable csv(
       "mode,qc,width,height,median_ms,min_ms,max_ms,cpu_ms,render_ms,post_ms,fps,samples,samples_past_mask,"

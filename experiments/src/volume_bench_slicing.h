@@ -22,8 +22,13 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <vector>
 
 namespace meltlab::experiments::slicing_bench {
+
+/// seed003-table3's quality classes: --qcs sorted, or the default grid; throws InputError for a value
+/// outside the renderer's [0.01, 1000] or one given twice (run_volume_bench() calls it before any study).
+std::vector<double> table3_qcs(const VolumeBenchOptions& o);
 
 void study_figures(const VolumeBenchOptions& o, const std::filesystem::path& dir, nlohmann::json& record);
 void study_table3(const VolumeBenchOptions& o, const std::filesystem::path& dir, nlohmann::json& record);

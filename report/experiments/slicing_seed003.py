@@ -158,12 +158,13 @@ def slicing_seed003(exp: Path, args):
     figures.append({"caption": "Table 3: frame CPU time against 1/QC with the fits t = t0 + k/QC", "png": "table_3.png",
                     "data": "table_3.csv"})
     r2_ok = all(fits[m][2] > 0.98 for m in fits)
-    qlo = "/".join(f"{q:g}" for q in qcs)
-    verdicts.append(f"T4 t = t0 + k/QC (CPU time, QC {qlo}): " + ", ".join(
+    def qc_list(qs):
+        return "/".join(f"{q:g}" for q in qs)
+    verdicts.append(f"T4 t = t0 + k/QC (CPU time, QC {qc_list(qcs)}): " + ", ".join(
         f"{m} t0 {fits[m][0]:.0f} ms, k {fits[m][1]:.0f} ms, R² {fits[m][2]:.4f} (wall {wall_fits[m][2]:.4f})"
         for m in fits)
         + f" (source: Blend R² {src_fit['blend'][2]:.4f}, combined {src_fit['combined'][2]:.4f}, QC "
-        + "/".join(f"{q:g}" for q in src_q) + "); R² > 0.98: " + yes(r2_ok))
+        + qc_list(src_q) + "); R² > 0.98: " + yes(r2_ok))
     # Not judged: the fit over QC >= 1 alone, where the CPU's cost per sample grows with the sample
     # spacing (fewer cache lines shared by consecutive samples) and bends the line.
     hi = [q for q in qcs if q >= 1]
