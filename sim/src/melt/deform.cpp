@@ -294,20 +294,22 @@ void sweep_block(const Sweep<Real, ScaleAt>& w, std::size_t b, std::size_t part,
     }
   };
   const bool mixed = kHalo && w.plan.block_mixed(b);
+  auto add_tested_if_mixed = [&](std::size_t from, std::size_t to) {
+    if (mixed)
+      add(std::true_type{}, from, to);
+    else
+      add(std::false_type{}, from, to);
+  };
   if constexpr (std::is_same_v<Real, float>) {
-    // Whole groups of eight by transposes; in a mixed block, runs of groups without a triangle
-    // flagged foreign (a group with one takes the loop with the owner tests).
-    const std::size_t grouped = count / kLanes * kLanes;
-    if (!mixed) {
-      add_groups_transposed(w, terms, first, 0, grouped);
-      add(std::false_type{}, grouped, count);
-      return;
-    }
+    // Whole groups of eight by transposes, in runs of groups without a triangle flagged foreign
+    // (all of them unless the block is mixed); a group with one takes the loop with the owner tests.
     auto flagged = [&](std::size_t i0) {
+      if (!mixed) return false;
       std::uint64_t flags;
       std::memcpy(&flags, foreign + first + i0, sizeof(flags));
       return flags != 0;
     };
+    const std::size_t grouped = count / kLanes * kLanes;
     std::size_t i0 = 0;
     while (i0 < grouped) {
       if (flagged(i0)) {
@@ -320,12 +322,9 @@ void sweep_block(const Sweep<Real, ScaleAt>& w, std::size_t b, std::size_t part,
       add_groups_transposed(w, terms, first, i0, run_end);
       i0 = run_end;
     }
-    add(std::true_type{}, grouped, count);
+    add_tested_if_mixed(grouped, count);
   } else {
-    if (mixed)
-      add(std::true_type{}, 0, count);
-    else
-      add(std::false_type{}, 0, count);
+    add_tested_if_mixed(0, count);
   }
 }
 
