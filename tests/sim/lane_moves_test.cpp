@@ -72,6 +72,41 @@ TYPED_TEST(Lanes8, InterleaveInvertsDeinterleave) {
   EXPECT_EQ(std::memcmp(back, packed, sizeof(packed)), 0);
 }
 
+// gather_xyz reads eight four-number records at scattered offsets into lanes, in record order.
+TYPED_TEST(Lanes8, GatherXyzReadsRecordIIntoLaneI) {
+  using Real = TypeParam;
+  Real table[4 * 40];
+  for (std::size_t k = 0; k < std::size(table); ++k) table[k] = static_cast<Real>(k);
+  const std::uint32_t offset[kLanes] = {27, 0, 90, 3, 3, 150, 61, 12};  // repeats, any order, any alignment
+  Lanes<Real> x, y, z;
+  gather_xyz<Real>(table, offset, x, y, z);
+  for (std::size_t i = 0; i < kLanes; ++i) {
+    EXPECT_EQ(x[i], table[offset[i]]) << i;
+    EXPECT_EQ(y[i], table[offset[i] + 1]) << i;
+    EXPECT_EQ(z[i], table[offset[i] + 2]) << i;
+  }
+}
+
+// The lane short-edge key is the scalar one lane by lane (a double rounded down to float; +inf
+// above float's range; a float itself).
+TYPED_TEST(Lanes8, ShortEdgeKeyEqualsScalar) {
+  using Real = TypeParam;
+  using Lim = std::numeric_limits<Real>;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> mantissa(1.0, 2.0);
+  std::uniform_int_distribution<int> exponent(-140, 140);
+  for (int round = 0; round < 2000; ++round) {
+    Lanes<Real> x;
+    for (std::size_t i = 0; i < kLanes; ++i) x[i] = static_cast<Real>(std::ldexp(mantissa(rng), exponent(rng)));
+    if (round == 0) x[0] = 0, x[1] = Lim::max(), x[2] = Lim::infinity(), x[3] = Lim::denorm_min();
+    const Lanes<float> key = lane_float_at_most<Real>(x);
+    for (std::size_t i = 0; i < kLanes; ++i) {
+      const float got = key[i], want = float_at_most(x[i]);
+      ASSERT_EQ(std::memcmp(&got, &want, sizeof(float)), 0) << "x = " << x[i] << " lane " << i;
+    }
+  }
+}
+
 TYPED_TEST(Lanes8, AllGreaterNeedsEveryLane) {
   using Real = TypeParam;
   Lanes<Real> x = broadcast<Real>(2);

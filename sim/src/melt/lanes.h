@@ -155,7 +155,8 @@ inline Lanes<double> lane_sqrt<double>(Lanes<double> x) {
 #endif
 
 /// 1/|v| for |v|² = n2, or 0 for a zero vector, lane by lane: the same operations as the
-/// scalar inverse_length() of triangle_kernels.h.
+/// scalar 1 / sqrt(max(n2, smallest normal)), and 0 where n2 > 0 is false (a degenerate triangle or
+/// a vanished edge contributes nothing instead of NaN).
 template <class Real>
 inline Lanes<Real> lane_inverse_length(Lanes<Real> n2) {
   const Lanes<Real> tiny = broadcast(std::numeric_limits<Real>::min());
@@ -171,6 +172,17 @@ inline Lanes<Real> lane_abs(Lanes<Real> x) {
 template <class Real>
 inline Lanes<Real> lane_max(Lanes<Real> a, Lanes<Real> b) {
   return lane_select<Real>(a < b, b, a);
+}
+
+/// Each lane rounded to float (as static_cast<float>).
+inline Lanes<float> lanes_to_float(const Lanes<double>& x) {
+#if defined(__AVX2__) && !defined(__AVX512F__)
+  using V4f = float __attribute__((vector_size(16)));
+  const V4f lo = V4f(_mm256_cvtpd_ps(__m256d(x.h[0]))), hi = V4f(_mm256_cvtpd_ps(__m256d(x.h[1])));
+  return __builtin_shufflevector(lo, hi, 0, 1, 2, 3, 4, 5, 6, 7);
+#else
+  return __builtin_convertvector(x, Lanes<float>);
+#endif
 }
 
 /// Lanes of Real from eight 32-bit integers, and the lane mask of eight bytes that are not zero.
@@ -244,6 +256,36 @@ inline void deinterleave3(const Real* p, Lanes<Real>& x, Lanes<Real>& y, Lanes<R
   x = __builtin_shufflevector(__builtin_shufflevector(a, b, 0, 3, 6, 9, 12, 15, 0, 0), c, 0, 1, 2, 3, 4, 5, 10, 13);
   y = __builtin_shufflevector(__builtin_shufflevector(a, b, 1, 4, 7, 10, 13, 0, 0, 0), c, 0, 1, 2, 3, 4, 8, 11, 14);
   z = __builtin_shufflevector(__builtin_shufflevector(a, b, 2, 5, 8, 11, 14, 0, 0, 0), c, 0, 1, 2, 3, 4, 9, 12, 15);
+}
+
+/// The first three numbers of eight four-number records base + offset[i] (i < 8) -> lanes x[i],
+/// y[i], z[i]: eight 4-number loads joined in pairs (i, i + 4) and three stages of two-input
+/// shuffles. Without AVX-512, double lanes are two registers; there they are filled number by number.
+template <class Real>
+inline void gather_xyz(const Real* base, const std::uint32_t (&offset)[kLanes], Lanes<Real>& x, Lanes<Real>& y,
+                       Lanes<Real>& z) {
+  if constexpr (std::is_class_v<Lanes<Real>>) {
+    for (std::size_t i = 0; i < kLanes; ++i) {
+      const Real* r = base + offset[i];
+      x[i] = r[0], y[i] = r[1], z[i] = r[2];
+    }
+  } else {
+    using Quad [[gnu::vector_size(4 * sizeof(Real))]] = Real;
+    Quad q[kLanes];
+    for (std::size_t i = 0; i < kLanes; ++i) std::memcpy(&q[i], base + offset[i], sizeof(Quad));
+    const Lanes<Real> a04 = __builtin_shufflevector(q[0], q[4], 0, 1, 2, 3, 4, 5, 6, 7);
+    const Lanes<Real> a15 = __builtin_shufflevector(q[1], q[5], 0, 1, 2, 3, 4, 5, 6, 7);
+    const Lanes<Real> a26 = __builtin_shufflevector(q[2], q[6], 0, 1, 2, 3, 4, 5, 6, 7);
+    const Lanes<Real> a37 = __builtin_shufflevector(q[3], q[7], 0, 1, 2, 3, 4, 5, 6, 7);
+    // x0 x1 y0 y1 x4 x5 y4 y5 | z0 z1 w0 w1 z4 z5 w4 w5, and the same of records 2, 3, 6, 7.
+    const Lanes<Real> t0 = __builtin_shufflevector(a04, a15, 0, 8, 1, 9, 4, 12, 5, 13);
+    const Lanes<Real> t1 = __builtin_shufflevector(a04, a15, 2, 10, 3, 11, 6, 14, 7, 15);
+    const Lanes<Real> t2 = __builtin_shufflevector(a26, a37, 0, 8, 1, 9, 4, 12, 5, 13);
+    const Lanes<Real> t3 = __builtin_shufflevector(a26, a37, 2, 10, 3, 11, 6, 14, 7, 15);
+    x = __builtin_shufflevector(t0, t2, 0, 1, 8, 9, 4, 5, 12, 13);
+    y = __builtin_shufflevector(t0, t2, 2, 3, 10, 11, 6, 7, 14, 15);
+    z = __builtin_shufflevector(t1, t3, 0, 1, 8, 9, 4, 5, 12, 13);
+  }
 }
 
 /// Lanes x, y, z -> eight packed triples p[3i + c].
