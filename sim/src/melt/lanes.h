@@ -230,7 +230,7 @@ inline bool all_greater(const Lanes<Real>& x, Real y) {
 
 /// Transposes an 8×8 block: out[j][i] = in[i][j] (records <-> lanes).
 template <class Real>
-inline void transpose8(const Lanes<Real> (&in)[kLanes], Lanes<Real> (&out)[kLanes]) {
+[[gnu::always_inline]] inline void transpose8(const Lanes<Real> (&in)[kLanes], Lanes<Real> (&out)[kLanes]) {
   // Three stages of two-input shuffles (the classic unpack / shuffle / 128-bit permute).
   Lanes<Real> t[kLanes], u[kLanes];
   for (std::size_t i = 0; i < kLanes; i += 2) {
@@ -260,16 +260,11 @@ inline void deinterleave3(const Real* p, Lanes<Real>& x, Lanes<Real>& y, Lanes<R
 
 /// The first three numbers of eight four-number records base + offset[i] (i < 8) -> lanes x[i],
 /// y[i], z[i]: eight 4-number loads joined in pairs (i, i + 4) and three stages of two-input
-/// shuffles. Without AVX-512, double lanes are two registers; there they are filled number by number.
+/// shuffles. (Without AVX-512, double lanes are two registers: see the specialisation below.)
 template <class Real>
 inline void gather_xyz(const Real* base, const std::uint32_t (&offset)[kLanes], Lanes<Real>& x, Lanes<Real>& y,
                        Lanes<Real>& z) {
-  if constexpr (std::is_class_v<Lanes<Real>>) {
-    for (std::size_t i = 0; i < kLanes; ++i) {
-      const Real* r = base + offset[i];
-      x[i] = r[0], y[i] = r[1], z[i] = r[2];
-    }
-  } else {
+  {
     using Quad [[gnu::vector_size(4 * sizeof(Real))]] = Real;
     Quad q[kLanes];
     for (std::size_t i = 0; i < kLanes; ++i) std::memcpy(&q[i], base + offset[i], sizeof(Quad));
@@ -360,6 +355,18 @@ inline void interleave3<double>(double* p, const Lanes<double>& x, const Lanes<d
     _mm256_storeu_pd(p + 12 * h + 4, _mm256_blend_pd(_mm256_blend_pd(Y, Z, 0b0010), X, 0b0100));
     _mm256_storeu_pd(p + 12 * h + 8, _mm256_blend_pd(_mm256_blend_pd(Z, X, 0b0010), Y, 0b0100));
   }
+}
+
+template <>
+inline void gather_xyz<double>(const double* base, const std::uint32_t (&offset)[kLanes], Lanes<double>& x,
+                               Lanes<double>& y, Lanes<double>& z) {
+  // Records 0-3 and 4-7, each four doubles: two 4×4 transposes.
+  __m256d r[2][4], c[2][4];
+  for (std::size_t i = 0; i < kLanes; ++i) r[i / 4][i % 4] = _mm256_loadu_pd(base + offset[i]);
+  lanes_detail::transpose4(r[0], c[0]);
+  lanes_detail::transpose4(r[1], c[1]);
+  x = lanes_detail::join(c[0][0], c[1][0]), y = lanes_detail::join(c[0][1], c[1][1]);
+  z = lanes_detail::join(c[0][2], c[1][2]);
 }
 #endif
 
