@@ -208,14 +208,14 @@ template <class Real, DeformMode kMode, class ScaleAt>
 }
 
 // The additions of a block's triangles [from, to) (whole groups of eight) into their corners'
-// records, for float: each group's 3 x 8 corner records (n, e_k, 0, 0) come from three 8 x 8
-// transposes of the block's term arrays in registers and are added in triangle order, corner by
-// corner (the additions and their order of the loop in sweep_block(), so the same bits). That loop
-// builds each record from six scalars with inserts; this cut the serial float cycle to 0.82-0.85
-// on the 32k meshes (0.87 on the bunny, 0.94 on the dragon). Not inlined: inlined into
-// sweep_block() the 24 records competed for registers and the serial cycle lost 11 %. Double's
-// 64-byte records built from 4 x 4 transposes of halves measured 0.98-0.99 and are not used
-// (docs/melt-core.md, issue 20 step 23).
+// records: each group's 3 x 8 corner records (n, e_k, 0, 0) come from three 8 x 8 transposes of the
+// block's term arrays in registers and are added in triangle order, corner by corner (the additions
+// and their order of the loop in sweep_block(), so the same bits). That loop builds each record from
+// six scalars with inserts; this cut the serial float cycle to 0.82-0.85 on the 32k meshes (0.87 on
+// the bunny, 0.94 on the dragon; issue 20 step 23), and the double one to 0.97-0.98 once transpose8
+// was inlined (step 24; out of line it had been 1.03-1.07x slower in double). Not inlined here:
+// inlined into sweep_block() the 24 records competed for registers and the serial float cycle lost
+// 11 % (docs/melt-core.md, issue 20 steps 23-24).
 template <class Real, class ScaleAt>
 [[gnu::noinline]] void add_groups_transposed(const Sweep<Real, ScaleAt>& w, const TriangleBlockTerms<Real>& terms,
                                              std::size_t first, std::size_t from, std::size_t to) {
@@ -294,22 +294,19 @@ void sweep_block(const Sweep<Real, ScaleAt>& w, std::size_t b, std::size_t part,
     }
   };
   const bool mixed = kHalo && w.plan.block_mixed(b);
-  auto add_tested_if_mixed = [&](std::size_t from, std::size_t to) {
-    if (mixed)
-      add(std::true_type{}, from, to);
-    else
-      add(std::false_type{}, from, to);
-  };
-  if constexpr (std::is_same_v<Real, float>) {
-    // Whole groups of eight by transposes, in runs of groups without a triangle flagged foreign
-    // (all of them unless the block is mixed); a group with one takes the loop with the owner tests.
+  // Whole groups of eight by transposes, in runs of groups without a triangle flagged foreign (all
+  // of them unless the block is mixed); a group with one takes the loop with the owner tests. Where
+  // eight doubles are two AVX registers (no AVX-512) the transposes measured 1.35-1.46x slower than
+  // the loop, which then takes every triangle (docs/melt-core.md, issue 20 step 24).
+  std::size_t grouped = 0;
+  if constexpr (!std::is_class_v<Lanes<Real>>) {
     auto flagged = [&](std::size_t i0) {
       if (!mixed) return false;
       std::uint64_t flags;
       std::memcpy(&flags, foreign + first + i0, sizeof(flags));
       return flags != 0;
     };
-    const std::size_t grouped = count / kLanes * kLanes;
+    grouped = count / kLanes * kLanes;
     std::size_t i0 = 0;
     while (i0 < grouped) {
       if (flagged(i0)) {
@@ -322,10 +319,11 @@ void sweep_block(const Sweep<Real, ScaleAt>& w, std::size_t b, std::size_t part,
       add_groups_transposed(w, terms, first, i0, run_end);
       i0 = run_end;
     }
-    add_tested_if_mixed(grouped, count);
-  } else {
-    add_tested_if_mixed(0, count);
   }
+  if (mixed)  // the rest (a block's last triangles that do not fill a group)
+    add(std::true_type{}, grouped, count);
+  else
+    add(std::false_type{}, grouped, count);
 }
 
 // Part p of the sweep: its blocks in ascending order, then its interior groups in ascending
