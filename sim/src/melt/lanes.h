@@ -4,7 +4,8 @@
 // the machine's registers: one AVX register for float, one AVX-512 register or two AVX registers
 // for double) and the shuffles that move data between per-element records and lanes:
 //   - transpose8: eight records of eight numbers <-> eight lanes of one number each;
-//   - deinterleave3 / interleave3: eight packed xyz triples (Vec3 arrays) <-> x, y, z lanes.
+//   - deinterleave3 / interleave3: eight packed xyz triples (Vec3 arrays) <-> x, y, z lanes;
+//   - gather_xyz: eight four-number records at scattered offsets -> x, y, z lanes.
 // Arithmetic on lanes is element by element with the same IEEE operations as scalar code
 // (contraction is off), so a lane's result is bitwise the scalar result.
 
@@ -264,23 +265,21 @@ inline void deinterleave3(const Real* p, Lanes<Real>& x, Lanes<Real>& y, Lanes<R
 template <class Real>
 inline void gather_xyz(const Real* base, const std::uint32_t (&offset)[kLanes], Lanes<Real>& x, Lanes<Real>& y,
                        Lanes<Real>& z) {
-  {
-    using Quad [[gnu::vector_size(4 * sizeof(Real))]] = Real;
-    Quad q[kLanes];
-    for (std::size_t i = 0; i < kLanes; ++i) std::memcpy(&q[i], base + offset[i], sizeof(Quad));
-    const Lanes<Real> a04 = __builtin_shufflevector(q[0], q[4], 0, 1, 2, 3, 4, 5, 6, 7);
-    const Lanes<Real> a15 = __builtin_shufflevector(q[1], q[5], 0, 1, 2, 3, 4, 5, 6, 7);
-    const Lanes<Real> a26 = __builtin_shufflevector(q[2], q[6], 0, 1, 2, 3, 4, 5, 6, 7);
-    const Lanes<Real> a37 = __builtin_shufflevector(q[3], q[7], 0, 1, 2, 3, 4, 5, 6, 7);
-    // x0 x1 y0 y1 x4 x5 y4 y5 | z0 z1 w0 w1 z4 z5 w4 w5, and the same of records 2, 3, 6, 7.
-    const Lanes<Real> t0 = __builtin_shufflevector(a04, a15, 0, 8, 1, 9, 4, 12, 5, 13);
-    const Lanes<Real> t1 = __builtin_shufflevector(a04, a15, 2, 10, 3, 11, 6, 14, 7, 15);
-    const Lanes<Real> t2 = __builtin_shufflevector(a26, a37, 0, 8, 1, 9, 4, 12, 5, 13);
-    const Lanes<Real> t3 = __builtin_shufflevector(a26, a37, 2, 10, 3, 11, 6, 14, 7, 15);
-    x = __builtin_shufflevector(t0, t2, 0, 1, 8, 9, 4, 5, 12, 13);
-    y = __builtin_shufflevector(t0, t2, 2, 3, 10, 11, 6, 7, 14, 15);
-    z = __builtin_shufflevector(t1, t3, 0, 1, 8, 9, 4, 5, 12, 13);
-  }
+  using Quad [[gnu::vector_size(4 * sizeof(Real))]] = Real;
+  Quad q[kLanes];
+  for (std::size_t i = 0; i < kLanes; ++i) std::memcpy(&q[i], base + offset[i], sizeof(Quad));
+  const Lanes<Real> a04 = __builtin_shufflevector(q[0], q[4], 0, 1, 2, 3, 4, 5, 6, 7);
+  const Lanes<Real> a15 = __builtin_shufflevector(q[1], q[5], 0, 1, 2, 3, 4, 5, 6, 7);
+  const Lanes<Real> a26 = __builtin_shufflevector(q[2], q[6], 0, 1, 2, 3, 4, 5, 6, 7);
+  const Lanes<Real> a37 = __builtin_shufflevector(q[3], q[7], 0, 1, 2, 3, 4, 5, 6, 7);
+  // x0 x1 y0 y1 x4 x5 y4 y5 | z0 z1 w0 w1 z4 z5 w4 w5, and the same of records 2, 3, 6, 7.
+  const Lanes<Real> t0 = __builtin_shufflevector(a04, a15, 0, 8, 1, 9, 4, 12, 5, 13);
+  const Lanes<Real> t1 = __builtin_shufflevector(a04, a15, 2, 10, 3, 11, 6, 14, 7, 15);
+  const Lanes<Real> t2 = __builtin_shufflevector(a26, a37, 0, 8, 1, 9, 4, 12, 5, 13);
+  const Lanes<Real> t3 = __builtin_shufflevector(a26, a37, 2, 10, 3, 11, 6, 14, 7, 15);
+  x = __builtin_shufflevector(t0, t2, 0, 1, 8, 9, 4, 5, 12, 13);
+  y = __builtin_shufflevector(t0, t2, 2, 3, 10, 11, 6, 7, 14, 15);
+  z = __builtin_shufflevector(t1, t3, 0, 1, 8, 9, 4, 5, 12, 13);
 }
 
 /// Lanes x, y, z -> eight packed triples p[3i + c].
