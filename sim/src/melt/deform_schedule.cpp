@@ -45,10 +45,25 @@ void DeformSchedule::update(const TriMesh<Real>& m, const VertexTriangles& adj, 
       group_seen_[vs / kGroup] = 1, touched_groups_.push_back(static_cast<Index>(vs / kGroup));
   }
   for (Index g : touched_groups_) group_seen_[static_cast<std::size_t>(g)] = 0;
+  // The touched vertices and their lists are scattered over a large mesh: their list records and then
+  // their lists are asked for a few items ahead (prefetched_for_each). Without it the classification
+  // and the flags below took 0.46 and 0.64 ms of the dragon's 11-ms two-thread cycle, waiting on one
+  // vertex's misses at a time; with it 0.21 and 0.31 (docs/melt-core.md, issue 20 step 26).
   for_range(
       exec, touched_groups_.size(),
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) classify(m, adj, static_cast<std::size_t>(touched_groups_[i]));
+        prefetched_for_each(
+            std::span<const Index>(touched_groups_).subspan(begin, end - begin),
+            [&](Index g) {
+              adj.prefetch_record(static_cast<Index>(static_cast<std::size_t>(g) * kGroup));
+              __builtin_prefetch(m.vertex_alive.data() + static_cast<std::size_t>(g) * kGroup);
+            },
+            [&](Index g) {
+              const std::size_t end_v = std::min(vertices_, (static_cast<std::size_t>(g) + 1) * kGroup);
+              for (std::size_t v = static_cast<std::size_t>(g) * kGroup; v < end_v; ++v)
+                adj.prefetch_list(static_cast<Index>(v));
+            },
+            [&](Index g) { classify(m, adj, static_cast<std::size_t>(g)); });
       },
       kUpdateGrain);
   // Whether a triangle has a corner owned by another part changes only where its corners
@@ -59,15 +74,17 @@ void DeformSchedule::update(const TriMesh<Real>& m, const VertexTriangles& adj, 
   for_range(
       exec, touched_vertices_.size(),
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) {
-          const Index v = touched_vertices_[i];
-          for (Index t : adj.of(v)) {
-            const Triangle& tri = m.triangle[static_cast<std::size_t>(t)];
-            bool first = true;
-            for (Index c : tri) first = first && !(c < v && vertex_seen_[static_cast<std::size_t>(c)] != 0);
-            if (first) find_foreign(m, static_cast<std::size_t>(t));
-          }
-        }
+        prefetched_for_each(
+            std::span<const Index>(touched_vertices_).subspan(begin, end - begin),
+            [&](Index v) { adj.prefetch_record(v); }, [&](Index v) { adj.prefetch_list(v); },
+            [&](Index v) {
+              for (Index t : adj.of(v)) {
+                const Triangle& tri = m.triangle[static_cast<std::size_t>(t)];
+                bool first = true;
+                for (Index c : tri) first = first && !(c < v && vertex_seen_[static_cast<std::size_t>(c)] != 0);
+                if (first) find_foreign(m, static_cast<std::size_t>(t));
+              }
+            });
       },
       kUpdateGrain);
   for (Index v : touched_vertices_) vertex_seen_[static_cast<std::size_t>(v)] = 0;
