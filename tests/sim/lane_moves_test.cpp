@@ -11,10 +11,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include "lanes.h"
 #include "triangle_kernels.h"
@@ -107,17 +109,38 @@ TYPED_TEST(Lanes8, ShortEdgeKeyEqualsScalar) {
   }
 }
 
-TYPED_TEST(Lanes8, AllGreaterNeedsEveryLane) {
+// The short-edge scan's candidates come from the bits of a comparison: bit i is lane i, and a
+// NaN key (no comparison true) stays a candidate, as the scalar test keeps it.
+TYPED_TEST(Lanes8, LaneBitsAreTheLanesOfAMask) {
   using Real = TypeParam;
-  Lanes<Real> x = broadcast<Real>(2);
-  EXPECT_TRUE(all_greater<Real>(x, 1));
-  EXPECT_FALSE(all_greater<Real>(x, 2));  // equal is not greater
+  const Lanes<Real> x = broadcast<Real>(2);
+  EXPECT_EQ(lane_bits<Real>(x > Real(1)), 0xffu);
+  EXPECT_EQ(lane_bits<Real>(x > Real(2)), 0u);  // equal is not greater
+  EXPECT_EQ(lane_bits<Real>(~(x > Real(2))), 0xffu);
   for (std::size_t i = 0; i < kLanes; ++i) {
     Lanes<Real> y = x;
     y[i] = Real(0.5);
-    EXPECT_FALSE(all_greater<Real>(y, 1)) << "lane " << i;
+    EXPECT_EQ(lane_bits<Real>(y > Real(1)), 0xffu & ~(1u << i)) << "lane " << i;
+    EXPECT_EQ(lane_bits<Real>(~(y > Real(1))), 1u << i) << "lane " << i;
     y[i] = std::numeric_limits<Real>::quiet_NaN();
-    EXPECT_FALSE(all_greater<Real>(y, 1)) << "NaN in lane " << i;
+    EXPECT_EQ(lane_bits<Real>(~(y > Real(1))), 1u << i) << "NaN in lane " << i;
+  }
+  const std::uint8_t flags[kLanes] = {0, 1, 0, 0, 7, 0, 0, 255};
+  EXPECT_EQ(lane_bits<Real>(lanes_nonzero<Real>(flags)), 0x92u);
+  EXPECT_EQ(nonzero_bits(flags), 0x92u);
+}
+
+// The scan's candidate list from a group's bits: every set bit's index, ascending, for all 256
+// masks (the compress of AVX-512 and the loop elsewhere).
+TEST(LaneBits, AppendBitIndicesListsEverySetBitAscending) {
+  for (unsigned bits = 0; bits < 256; ++bits) {
+    std::int32_t out[3 + kLanes] = {-7, -7, -7};
+    std::vector<std::int32_t> want = {-7, -7, -7};
+    for (std::int32_t i = 0; i < 8; ++i)
+      if (bits & (1u << i)) want.push_back(1000 + i);
+    const std::size_t n = append_bit_indices(bits, 1000, out + 3);
+    ASSERT_EQ(n + 3, want.size()) << "bits " << bits;
+    EXPECT_TRUE(std::equal(want.begin(), want.end(), out)) << "bits " << bits;
   }
 }
 

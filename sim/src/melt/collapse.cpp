@@ -22,6 +22,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -144,20 +145,29 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
     // corners one candidate at a time (the 871k dragon: ~80k candidates per cycle, their corners
     // mostly out of the cache after the sweep).
     constexpr std::size_t kChunk = 1024, kAhead = 8;
-    Index candidate[kChunk];
+    static_assert(sizeof(Index) == sizeof(std::int32_t));
+    Index candidate[kChunk + kLanes];  // room for a whole group's indices past the last candidate
     for (std::size_t chunk = begin; chunk < end; chunk += kChunk) {
       const std::size_t chunk_end = std::min(end, chunk + kChunk);
       std::size_t n = 0;
-      for (std::size_t t = chunk; t < chunk_end; ++t) {
-        if (t % kLanes == 0 && t + kLanes <= chunk_end && all_greater(load_lanes(key + t), skip_above)) {
-          t += kLanes - 1;
+      for (std::size_t t = chunk; t < chunk_end;) {
+        if (t % kLanes == 0 && t + kLanes <= chunk_end) {
+          // Eight keys and flags at once, the candidates taken from the bits of the comparison: a
+          // branch per triangle, taken at random where candidates are dense, was half of this pass
+          // on the 871k dragon (docs/melt-core.md, issue 20 step 28).
+          unsigned bits = ~lane_bits<float>(load_lanes(key + t) > skip_above) & 0xffu;
+          if (bits != 0) n += append_bit_indices(bits & nonzero_bits(alive + t), static_cast<Index>(t), candidate + n);
+          t += kLanes;
           continue;
         }
-        if (key[t] > skip_above || !alive[t]) continue;
-        candidate[n++] = static_cast<Index>(t);
-        __builtin_prefetch(&m.triangle[t]);
+        if (!(key[t] > skip_above) && alive[t]) candidate[n++] = static_cast<Index>(t);
+        ++t;
       }
+      // Each candidate's triangle record asked for 2 kAhead candidates ahead, its corners kAhead ahead.
+      for (std::size_t i = 0; i < std::min(n, 2 * kAhead); ++i)
+        __builtin_prefetch(&m.triangle[static_cast<std::size_t>(candidate[i])]);
       for (std::size_t i = 0; i < n; ++i) {
+        if (i + 2 * kAhead < n) __builtin_prefetch(&m.triangle[static_cast<std::size_t>(candidate[i + 2 * kAhead])]);
         if (i + kAhead < n)
           for (Index v : m.triangle[static_cast<std::size_t>(candidate[i + kAhead])]) {
             const Real* p = packed + 3 * static_cast<std::size_t>(v);

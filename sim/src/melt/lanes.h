@@ -24,7 +24,7 @@
 #include <limits>
 #include <type_traits>
 
-#if defined(__AVX2__) && !defined(__AVX512F__)
+#if defined(__SSE2__)
 #include <immintrin.h>
 #endif
 
@@ -220,13 +220,43 @@ inline LaneMask<Real> lanes_nonzero(const std::uint8_t* p) {
   }
 }
 
-/// Whether every lane of x is greater than y (false for a NaN lane).
+/// Bit i set where lane i of m is true (one instruction for float lanes on AVX).
 template <class Real>
-inline bool all_greater(const Lanes<Real>& x, Real y) {
-  const LaneMask<Real> greater = x > y;
-  bool all = true;
-  for (std::size_t i = 0; i < kLanes; ++i) all = all && greater[i] != 0;
-  return all;
+inline unsigned lane_bits(const LaneMask<Real>& m) {
+#if defined(__AVX__)
+  if constexpr (std::is_same_v<Real, float>) return static_cast<unsigned>(_mm256_movemask_ps(__m256(m)));
+#endif
+  unsigned bits = 0;
+  for (std::size_t i = 0; i < kLanes; ++i) bits |= (m[i] != 0 ? 1u : 0u) << i;
+  return bits;
+}
+
+/// Writes first + i for every bit i set in `bits` (of eight), ascending, to out[0], out[1], ...,
+/// and returns how many: without a branch per bit where AVX-512 can compress a vector of
+/// indices (out must then have room for eight).
+inline std::size_t append_bit_indices(unsigned bits, std::int32_t first, std::int32_t* out) {
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+  const __m256i index = _mm256_add_epi32(_mm256_set1_epi32(first), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+  // The register form: compressing straight to memory is microcoded and slow on Zen 4.
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out), _mm256_maskz_compress_epi32(static_cast<__mmask8>(bits), index));
+  return static_cast<std::size_t>(__builtin_popcount(bits & 0xffu));
+#else
+  std::size_t n = 0;
+  for (; bits != 0; bits &= bits - 1) out[n++] = first + __builtin_ctz(bits);
+  return n;
+#endif
+}
+
+/// Bit i set where byte p[i] of eight is not zero.
+inline unsigned nonzero_bits(const std::uint8_t* p) {
+#if defined(__SSE2__)
+  const __m128i bytes = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p));
+  return ~static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(bytes, _mm_setzero_si128()))) & 0xffu;
+#else
+  unsigned bits = 0;
+  for (std::size_t i = 0; i < kLanes; ++i) bits |= (p[i] != 0 ? 1u : 0u) << i;
+  return bits;
+#endif
 }
 
 /// Transposes an 8×8 block: out[j][i] = in[i][j] (records <-> lanes).
