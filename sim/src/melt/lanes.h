@@ -226,8 +226,10 @@ inline unsigned lane_bits(const LaneMask<Real>& m) {
 #if defined(__AVX__)
   if constexpr (std::is_same_v<Real, float>) return static_cast<unsigned>(_mm256_movemask_ps(__m256(m)));
 #endif
+  // (Written as `(m[i] != 0 ? 1u : 0u) << i`, GCC 12 with -fsanitize=undefined returned wrong bits for
+  // double lanes: 0 for a mask of 0xfe, checked by Lanes8.LaneBitsAreTheLanesOfAMask in build/asan.)
   unsigned bits = 0;
-  for (std::size_t i = 0; i < kLanes; ++i) bits |= (m[i] != 0 ? 1u : 0u) << i;
+  for (std::size_t i = 0; i < kLanes; ++i) bits |= static_cast<unsigned>(m[i] != 0) << i;
   return bits;
 }
 
@@ -254,7 +256,7 @@ inline unsigned nonzero_bits(const std::uint8_t* p) {
   return ~static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(bytes, _mm_setzero_si128()))) & 0xffu;
 #else
   unsigned bits = 0;
-  for (std::size_t i = 0; i < kLanes; ++i) bits |= (p[i] != 0 ? 1u : 0u) << i;
+  for (std::size_t i = 0; i < kLanes; ++i) bits |= static_cast<unsigned>(p[i] != 0) << i;
   return bits;
 #endif
 }
