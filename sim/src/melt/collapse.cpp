@@ -22,7 +22,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -145,7 +144,6 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
     // corners one candidate at a time (the 871k dragon: ~80k candidates per cycle, their corners
     // mostly out of the cache after the sweep).
     constexpr std::size_t kChunk = 1024, kAhead = 8;
-    static_assert(sizeof(Index) == sizeof(std::int32_t));
     Index candidate[kChunk + kLanes];  // room for a whole group's indices past the last candidate
     for (std::size_t chunk = begin; chunk < end; chunk += kChunk) {
       const std::size_t chunk_end = std::min(end, chunk + kChunk);
@@ -156,7 +154,9 @@ bool mark_short_edges(TriMesh<Real>& m, double kr, Execution exec, MeltWorkspace
           // branch per triangle, taken at random where candidates are dense, was half of this pass
           // on the 871k dragon (docs/melt-core.md, issue 20 step 28).
           unsigned bits = ~lane_bits<float>(load_lanes(key + t) > skip_above) & 0xffu;
-          if (bits != 0) n += append_bit_indices(bits & nonzero_bits(alive + t), static_cast<Index>(t), candidate + n);
+          if (bits != 0)
+            n += append_bit_indices(bits & lane_bits<float>(lanes_nonzero<float>(alive + t)), static_cast<Index>(t),
+                                    candidate + n);
           t += kLanes;
           continue;
         }

@@ -24,7 +24,7 @@
 #include <limits>
 #include <type_traits>
 
-#if defined(__SSE2__)
+#if defined(__AVX__)
 #include <immintrin.h>
 #endif
 
@@ -246,18 +246,6 @@ inline std::size_t append_bit_indices(unsigned bits, std::int32_t first, std::in
   std::size_t n = 0;
   for (; bits != 0; bits &= bits - 1) out[n++] = first + __builtin_ctz(bits);
   return n;
-#endif
-}
-
-/// Bit i set where byte p[i] of eight is not zero.
-inline unsigned nonzero_bits(const std::uint8_t* p) {
-#if defined(__SSE2__)
-  const __m128i bytes = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p));
-  return ~static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(bytes, _mm_setzero_si128()))) & 0xffu;
-#else
-  unsigned bits = 0;
-  for (std::size_t i = 0; i < kLanes; ++i) bits |= static_cast<unsigned>(p[i] != 0) << i;
-  return bits;
 #endif
 }
 
