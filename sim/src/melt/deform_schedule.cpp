@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <limits>
 #include <cstdint>
 
 namespace meltlab::sim {
@@ -120,14 +119,14 @@ void DeformSchedule::rebuild(const TriMesh<Real>& m, const VertexTriangles& adj,
   vertices_ = m.vertex_slots();
   blocks_ = (triangles_ + kTriangleBlock - 1) / kTriangleBlock;
   // Equal work per part: a part sweeps its blocks' live triangles and moves the vertices it
-  // owns (those whose first triangle is in it), a move costing about kMoveWeight triangles,
-  // and a triangle with a corner owned by another part about kForeignWeight more (split()).
+  // owns (those whose first triangle is in it), a move costing about kMoveWeight triangles.
   // Equal numbers of blocks could leave one part far more vertices: on object C after 20
   // cycles (merges, a compaction) the first half of the blocks held 63 % of the interior groups.
   // (The work is counted in integers: the live triangles of each block, then the vertices whose
   // first triangle it holds, each vertex of a run in one block counted in a register. Adding 1.0
   // and 0.5 into block_work_ one at a time made each addition wait on the store of the one before:
   // the two loops took 85-115 µs of a 32k mesh's 155-225 µs rebuild.)
+  constexpr double kMoveWeight = 0.5;
   block_work_.resize(blocks_);
   for (std::size_t b = 0; b < blocks_; ++b) {
     std::size_t live = 0;
@@ -136,89 +135,34 @@ void DeformSchedule::rebuild(const TriMesh<Real>& m, const VertexTriangles& adj,
     block_work_[b] = static_cast<double>(live);
   }
   // (Multiples of 0.5 below 2^52: exact in any grouping, as the additions one at a time were.)
-  // vertex_first_: each vertex's first triangle, for split() (none for a vertex without triangles).
-  vertex_first_.resize(vertices_);
   std::size_t run_block = 0, run = 0;
   for (std::size_t v = 0; v < vertices_; ++v) {
-    vertex_first_[v] = std::numeric_limits<Index>::max();
     if (!m.vertex_alive[v]) continue;
     const auto list = adj.of(static_cast<Index>(v));
     if (list.empty()) continue;
-    vertex_first_[v] = list.front();
     const std::size_t b = static_cast<std::size_t>(list.front()) / kTriangleBlock;
     if (b != run_block) block_work_[run_block] += kMoveWeight * static_cast<double>(run), run_block = b, run = 0;
     ++run;
   }
   if (blocks_ > 0) block_work_[run_block] += kMoveWeight * static_cast<double>(run);
-  split(m, parts);
-  assign(m, adj, exec);
-  valid_ = true;
-}
-
-template <class Real>
-void DeformSchedule::split(const TriMesh<Real>& m, std::size_t parts) {
-  part_first_block_.assign(parts + 1, blocks_);
-  part_first_block_[0] = 0;
-  // A triangle with a corner owned by an earlier part costs its part more than another (it tests
-  // its corners' owners and stores its terms for the halo phase): split by triangles and moves
-  // alone, the part after the boundary took 13 % longer than the one before on the geodesic 32k,
-  // whose generated order flags 790 triangles. A live triangle t of a part starting at triangle s
-  // is flagged iff a corner's first triangle lies before s (a vertex is owned by the part of its
-  // first triangle, which comes no later than t): with the smallest first triangle of its corners,
-  // first_[t], the flags of every candidate start are counted while the part grows.
-  const bool weigh_flags = parts > 1;
-  if (weigh_flags) {
-    first_.resize(triangles_);
-    for (std::size_t t = 0; t < triangles_; ++t) {
-      Index f = std::numeric_limits<Index>::max();  // a dead slot is never flagged
-      if (m.triangle_alive[t])
-        for (Index c : m.triangle[t]) f = std::min(f, vertex_first_[static_cast<std::size_t>(c)]);
-      first_[t] = f;
-    }
-  }
-  // Block b's work in a part whose first triangle is `start`.
-  auto work = [&](std::size_t b, std::size_t start) {
-    double w = block_work_[b];
-    if (weigh_flags && start > 0) {
-      std::size_t flagged = 0;
-      const std::size_t end = std::min(triangles_, (b + 1) * kTriangleBlock);
-      for (std::size_t t = b * kTriangleBlock; t < end; ++t)
-        flagged += static_cast<std::size_t>(first_[t]) < start ? 1 : 0;
-      w += kForeignWeight * static_cast<double>(flagged);
-    }
-    return w;
-  };
   double total = 0;
   for (double w : block_work_) total += w;
-  // Each part ends at the first block at which the work before it reaches p / parts of the total,
-  // leaving every part at least one block. The total depends on the split (the flags): split
-  // again with the total of the last split until it repeats (twice on the geodesic 32k).
-  for (int pass = 0; pass < 4; ++pass) {
-    double done = 0;
-    std::size_t next = 0;
-    for (std::size_t p = 1; p < parts; ++p) {
-      const double target = total * static_cast<double>(p) / static_cast<double>(parts);
-      const std::size_t start = part_first_block_[p - 1] * kTriangleBlock;
-      for (; next < blocks_ - (parts - p); ++next) {
-        const double w = work(next, start);
-        if (done + w > target && next >= part_first_block_[p - 1] + 1) break;
-        done += w;
-      }
-      part_first_block_[p] = next;
-    }
-    const std::size_t last_start = part_first_block_[parts - 1] * kTriangleBlock;
-    for (std::size_t b = next; b < blocks_; ++b) done += work(b, last_start);
-    if (done == total) break;
-    total = done;
+  part_first_block_.assign(parts + 1, blocks_);
+  part_first_block_[0] = 0;
+  double done = 0;
+  std::size_t next = 0;
+  for (std::size_t p = 1; p < parts; ++p) {
+    // The first block at which the work before it reaches p / parts of the total, leaving
+    // every part at least one block.
+    const double target = total * static_cast<double>(p) / static_cast<double>(parts);
+    while (next < blocks_ - (parts - p) && (done + block_work_[next] <= target || next < part_first_block_[p - 1] + 1))
+      done += block_work_[next++];
+    part_first_block_[p] = next;
   }
   block_part_.resize(blocks_);
   for (std::size_t p = 0; p < parts; ++p)
     for (std::size_t b = part_first_block_[p]; b < part_first_block_[p + 1]; ++b)
       block_part_[b] = static_cast<std::uint16_t>(p);
-}
-
-template <class Real>
-void DeformSchedule::assign(const TriMesh<Real>& m, const VertexTriangles& adj, Execution exec) {
   owner_.assign(vertices_, 0);
   group_part_.assign((vertices_ + kGroup - 1) / kGroup, 0);
   // Groups and blocks side by side in a parallel cycle (each task writes its own groups' owners
@@ -256,6 +200,7 @@ void DeformSchedule::assign(const TriMesh<Real>& m, const VertexTriangles& adj, 
       }
     }
   }
+  valid_ = true;
 }
 
 template <class Real>

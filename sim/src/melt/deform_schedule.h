@@ -82,25 +82,12 @@ class DeformSchedule {
   /// its block's, else 0 (exact for live triangles, as block_mixed(); a dead slot may keep its
   /// flag until the next rebuild). In a mixed block only these triangles test their owners.
   const std::uint8_t* foreign() const { return foreign_.data(); }
-  /// The work of a part, in triangles swept: each live triangle of its blocks, kMoveWeight per
-  /// vertex it owns and kForeignWeight more per triangle with a foreign corner. (Timed on one
-  /// thread in float, the two parts of the geodesic 32k took 101 and 115 µs without the flags'
-  /// weight, 108 and 109 with 3; object C's and the breadth-first bunny's were balanced with 2-3;
-  /// docs/melt-core.md, issue 20 step 29. Multiples of 0.5: the sums of the work are exact.)
-  static constexpr double kMoveWeight = 0.5, kForeignWeight = 3.0;
   /// At most this many parts (the owner of a vertex is stored in 16 bits).
   static constexpr std::size_t kMaxParts = 65535;
 
  private:
   template <class Real>
   void rebuild(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t parts, Execution exec);
-  /// part_first_block_ and block_part_ from block_work_ and the flags each split gives: equal
-  /// work per part.
-  template <class Real>
-  void split(const TriMesh<Real>& m, std::size_t parts);
-  /// The owners, groups, buckets and flags of the current split.
-  template <class Real>
-  void assign(const TriMesh<Real>& m, const VertexTriangles& adj, Execution exec);
   template <class Real>
   void classify(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t g);
   void build_buckets();
@@ -129,8 +116,6 @@ class DeformSchedule {
   std::vector<std::uint8_t> vertex_seen_;     ///< update() scratch: 1 for a vertex in touched_vertices_
   std::vector<std::uint8_t> group_seen_;      ///< update() scratch: 1 for a group in touched_groups_
   std::vector<double> block_work_;            ///< rebuild() scratch
-  std::vector<Index> vertex_first_;           ///< rebuild() scratch: per vertex, its first triangle
-  std::vector<Index> first_;                  ///< split() scratch: per triangle, its corners' first triangle
   std::vector<Index> touched_;
 };
 
