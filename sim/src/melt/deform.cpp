@@ -396,28 +396,35 @@ double sweep(const Sweep<Real, ScaleAt>& w, std::size_t parts, Execution exec) {
     for (std::size_t g = 0; g < groups; ++g) move_group_at<Real, kMode>(w, g, mx);
     publish(mx);
   } else {
-    auto run_parts = [&](const tbb::blocked_range<std::size_t>& r) {
-      MoveMaxima<Real> mx;
-      for (std::size_t p = r.begin(); p < r.end(); ++p) sweep_part<true, kMode>(w, p, mx);
-      publish(mx);
-    };
-    const tbb::blocked_range<std::size_t> all(0, plan.parts(), 1);
-    if (exec == Execution::kSerial)
-      run_parts(all);
-    else
-      tbb::parallel_for(all, run_parts, tbb::simple_partitioner());
     const auto halo = plan.halo_groups();
-    // Halo groups are few (a part boundary) but each gathers stored terms and moves eight
-    // vertices: on the threads from 2 x kHaloGrain groups on (geodesic 32k, 209 groups: 4 %
-    // off a two-thread cycle). Every group writes only its own records and vertices.
-    for_range(
-        exec, halo.size(),
-        [&](std::size_t begin, std::size_t end) {
-          MoveMaxima<Real> mx;
-          for (std::size_t i = begin; i < end; ++i) halo_group<kMode>(w, static_cast<std::size_t>(halo[i]), mx);
-          publish(mx);
-        },
-        kHaloGrain);
+    const std::size_t nparts = plan.parts();
+    if (exec == Execution::kSerial) {
+      MoveMaxima<Real> mx;
+      for (std::size_t p = 0; p < nparts; ++p) sweep_part<true, kMode>(w, p, mx);
+      for (const std::int32_t g : halo) halo_group<kMode>(w, static_cast<std::size_t>(g), mx);
+      publish(mx);
+    } else {
+      // The parts and then the halo groups in one region of tasks (one per thread TBB may use),
+      // each claiming work: a part at a time, then, once every part has finished, kHaloGrain halo
+      // groups at a time. A task waits for parts only when all are claimed, so by tasks that run:
+      // no task waits on work nobody has taken (if TBB runs fewer tasks at once, one does all).
+      // Two regions (the parts, then the halo groups) cost a worker's second wake-up and join.
+      std::atomic<std::size_t> next_part{0}, parts_done{0}, next_halo{0};
+      auto run = [&](std::size_t) {
+        MoveMaxima<Real> mx;
+        for (std::size_t p; (p = next_part.fetch_add(1, std::memory_order_relaxed)) < nparts;) {
+          sweep_part<true, kMode>(w, p, mx);
+          parts_done.fetch_add(1, std::memory_order_release);
+        }
+        while (parts_done.load(std::memory_order_acquire) < nparts) _mm_pause();
+        for (std::size_t i; (i = next_halo.fetch_add(kHaloGrain, std::memory_order_relaxed)) < halo.size();) {
+          const std::size_t end = std::min(halo.size(), i + kHaloGrain);
+          for (; i < end; ++i) halo_group<kMode>(w, static_cast<std::size_t>(halo[i]), mx);
+        }
+        publish(mx);
+      };
+      tbb::parallel_for(std::size_t{0}, nparts, run, tbb::simple_partitioner());
+    }
   }
   // |move| <= sqrt(3) * max component; rounding of each component <= eps * |coordinate|.
   constexpr double kSqrt3 = 1.7320508075688772;
