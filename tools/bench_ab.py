@@ -12,12 +12,17 @@ a serial benchmark includes the time the scheduler gave the core to other proces
 CPU time does not (it still includes the cost of caches shared with them). For a parallel
 benchmark the CPU time is the work of all threads, not how long the cycle took.
 
+--counter NAME compares a per-repetition counter of the benchmark instead of its time, e.g. steady_ms
+(BM_MeltCycle's cycles that are neither a fresh simulator's first nor a remnant check: on two threads
+the benchmark's restarts every 20 cycles add a wake-up-bound tail that is noisier than the cycle).
+
 --side-by-side 0,1 runs OLD and NEW at the same time, each pinned to one of the two CPUs (swapped
 every round): both then see the same spell of the host, at one thread each (TBB follows the
 affinity mask), which makes the per-round ratios steadier than runs one after the other.
 
   tools/bench_ab.py OLD_BENCH NEW_BENCH [--rounds 4] [--repetitions 3] [--json OUT]
-                    [--taskset CPUS | --side-by-side A,B] [--time real|cpu] -- [benchmark args, e.g. --benchmark_filter=...]
+                    [--taskset CPUS | --side-by-side A,B] [--time real|cpu] [--counter NAME]
+                    -- [benchmark args, e.g. --benchmark_filter=...]
 """
 import argparse
 import json
@@ -63,7 +68,10 @@ def rows_of(doc, time_key):
     for b in doc["benchmarks"]:
         if b.get("run_type") == "aggregate":
             continue
-        ms = b[time_key] * {"ms": 1.0, "us": 1e-3, "ns": 1e-6, "s": 1e3}[b.get("time_unit", "ns")]
+        if time_key.startswith("counter:"):  # a counter in ms, e.g. steady_ms
+            ms = b.get(time_key[len("counter:"):], float("nan"))
+        else:
+            ms = b[time_key] * {"ms": 1.0, "us": 1e-3, "ns": 1e-6, "s": 1e3}[b.get("time_unit", "ns")]
         r = rows.setdefault(b["run_name"], {"ms": [], "deform_ms": [], "collapse_ms": [], "triangles": []})
         r["ms"].append(ms)
         for k in ("deform_ms", "collapse_ms", "triangles"):
@@ -89,6 +97,7 @@ def main():
                           "round), so that both see the same spell of the host (one thread each)")
     ap.add_argument("--json")
     ap.add_argument("--time", choices=("real", "cpu"), default="real")
+    ap.add_argument("--counter", default="", help="compare this counter (ms) instead of the time, e.g. steady_ms")
     argv = sys.argv[1:]
     cut = argv.index("--") if "--" in argv else len(argv)
     a = ap.parse_args(argv[:cut])
@@ -97,18 +106,19 @@ def main():
     cpus = a.side_by_side.split(",") if a.side_by_side else []
     if a.side_by_side and len(cpus) != 2:
         raise SystemExit("bench_ab.py: --side-by-side wants two CPUs, e.g. 0,1")
+    time_key = f"counter:{a.counter}" if a.counter else f"{a.time}_time"
     rounds = []
     for i in range(a.rounds):
         order = [("old", a.old), ("new", a.new)] if i % 2 == 0 else [("new", a.new), ("old", a.old)]
         if cpus:
             got = run_side_by_side([(tag, binary, cpus[k]) for k, (tag, binary) in enumerate(order)], extra,
-                                   f"{a.time}_time")
+                                   time_key)
             print(f"round {i + 1}/{a.rounds}: both done ({order[0][0]} on CPU {cpus[0]})", file=sys.stderr)
             rounds.append(got)
             continue
         got = {}
         for tag, binary in order:
-            got[tag] = run(binary, extra, a.taskset, f"{a.time}_time")
+            got[tag] = run(binary, extra, a.taskset, time_key)
             print(f"round {i + 1}/{a.rounds}: {tag} done", file=sys.stderr)
         rounds.append(got)
     names = []
@@ -116,7 +126,9 @@ def main():
         for tag in ("old", "new"):
             names += [n for n in r[tag] if n not in names]
     table = []
-    print(f"{'benchmark':<58}{'old ms':>9}{'new ms':>9}{'new/old':>9}{'deform':>8}{'collapse':>9}{'tri':>9}")
+    what = a.counter or "ms"
+    w = max(9, len(what) + 5)
+    print(f"{'benchmark':<58}{'old ' + what:>{w}}{'new ' + what:>{w}}{'new/old':>9}{'deform':>8}{'collapse':>9}{'tri':>9}")
     for n in names:
         old = [x for r in rounds for x in r["old"].get(n, {}).get("ms", [])]
         new = [x for r in rounds for x in r["new"].get(n, {}).get("ms", [])]
@@ -130,10 +142,11 @@ def main():
                "ratios": ratios, **counters, "old_deform_ms": old_c["deform_ms"],
                "old_collapse_ms": old_c["collapse_ms"]}
         table.append(row)
-        print(f"{n:<58}{row['old_ms']:>9.3f}{row['new_ms']:>9.3f}{row['ratio']:>9.3f}"
+        print(f"{n:<58}{row['old_ms']:>{w}.3f}{row['new_ms']:>{w}.3f}{row['ratio']:>9.3f}"
               f"{counters['deform_ms']:>8.3f}{counters['collapse_ms']:>9.3f}{counters['triangles']:>9.0f}")
     if a.json:
-        Path(a.json).write_text(json.dumps({"rounds": a.rounds, "repetitions": a.repetitions, "time": a.time,
+        Path(a.json).write_text(json.dumps({"rounds": a.rounds, "repetitions": a.repetitions,
+                                            "time": a.counter or a.time,
                                             "args": a.bench_args, "rows": table}, indent=1))
     return 0
 
