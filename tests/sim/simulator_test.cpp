@@ -144,6 +144,15 @@ TEST(Simulator, AnySweepPartitionGivesTheSameMeshBitwise) {
   check_partitions_equal<double>(dumbbell, relative_params(dumbbell, 0.05, 0.5), 1100, "dumbbell double");
 }
 
+// A parallel sweep's tasks claim its parts and then its halo groups, and a task waits for the parts
+// only once all are claimed: with one thread for TBB the first task runs every part and every halo
+// group itself (and the others find nothing left). Same meshes as with four threads.
+TEST(Simulator, OneThreadRunsEveryPartOfAParallelSweep) {
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 1);
+  const IndexedMesh c = datasets::benchmark_object('C');
+  check_partitions_equal<float>(c, relative_params(c, 0.05, 0.5), 30, "object C float, one thread");
+}
+
 // MeltSimulator writes the N, M and Nf columns only when asked (set_record_vectors): the
 // positions and the topology are bitwise the same either way, the columns stay as they were
 // when off, and when on they are Alg. 1's of that cycle — what deform() writes on the mesh
