@@ -11,6 +11,7 @@
 #include <meltlab/sim/melt.h>
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <numeric>
@@ -130,6 +131,43 @@ TEST(Remnants, PartsAreTheSmallestVertexOfEachComponent) {
         EXPECT_EQ(wrong, 0u) << what;
       }
     }
+}
+
+// On the threads the parts' volumes are summed in chunks, in another order than the serial check's
+// ordered sums; only a sign the chunked sum certifies (further from zero than the two orders' error
+// bound) is taken from it, otherwise the ordered sum decides. Flat closed parts (a geodesic sphere
+// squashed onto a plane off the origin: volume zero, terms that are not) have sums that are rounding
+// noise of either sign: the decisions on threads must be the serial ones in every case, beside a
+// correct sphere and an inverted one, whose signs the chunked sums certify. More than 2 x 2048
+// triangles, so that the chunks run on the threads.
+TEST(Remnants, ChunkedVolumesOnTheThreadsDecideAsTheOrderedSums) {
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 4);
+  const IndexedMesh sphere = datasets::geodesic_sphere(12, 1.0);  // 2 880 triangles
+  IndexedMesh inverted = test::translated(sphere, {3, 0, 0});
+  for (auto& t : inverted.F) std::swap(t[1], t[2]);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> offset(-50.0, 50.0), slope(-0.3, 0.3);
+  int flat_removed = 0, flat_kept = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    // A plane z = c + a x + b y, far from the origin, holding a squashed sphere.
+    IndexedMesh flat = sphere;
+    const double c = offset(rng), a = slope(rng), b = slope(rng);
+    for (auto& v : flat.V) v = {v.x() + 6.0, v.y(), c + a * (v.x() + 6.0) + b * v.y()};
+    const IndexedMesh mesh = test::disjoint_union(test::disjoint_union(sphere, inverted), flat);
+    ASSERT_GT(mesh.F.size(), 2u * 2048u);
+    TriMesh<double> serial = TriMesh<double>::from_indexed(mesh), on_threads = serial;
+    MeltWorkspace serial_ws, threads_ws;
+    const std::int64_t removed = remove_inverted_parts_pass(serial, serial_ws, Execution::kSerial);
+    EXPECT_EQ(remove_inverted_parts_pass(on_threads, threads_ws, Execution::kParallel), removed) << "trial " << trial;
+    EXPECT_EQ(on_threads.triangle_alive, serial.triangle_alive) << "trial " << trial;
+    EXPECT_EQ(on_threads.vertex_alive, serial.vertex_alive) << "trial " << trial;
+    EXPECT_TRUE(serial.vertex_alive[0]) << "the sphere stays";
+    EXPECT_FALSE(serial.vertex_alive[sphere.V.size()]) << "the inverted sphere goes";
+    (serial.vertex_alive[2 * sphere.V.size()] ? flat_kept : flat_removed) += 1;
+  }
+  // The flat parts' ordered sums fell on both sides of zero: the decisions above depended on rounding.
+  EXPECT_GT(flat_removed, 0);
+  EXPECT_GT(flat_kept, 0);
 }
 
 }  // namespace

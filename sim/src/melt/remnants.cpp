@@ -7,7 +7,12 @@
 #include "../mesh/union_find.h"
 #include "workspace.h"
 
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <limits>
 
 namespace meltlab::sim {
 
@@ -106,6 +111,79 @@ void find_parts(const TriMesh<Real>& m, UnionFind& parts, std::vector<Triangle>&
   alive = m.triangle_alive;
 }
 
+// Each part's six-fold signed volume, the sum of its triangles' terms in triangle order, into
+// six_volume (zero on entry). Consecutive triangles mostly lie in one part, so its sum is kept in a
+// register for the run of them (written back when the part changes, read again when it comes back):
+// the same additions in the same order as adding into six_volume each time, without waiting on the
+// store of one addition to load the next (about a third of this pass on the 32k meshes,
+// docs/melt-core.md, issue 20 step 20).
+template <class Real, class Term>
+void sum_volumes_in_order(const TriMesh<Real>& m, const std::vector<Index>& parent, const Term& term,
+                          std::vector<double>& six_volume) {
+  const std::size_t nt = m.triangle_slots();
+  Index run_part = 0;
+  double run_sum = six_volume.empty() ? 0.0 : six_volume[0];
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (!m.triangle_alive[t]) continue;
+    const Index part = parent[static_cast<std::size_t>(m.triangle[t][0])];
+    if (part != run_part) {
+      six_volume[static_cast<std::size_t>(run_part)] = run_sum;
+      run_part = part;
+      run_sum = six_volume[static_cast<std::size_t>(part)];
+    }
+    run_sum += term(t);
+  }
+  if (!six_volume.empty()) six_volume[static_cast<std::size_t>(run_part)] = run_sum;
+}
+
+// The parts' volumes summed in chunks of triangles on the threads, written to ws.part_six_volume
+// when every part's sign is certified (see remove_inverted_parts_pass); false otherwise (then
+// ws.part_six_volume is left as it was: zero).
+template <class Real, class Term>
+bool sum_volumes_in_chunks(const TriMesh<Real>& m, const std::vector<Index>& parent, const Term& term,
+                           MeltWorkspace& ws) {
+  const std::size_t nt = m.triangle_slots();
+  const std::size_t chunks = (nt + kParallelGrain - 1) / kParallelGrain;
+  using VolumeRun = MeltWorkspace::VolumeRun;
+  std::vector<std::vector<VolumeRun>>& runs = ws.volume_runs;
+  runs.resize(chunks);
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t k) {
+    std::vector<VolumeRun>& out = runs[k];
+    out.clear();
+    VolumeRun run{-1, 0.0, 0.0, 0};
+    for (std::size_t t = k * kParallelGrain; t < std::min(nt, (k + 1) * kParallelGrain); ++t) {
+      if (!m.triangle_alive[t]) continue;
+      const Index part = parent[static_cast<std::size_t>(m.triangle[t][0])];
+      if (part != run.part) {
+        if (run.terms > 0) out.push_back(run);
+        run = {part, 0.0, 0.0, 0};
+      }
+      const double x = term(t);
+      run.sum += x, run.magnitude += std::abs(x), ++run.terms;
+    }
+    if (run.terms > 0) out.push_back(run);
+  });
+  // Each part's runs in chunk order (a stable sort keeps it): one deterministic sum per part.
+  std::vector<VolumeRun>& all = ws.volume_runs_sorted;
+  all.clear();
+  for (const std::vector<VolumeRun>& chunk : runs) all.insert(all.end(), chunk.begin(), chunk.end());
+  std::stable_sort(all.begin(), all.end(), [](const VolumeRun& a, const VolumeRun& b) { return a.part < b.part; });
+  constexpr double u = std::numeric_limits<double>::epsilon() / 2;
+  for (std::size_t i = 0; i < all.size();) {
+    VolumeRun part = all[i++];
+    for (; i < all.size() && all[i].part == part.part; ++i)
+      part.sum += all[i].sum, part.magnitude += all[i].magnitude, part.terms += all[i].terms;
+    // 2 γ(n-1) Σ|terms| <= 4 (n + 1) u × the computed Σ|terms| (itself within γ(n-1) of the exact; n u < 1e-6).
+    const auto n = static_cast<double>(part.terms);
+    if (!(std::abs(part.sum) > 4.0 * (n + 1.0) * u * part.magnitude)) {
+      std::fill(ws.part_six_volume.begin(), ws.part_six_volume.end(), 0.0);
+      return false;
+    }
+    ws.part_six_volume[static_cast<std::size_t>(part.part)] = part.sum;
+  }
+  return true;
+}
+
 }  // namespace
 
 template <class Real>
@@ -123,28 +201,20 @@ std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws, Exe
     if (use_packed) return Vec3<double>(packed[3 * vs], packed[3 * vs + 1], packed[3 * vs + 2]);
     return Vec3<double>(m.position[vs].template cast<double>());
   };
-  std::vector<double>& six_volume = ws.part_six_volume;
-  six_volume.assign(nv, 0.0);
-  // Each part's sum in triangle order. Consecutive triangles mostly lie in one part, so its sum
-  // is kept in a register for the run of them (written back when the part changes, read again
-  // when it comes back): the same additions in the same order as adding into six_volume each
-  // time, without waiting on the store of one addition to load the next (about a third of this
-  // pass on the 32k meshes, docs/melt-core.md, issue 20 step 20).
-  Index run_part = 0;
-  double run_sum = nv > 0 ? six_volume[0] : 0.0;
-  for (std::size_t t = 0; t < nt; ++t) {
-    if (!m.triangle_alive[t]) continue;
+  auto term = [&](std::size_t t) {
     const Triangle& tri = m.triangle[t];
     const Vec3<double> a = corner(tri[0]), b = corner(tri[1]), c = corner(tri[2]);
-    const Index part = parent[static_cast<std::size_t>(tri[0])];
-    if (part != run_part) {
-      six_volume[static_cast<std::size_t>(run_part)] = run_sum;
-      run_part = part;
-      run_sum = six_volume[static_cast<std::size_t>(part)];
-    }
-    run_sum += a.dot(b.cross(c));
-  }
-  if (nv > 0) six_volume[static_cast<std::size_t>(run_part)] = run_sum;
+    return a.dot(b.cross(c));
+  };
+  std::vector<double>& six_volume = ws.part_six_volume;
+  six_volume.assign(nv, 0.0);
+  // On the threads: each part's volume summed in chunks, then the chunks' sums in chunk order. Only
+  // the sign decides, and it must be the sign of the ordered sum below (the serial check's): both
+  // sums add the same n terms, each within γ(n-1)·Σ|terms| of their exact sum, so a chunked sum
+  // further from zero than twice that has the ordered sum's sign (and the ordered sum is not 0).
+  // A part nearer zero (a flat remnant) sends the check to the ordered sum.
+  const bool chunked = exec == Execution::kParallel && nt >= 2 * kParallelGrain;
+  if (!(chunked && sum_volumes_in_chunks(m, parent, term, ws))) sum_volumes_in_order(m, parent, term, six_volume);
   std::int64_t removed = 0;
   std::vector<std::uint8_t>& doomed = ws.part_doomed;
   doomed.assign(nv, 0);

@@ -121,7 +121,17 @@ struct MeltWorkspace {
   /// these and the vertex slot count alone, so the check reuses them while both are unchanged.
   std::vector<Triangle> remnant_triangles;
   std::vector<std::uint8_t> remnant_alive;
-  std::vector<double> part_six_volume;    ///< remnant check: 6 x volume per part (at its root)
+  std::vector<double> part_six_volume;  ///< remnant check: 6 x volume per part (at its root)
+  /// Remnant check on the threads: a run of consecutive live triangles of one part in a chunk (the
+  /// sum of their volume terms, of the terms' magnitudes, and their number), per chunk and then
+  /// all of them ordered by part.
+  struct VolumeRun {
+    Index part;
+    double sum, magnitude;
+    std::int64_t terms;
+  };
+  std::vector<std::vector<VolumeRun>> volume_runs;
+  std::vector<VolumeRun> volume_runs_sorted;
   std::vector<std::uint8_t> part_doomed;  ///< remnant check: the part is removed
   std::vector<Index> merged;              ///< vertices merged this cycle (ascending): those the short-edge test marked
   std::vector<std::int32_t> cluster_size;
