@@ -397,35 +397,31 @@ double sweep(const Sweep<Real, ScaleAt>& w, std::size_t parts, Execution exec) {
     for (std::size_t g = 0; g < groups; ++g) move_group_at<Real, kMode>(w, g, mx);
     publish(mx);
   } else {
+    // The parts and then the halo groups in one region of tasks (one per part), each claiming work:
+    // a part at a time, then, once every part has finished, kHaloGrain halo groups at a time. A task
+    // waits for parts only when all are claimed, so by tasks that run: no task waits on work nobody
+    // has taken (if TBB runs fewer tasks at once, one does all, as the serial sweep's one call does).
+    // Two regions (the parts, then the halo groups) cost a worker's second wake-up and join.
     const auto halo = plan.halo_groups();
     const std::size_t nparts = plan.parts();
-    if (exec == Execution::kSerial) {
+    std::atomic<std::size_t> next_part{0}, parts_done{0}, next_halo{0};
+    auto run = [&](std::size_t) {
       MoveMaxima<Real> mx;
-      for (std::size_t p = 0; p < nparts; ++p) sweep_part<true, kMode>(w, p, mx);
-      for (const std::int32_t g : halo) halo_group<kMode>(w, static_cast<std::size_t>(g), mx);
+      for (std::size_t p; (p = next_part.fetch_add(1, std::memory_order_relaxed)) < nparts;) {
+        sweep_part<true, kMode>(w, p, mx);
+        parts_done.fetch_add(1, std::memory_order_release);
+      }
+      while (parts_done.load(std::memory_order_acquire) < nparts) _mm_pause();
+      for (std::size_t i; (i = next_halo.fetch_add(kHaloGrain, std::memory_order_relaxed)) < halo.size();) {
+        const std::size_t end = std::min(halo.size(), i + kHaloGrain);
+        for (; i < end; ++i) halo_group<kMode>(w, static_cast<std::size_t>(halo[i]), mx);
+      }
       publish(mx);
-    } else {
-      // The parts and then the halo groups in one region of tasks (one per thread TBB may use),
-      // each claiming work: a part at a time, then, once every part has finished, kHaloGrain halo
-      // groups at a time. A task waits for parts only when all are claimed, so by tasks that run:
-      // no task waits on work nobody has taken (if TBB runs fewer tasks at once, one does all).
-      // Two regions (the parts, then the halo groups) cost a worker's second wake-up and join.
-      std::atomic<std::size_t> next_part{0}, parts_done{0}, next_halo{0};
-      auto run = [&](std::size_t) {
-        MoveMaxima<Real> mx;
-        for (std::size_t p; (p = next_part.fetch_add(1, std::memory_order_relaxed)) < nparts;) {
-          sweep_part<true, kMode>(w, p, mx);
-          parts_done.fetch_add(1, std::memory_order_release);
-        }
-        while (parts_done.load(std::memory_order_acquire) < nparts) _mm_pause();
-        for (std::size_t i; (i = next_halo.fetch_add(kHaloGrain, std::memory_order_relaxed)) < halo.size();) {
-          const std::size_t end = std::min(halo.size(), i + kHaloGrain);
-          for (; i < end; ++i) halo_group<kMode>(w, static_cast<std::size_t>(halo[i]), mx);
-        }
-        publish(mx);
-      };
+    };
+    if (exec == Execution::kSerial)
+      run(0);
+    else
       tbb::parallel_for(std::size_t{0}, nparts, run, tbb::simple_partitioner());
-    }
   }
   // |move| <= sqrt(3) * max component; rounding of each component <= eps * |coordinate|.
   constexpr double kSqrt3 = 1.7320508075688772;

@@ -138,7 +138,7 @@ void sum_volumes_in_order(const TriMesh<Real>& m, const std::vector<Index>& pare
 
 // The parts' volumes summed in chunks of triangles on the threads, written to ws.part_six_volume
 // when every part's sign is certified (see remove_inverted_parts_pass); false otherwise (then
-// ws.part_six_volume is left as it was: zero).
+// ws.part_six_volume is left as it was).
 template <class Real, class Term>
 bool sum_volumes_in_chunks(const TriMesh<Real>& m, const std::vector<Index>& parent, const Term& term,
                            MeltWorkspace& ws) {
@@ -168,19 +168,19 @@ bool sum_volumes_in_chunks(const TriMesh<Real>& m, const std::vector<Index>& par
   all.clear();
   for (const std::vector<VolumeRun>& chunk : runs) all.insert(all.end(), chunk.begin(), chunk.end());
   std::stable_sort(all.begin(), all.end(), [](const VolumeRun& a, const VolumeRun& b) { return a.part < b.part; });
+  // The parts' totals (in place, at the front of `all`), each certified before any is written.
   constexpr double u = std::numeric_limits<double>::epsilon() / 2;
-  for (std::size_t i = 0; i < all.size();) {
+  std::size_t parts = 0;
+  for (std::size_t i = 0; i < all.size(); ++parts) {
     VolumeRun part = all[i++];
     for (; i < all.size() && all[i].part == part.part; ++i)
       part.sum += all[i].sum, part.magnitude += all[i].magnitude, part.terms += all[i].terms;
     // 2 γ(n-1) Σ|terms| <= 4 (n + 1) u × the computed Σ|terms| (itself within γ(n-1) of the exact; n u < 1e-6).
     const auto n = static_cast<double>(part.terms);
-    if (!(std::abs(part.sum) > 4.0 * (n + 1.0) * u * part.magnitude)) {
-      std::fill(ws.part_six_volume.begin(), ws.part_six_volume.end(), 0.0);
-      return false;
-    }
-    ws.part_six_volume[static_cast<std::size_t>(part.part)] = part.sum;
+    if (!(std::abs(part.sum) > 4.0 * (n + 1.0) * u * part.magnitude)) return false;
+    all[parts] = part;
   }
+  for (std::size_t k = 0; k < parts; ++k) ws.part_six_volume[static_cast<std::size_t>(all[k].part)] = all[k].sum;
   return true;
 }
 
