@@ -73,17 +73,19 @@ std::map<std::string, std::string> generator_record(const render::VolumeGenerate
           {"permutation", "Perlin 2002 reference"}};
 }
 
-/// Seed 003's data choices of a render of a .vlb/.nrrd file (vsi.data.*); empty otherwise.
-json vsi_data_json(const render::VolumeScene& scene, const std::optional<render::Normalisation>& n) {
+/// Seed 003's data choices of a render of a .vlb/.nrrd file (`prefix`data.*); empty otherwise.
+json vsi_data_json(const render::VolumeScene& scene, const std::optional<render::Normalisation>& n,
+                   const std::string& prefix = "") {
   json j = json::object();
   if (!n) return j;
-  j["data.norm_source"] = render::norm_source_name(n->source);
-  j["data.norm_range"] = {n->lo, n->hi};
-  j["data.scanned_range"] = {n->scanned_min, n->scanned_max};
-  j["data.constant"] = n->constant;
-  j["data.clipped"] = {n->clipped_low, n->clipped_high};
-  j["data.window_units"] = scene.volume.read.window_units == render::VlbWindowUnits::kValue ? "value" : "fraction";
-  j["data.internal_bits"] = "float32";
+  j[prefix + "data.norm_source"] = render::norm_source_name(n->source);
+  j[prefix + "data.norm_range"] = {n->lo, n->hi};
+  j[prefix + "data.scanned_range"] = {n->scanned_min, n->scanned_max};
+  j[prefix + "data.constant"] = n->constant;
+  j[prefix + "data.clipped"] = {n->clipped_low, n->clipped_high};
+  j[prefix + "data.window_units"] =
+      scene.volume.read.window_units == render::VlbWindowUnits::kValue ? "value" : "fraction";
+  j[prefix + "data.internal_bits"] = "float32";
   return j;
 }
 
@@ -397,10 +399,19 @@ VolumeRenderRunResult run_slicing_render(const VolumeRenderRunOptions& o, render
   const std::string scene_name = o.scene_file.string();
   auto named = [&](const auto& call) { run_naming_scene(scene_name, call); };
   const auto t_load = std::chrono::steady_clock::now();
-  const render::Volume volume = render::load_scene_volume(scene);
+  render::SceneVolume loaded = render::load_scene_volumes(scene);
+  if (loaded.is_bricked()) (void)render::load_scene_volume(scene);  // refuses a blocked volume, naming it
+  const render::Volume volume = std::move(loaded.dense);
   const double load_ms = ms_since(t_load);
   render::SlicingScene& sl = *scene.slicing;
   render::SlicingSettings& s = sl.settings;
+  // A .vlb/.nrrd load has already mapped its chosen range (scanned, header or window) to [0, 1]; the
+  // renderer's own default, the scanned extrema, would stretch a header or window range wider than
+  // the data back over the data. So the load's [0, 1] is kept unless the scene gives a value_range.
+  // (For a scanned load the two are the same numbers; `normalise: none` keeps the renderer's default.)
+  const bool range_from_load =
+      loaded.normalisation && loaded.normalisation->source != render::NormSource::kNone && !s.value_range;
+  if (range_from_load) s.value_range = std::make_pair(0.0, 1.0);
   named([&] {
     s.mask = render::build_scene_mask(sl, volume.domain());
     render::check_slicing_settings(volume, s);
@@ -457,9 +468,13 @@ VolumeRenderRunResult run_slicing_render(const VolumeRenderRunOptions& o, render
   json j;
   j["scene_file"] = o.scene_file.string();
   j["method"] = "slicing";
-  json vsi = pairs_json(render::describe_vsi(s, volume, scene.camera));
+  // The load's normalisation (a .vlb/.nrrd file), then the renderer's choices over it.
+  json vsi = vsi_data_json(scene, loaded.normalisation, "vsi.");
+  vsi.update(pairs_json(render::describe_vsi(s, volume, scene.camera)));
   const auto [lo, hi] = renderer.value_range();
   vsi["vsi.data.value_range"] = fmt::format("[{:.17g}, {:.17g}]", lo, hi);
+  if (range_from_load)
+    vsi["vsi.data.norm_source"] = render::norm_source_name(loaded.normalisation->source) + " (at load, to [0, 1])";
   j["vsi"] = vsi;
   j["volume"] = scene_volume_json(scene, volume);
   j["camera"] = camera_json(scene.camera);

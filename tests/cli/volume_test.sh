@@ -132,6 +132,31 @@ assert json.load(open('r_mip/render.json'))['gradients']['from_cache'] is False
 assert json.load(open('r_mip2/render.json'))['gradients']['from_cache'] is True
 PY
     ls data/slicing-gradients/*.grad >/dev/null || fail "no gradient cache file"
+    # A .vlb's `normalise` reaches the image: a header range (0..4000) wider than the data (a ramp
+    # 1000..3000) maps the data to [0.25, 0.75], which the renderer keeps (it must not stretch it back
+    # to [0, 1] by its own scanned extrema); scanned and the equivalent value_range agree bit for bit.
+    py <<'PY'
+import struct
+nx, ny, nz = 12, 10, 8
+vals = [1000 + (2000 * i) // (nx - 1) for k in range(nz) for j in range(ny) for i in range(nx)]
+hdr = f"VLB.1\n{nx} {ny} {nz}\nuint16\nlittle\n1 1 1\n0 4000\n0 1\n"
+open('wide.vlb', 'wb').write(hdr.encode() + struct.pack(f'<{len(vals)}H', *vals))
+PY
+    for n in header scanned; do
+      printf 'method: slicing\nvolume: {file: wide.vlb, normalise: %s}\ncamera: {type: pinhole, width: 24, height: 20, fov_deg: 30, eye: [40, -30, 30], target: [6, 5, 4]}\nslicing:\n  transfer_functions: [{r: [[0, 1]], g: [[0, 1]], b: [[0, 1]], a: [[0, 0], [1, 1]]}]\n' "$n" > "w_$n.yaml"
+      run_ok "$M" volume render --scene "w_$n.yaml" --frames 1 --out "rw_$n"
+    done
+    sed -e 's/normalise: header/normalise: scanned/' -e '$a\  value_range: [0, 1]' w_header.yaml > w_given.yaml
+    run_ok "$M" volume render --scene w_given.yaml --frames 1 --out rw_given
+    cmp -s rw_header/image.png rw_scanned/image.png && fail "normalise: header rendered as scanned"
+    cmp -s rw_scanned/image.png rw_given/image.png || fail "scanned and value_range [0, 1] differ"
+    py <<'PY'
+import json
+v = {n: json.load(open(f'rw_{n}/render.json'))['vsi'] for n in ('header', 'scanned', 'given')}
+assert v['header']['vsi.data.norm_source'].startswith('header (at load') and v['header']['vsi.data.norm_range'] == [0, 4000], v['header']
+assert v['scanned']['vsi.data.norm_range'] == [1000, 3000] and v['header']['vsi.data.scanned_range'] == [1000, 3000]
+assert v['given']['vsi.data.norm_source'] == 'given [0, 1]', v['given']
+PY
     # A bad key inside the slicing section: file:line, nothing written.
     printf 'method: slicing\nvolume: {generate: {kind: constant, size: 4}}\ncamera: {type: pinhole, width: 8, height: 8, fov_deg: 30, eye: [400, 0, 0], target: [0, 0, 0]}\nslicing:\n  quality_class: 0\n  transfer_functions: [{a: [[0, 1]]}]\n' > bad_s.yaml
     expect_exit 2 "$M" volume render --scene bad_s.yaml --out rb
