@@ -41,9 +41,20 @@ bool has_foreign_corner(const DeformSchedule& s, const TriMesh<Real>& m, std::si
   return foreign;
 }
 
-// Blocks the schedule calls unmixed although a live triangle in them has a foreign corner, and
-// live triangles with a foreign corner that it does not flag (foreign(), which in a mixed block
-// decides which triangles test their owners), for `m` as it is: both must be 0 (a block called
+// Whether group g has no live vertex with triangles (it may be called interior to any part).
+template <class Real>
+bool free_group(const TriMesh<Real>& m, const VertexTriangles& adj, std::int32_t g) {
+  bool free = true;
+  for (std::size_t v = static_cast<std::size_t>(g) * kGroup;
+       v < std::min(m.vertex_slots(), (static_cast<std::size_t>(g) + 1) * kGroup); ++v)
+    free = free && (!m.vertex_alive[v] || adj.of(static_cast<Index>(v)).empty());
+  return free;
+}
+
+// Blocks the schedule calls unmixed although a live triangle in them has a foreign corner, live
+// triangles with a foreign corner that it does not flag (foreign(), which in a mixed block decides
+// which triangles test their owners), and owners or interior groups that would change the order of
+// a vertex's additions (below), for `m` as it is: all must be 0 (a block called
 // mixed that no longer is, or a dead slot still flagged, is allowed); a schedule built afresh must
 // be exact in both.
 template <class Real>
@@ -55,6 +66,37 @@ std::size_t check_blocks(const DeformSchedule& s, const TriMesh<Real>& m, const 
     wrong += s.foreign()[t] == 0 && triangle_has_foreign_corner(s, m, t);
   DeformSchedule fresh;
   fresh.update(m, adj, parts);
+  // Owners and the groups' classes after an update must keep the sums' order: a live vertex's owner
+  // is no later than the part of its first triangle (its owner part adds its triangles of that part
+  // first, the halo phase the others' in ascending order), and a group is interior to part p only if
+  // every live vertex in it has all its triangles in p and is owned by p; any other group is a halo
+  // group (an update may leave a group halo, or a dead vertex's owner, that a rebuild would not:
+  // that costs time, not bits). Every group is classified once.
+  std::vector<std::int32_t> may_be(s.groups(), 0);  // the part a group may be interior to, or kHalo
+  for (std::size_t g = 0; g < s.groups(); ++g) {
+    std::int64_t part = -1;
+    bool halo = false;
+    for (std::size_t v = g * kGroup; v < std::min(m.vertex_slots(), (g + 1) * kGroup); ++v) {
+      const auto list = adj.of(static_cast<Index>(v));
+      if (!m.vertex_alive[v] || list.empty()) continue;
+      const std::size_t own = s.owner(static_cast<Index>(v));
+      const std::size_t first = s.part_of_triangle(static_cast<std::size_t>(list.front()));
+      const std::size_t last = s.part_of_triangle(static_cast<std::size_t>(list.back()));
+      wrong += own > first;
+      halo = halo || own != first || last != first || (part >= 0 && static_cast<std::size_t>(part) != first);
+      part = static_cast<std::int64_t>(first);
+    }
+    may_be[g] = halo ? DeformSchedule::kHalo : static_cast<std::int32_t>(std::max<std::int64_t>(part, 0));
+  }
+  std::size_t classified = s.halo_groups().size();
+  for (std::size_t p = 0; p < parts; ++p) {
+    classified += s.interior_groups(p).size();
+    for (std::int32_t g : s.interior_groups(p)) {
+      const std::int32_t allowed = may_be[static_cast<std::size_t>(g)];
+      wrong += allowed == DeformSchedule::kHalo || (allowed != static_cast<std::int32_t>(p) && !free_group(m, adj, g));
+    }
+  }
+  wrong += classified != s.groups();
   for (std::size_t b = 0; b < fresh.blocks(); ++b)
     EXPECT_EQ(fresh.block_mixed(b), has_foreign_corner(fresh, m, b)) << "a fresh schedule is exact, block " << b;
   for (std::size_t t = 0; t < m.triangle_slots(); ++t)

@@ -88,8 +88,12 @@ class DeformSchedule {
  private:
   template <class Real>
   void rebuild(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t parts, Execution exec);
+  /// owner_[v] and last_part_[v] from vertex v's list.
   template <class Real>
-  void classify(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t g);
+  void refresh_vertex(const TriMesh<Real>& m, const VertexTriangles& adj, std::size_t v);
+  /// group_part_[g] from its live vertices' owner_ and last_part_; whether it changed.
+  template <class Real>
+  bool classify(const TriMesh<Real>& m, std::size_t g);
   void build_buckets();
   /// Whether live triangle t has a corner not owned by `part` (false for a dead slot).
   template <class Real>
@@ -103,12 +107,17 @@ class DeformSchedule {
   std::size_t blocks_ = 0, triangles_ = 0, vertices_ = 0;
   std::vector<std::size_t> part_first_block_ = {0};
   std::vector<std::uint16_t> block_part_;
-  std::vector<std::uint16_t> owner_;          ///< per vertex slot: the part of its first triangle
-  std::vector<std::int32_t> group_part_;      ///< per group: the part it is interior to, or kHalo
-  std::vector<std::int32_t> bucket_;          ///< per part: first entry in interior_
-  std::vector<std::int32_t> interior_;        ///< interior groups by part, ascending
-  std::vector<std::int32_t> next_;            ///< build_buckets() scratch
-  std::vector<std::int32_t> halo_;            ///< halo groups, ascending
+  std::vector<std::uint16_t> owner_;  ///< per vertex slot: the part of its first triangle
+  /// Per vertex slot: the part of its last triangle, or kNoTriangles (dead, or without triangles).
+  /// With owner_ it classifies a group without reading its vertices' lists: an update reads only
+  /// the lists of the touched vertices.
+  std::vector<std::uint16_t> last_part_;
+  static constexpr std::uint16_t kNoTriangles = 0xFFFF;  // above any part (kMaxParts - 1)
+  std::vector<std::int32_t> group_part_;                 ///< per group: the part it is interior to, or kHalo
+  std::vector<std::int32_t> bucket_;                     ///< per part: first entry in interior_
+  std::vector<std::int32_t> interior_;                   ///< interior groups by part, ascending
+  std::vector<std::int32_t> next_;                       ///< build_buckets() scratch
+  std::vector<std::int32_t> halo_;                       ///< halo groups, ascending
   std::vector<std::uint8_t> foreign_;         ///< per triangle slot: 1 if live with a corner owned by another part
   std::vector<std::uint32_t> block_foreign_;  ///< per block: its triangles with foreign_ set
   std::vector<Index> touched_groups_;         ///< update() scratch: the groups of touched_
