@@ -13,6 +13,7 @@
 //     opacity_correction: true
 //     lit_blend: false            # vsi.shade.modes: Blinn-Phong in Blend too
 //     value_range: [lo, hi]       # vsi.data.norm_source: the values mapped to [0, 1]; default scanned
+//                                 # (a .vlb/.nrrd file: [0, 1], what its `normalise` at load mapped)
 //     gradient: {radius: 2, neighbourhood: cube, bits: 8, cache: true}
 //     light: {position_camera: [1, 1, 1], ambient: 0.2, diffuse: 0.7, specular: 0.3, exponent: 32, gate: 0}
 //     mask:
