@@ -17,6 +17,7 @@
 #include <numeric>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace meltlab::sim {
@@ -88,8 +89,29 @@ std::vector<Index> smallest_of_part(const TriMesh<double>& m) {
   return low;
 }
 
+// Rem's unions with splicing (the check's) against finds with path halving and a link of the larger
+// root under the smaller: the same parents after flatten() (each slot's smallest part member), for
+// random pairs in random orders, few enough to leave many parts; and before flatten() no slot's
+// parent is larger than the slot (what makes one ascending pass of flatten() enough).
+TEST(Remnants, SplicedUnionsGiveTheParentsOfLinkedFinds) {
+  std::mt19937 rng(17);
+  for (int round = 0; round < 20; ++round) {
+    const std::size_t n = 500 + rng() % 3000;
+    std::vector<std::pair<Index, Index>> pairs(n * (round % 4 + 1) / 4);
+    std::uniform_int_distribution<Index> any(0, static_cast<Index>(n) - 1);
+    for (auto& [a, b] : pairs) a = any(rng), b = any(rng);
+    UnionFind linked(n), spliced(n);
+    for (const auto& [a, b] : pairs) linked.unite(a, b);
+    std::shuffle(pairs.begin(), pairs.end(), rng);
+    for (const auto& [a, b] : pairs) spliced.unite_spliced(a, b);
+    for (std::size_t v = 0; v < n; ++v) ASSERT_LE(spliced.parent[v], static_cast<Index>(v)) << "round " << round;
+    linked.flatten(), spliced.flatten();
+    EXPECT_EQ(spliced.parent, linked.parent) << "round " << round << ", " << pairs.size() << " pairs on " << n;
+  }
+}
+
 // The parts the check finds (each slot's root after flatten: the smallest index of its part) against
-// the reference, serial and on the threads (more than 2 x 2048 triangles: the union-find splits), on
+// the reference, serial and on the threads (more than 2 x 2048 triangles: the volumes are summed in chunks), on
 // twelve spheres and forty strips with their vertices renumbered at random, in their generated
 // triangle order (the loops then take most corners' roots from the triangle before) and shuffled,
 // with every fifth triangle dead (a sphere may fall apart into pieces, a strip does).

@@ -478,10 +478,9 @@ TEST(Simulator, CompactsWhenTheDeadSlotsHaveCostACompaction) {
 }
 
 // Spheres of 1280 triangles, every third one inside out, their vertices shuffled in index
-// order so that the unions of the two threads meet in deep trees: serial and parallel remnant
-// checks (more than 2 × 2048 triangles, so the union-find splits) remove the same parts, exactly
-// the inverted ones.
-TEST(Remnants, ParallelUnionFindRemovesTheSameParts) {
+// order (deep union-find trees): serial and parallel remnant checks (more than 2 × 2048 triangles,
+// so the parallel one sums the volumes in chunks) remove the same parts, exactly the inverted ones.
+TEST(Remnants, ParallelCheckRemovesTheSameParts) {
   IndexedMesh all;
   std::vector<int> inverted_vertex;
   std::int64_t inverted_parts = 0;

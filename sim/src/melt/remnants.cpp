@@ -18,76 +18,21 @@ namespace meltlab::sim {
 
 namespace {
 
-// The corners of the last triangle a loop over the triangles united, and the root that union
-// returned: a corner of the next triangle that is one of them is in that set (consecutive triangles
-// share a corner nearly always, two about half the time), so its find can start at that root.
-struct LastUnion {
-  Triangle corners = {-1, -1, -1};
-  Index root = -1;
-  bool has(Index v) const { return v == corners[0] || v == corners[1] || v == corners[2]; }
-};
-
-// Unites the corners of every live triangle. In parallel, a link is a compare-exchange of a root's
-// parent from itself to the smaller root, retried with fresh roots when another thread linked
-// first; a find halves its path with plain stores (each moves a non-root's parent to one of its
-// ancestors, which concurrent links cannot invalidate). Every link goes to a smaller index, so a
-// part's root is its smallest vertex whatever the order of the unions: the same parents after
-// flatten() as the serial loop.
+// Unites the corners of every live triangle, in triangle order, by Rem's algorithm with splicing
+// (UnionFind::unite_spliced): a part's root is its smallest vertex, so after flatten() the parents
+// are those of any order of the unions. One thread: it measured faster than the earlier unions on
+// the threads by compare-exchange (serial finds with path halving, per check: 84, 492 and 6 686 µs on
+// the geodesic 32k, the bunny and the dragon; on two threads 102, 416 and 5 498; spliced, serial:
+// 59, 287 and 3 966; docs/melt-core.md, issue 20 step 30).
 template <class Real>
-void unite_corners(const TriMesh<Real>& m, UnionFind& parts, Execution exec) {
+void unite_corners(const TriMesh<Real>& m, UnionFind& parts) {
   const std::size_t nt = m.triangle_slots();
-  if (exec == Execution::kSerial || nt < 2 * kParallelGrain) {
-    // A corner of the last live triangle needs no find: serially, the root the last links
-    // returned is still its root. The sets are the same, so are the roots (the smallest index of
-    // each).
-    LastUnion last;
-    auto root = [&](Index v) { return last.has(v) ? last.root : parts.find(v); };
-    for (std::size_t t = 0; t < nt; ++t) {
-      if (!m.triangle_alive[t]) continue;
-      const Triangle& tri = m.triangle[t];
-      // The two unions share the first corner's root: one find fewer than two unite() calls.
-      const Index r = parts.link(root(tri[0]), root(tri[1]));
-      last.root = parts.link(r, root(tri[2]));
-      last.corners = tri;
-    }
-    return;
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (!m.triangle_alive[t]) continue;
+    const Triangle& tri = m.triangle[t];
+    parts.unite_spliced(tri[0], tri[1]);
+    parts.unite_spliced(tri[0], tri[2]);
   }
-  Index* const parent = parts.parent.data();
-  auto at = [parent](Index x) { return std::atomic_ref<Index>(parent[static_cast<std::size_t>(x)]); };
-  auto find = [&at](Index x) {
-    for (;;) {
-      const Index p = at(x).load(std::memory_order_relaxed);
-      if (p == x) return x;
-      const Index g = at(p).load(std::memory_order_relaxed);
-      if (g != p) at(x).store(g, std::memory_order_relaxed);
-      x = g;
-    }
-  };
-  // Joins the sets of a and b (any members); returns the root of the joined set when it was
-  // made (another thread may link it further since).
-  auto unite = [&](Index a, Index b) {
-    for (;;) {
-      a = find(a);
-      b = find(b);
-      if (a == b) return a;
-      if (a < b) std::swap(a, b);
-      Index expected = a;
-      if (at(a).compare_exchange_strong(expected, b, std::memory_order_relaxed)) return b;
-    }
-  };
-  for_range(exec, nt, [&](std::size_t begin, std::size_t end) {
-    // A corner of the task's last triangle starts its find from the root the last union returned
-    // (another thread may have linked it since, but it stays a member of the set: sets only grow).
-    LastUnion last;
-    auto start = [&](Index v) { return last.has(v) ? last.root : v; };
-    for (std::size_t t = begin; t < end; ++t) {
-      if (!m.triangle_alive[t]) continue;
-      const Triangle& tri = m.triangle[t];
-      const Index r = unite(start(tri[0]), start(tri[1]));
-      last.root = unite(r, start(tri[2]));
-      last.corners = tri;
-    }
-  });
 }
 
 // The connected parts of the live triangles (`parts`: every slot's root after flatten()), found
@@ -96,8 +41,8 @@ void unite_corners(const TriMesh<Real>& m, UnionFind& parts, Execution exec) {
 // checks a melt usually changes no triangle (the 32k meshes of the benchmark merge none), and
 // comparing the arrays costs a tenth of the unions.
 template <class Real>
-void find_parts(const TriMesh<Real>& m, UnionFind& parts, std::vector<Triangle>& tris, std::vector<std::uint8_t>& alive,
-                Execution exec) {
+void find_parts(const TriMesh<Real>& m, UnionFind& parts, std::vector<Triangle>& tris,
+                std::vector<std::uint8_t>& alive) {
   const std::size_t nv = m.vertex_slots(), nt = m.triangle_slots();
   static_assert(sizeof(Triangle) == 3 * sizeof(Index));  // no padding: memcmp compares the corners
   const bool same = parts.parent.size() == nv && tris.size() == nt && alive.size() == nt &&
@@ -105,7 +50,7 @@ void find_parts(const TriMesh<Real>& m, UnionFind& parts, std::vector<Triangle>&
                                  std::memcmp(tris.data(), m.triangle.data(), nt * sizeof(Triangle)) == 0));
   if (same) return;
   parts.reset(nv);
-  unite_corners(m, parts, exec);
+  unite_corners(m, parts);
   parts.flatten();
   tris = m.triangle;
   alive = m.triangle_alive;
@@ -190,7 +135,7 @@ template <class Real>
 std::int64_t remove_inverted_parts_pass(TriMesh<Real>& m, MeltWorkspace& ws, Execution exec) {
   const std::size_t nv = m.vertex_slots(), nt = m.triangle_slots();
   UnionFind& parts = ws.remnant_parts;
-  find_parts(m, parts, ws.remnant_triangles, ws.remnant_alive, exec);
+  find_parts(m, parts, ws.remnant_triangles, ws.remnant_alive);
   const std::vector<Index>& parent = parts.parent;  // each slot's root
   // Corners from the packed copy of the positions when it is current (the same numbers; one
   // cache line per corner instead of three).

@@ -38,6 +38,25 @@ struct UnionFind {
     parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
     return std::min(a, b);
   }
+  /// Joins the sets of a and b (any members) by Rem's algorithm with splicing: both are walked
+  /// up together, the one with the larger parent first, and each step moves that node's parent
+  /// to the other's (smaller) parent. Every node's parent stays no larger than the node, so each
+  /// root is its set's smallest index, as with link(); the sets and, after flatten(), the parents
+  /// are the same as any other sequence of unions of the same pairs gives.
+  void unite_spliced(Index x, Index y) {
+    Index* const p = parent.data();
+    auto at = [p](Index v) -> Index& { return p[static_cast<std::size_t>(v)]; };
+    while (at(x) != at(y)) {
+      if (at(x) < at(y)) std::swap(x, y);
+      if (at(x) == x) {  // x is a root: hang it below y's parent
+        at(x) = at(y);
+        return;
+      }
+      const Index z = at(x);
+      at(x) = at(y);
+      x = z;
+    }
+  }
   /// Points every slot straight at its root: every link goes to a smaller index, so one
   /// ascending pass does it. Afterwards parent[v] is v's root.
   void flatten() {
