@@ -101,9 +101,9 @@ TEST(Remnants, SplicedUnionsGiveTheParentsOfLinkedFinds) {
     std::uniform_int_distribution<Index> any(0, static_cast<Index>(n) - 1);
     for (auto& [a, b] : pairs) a = any(rng), b = any(rng);
     UnionFind linked(n), spliced(n);
-    for (const auto& [a, b] : pairs) linked.unite(a, b);
+    for (const auto& [a, b] : pairs) linked.link(linked.find(a), linked.find(b));
     std::shuffle(pairs.begin(), pairs.end(), rng);
-    for (const auto& [a, b] : pairs) spliced.unite_spliced(a, b);
+    for (const auto& [a, b] : pairs) spliced.unite(a, b);
     for (std::size_t v = 0; v < n; ++v) ASSERT_LE(spliced.parent[v], static_cast<Index>(v)) << "round " << round;
     linked.flatten(), spliced.flatten();
     EXPECT_EQ(spliced.parent, linked.parent) << "round " << round << ", " << pairs.size() << " pairs on " << n;

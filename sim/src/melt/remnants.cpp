@@ -19,7 +19,7 @@ namespace meltlab::sim {
 namespace {
 
 // Unites the corners of every live triangle, in triangle order, by Rem's algorithm with splicing
-// (UnionFind::unite_spliced): a part's root is its smallest vertex, so after flatten() the parents
+// (UnionFind::unite): a part's root is its smallest vertex, so after flatten() the parents
 // are those of any order of the unions. One thread: it measured faster than the earlier unions on
 // the threads by compare-exchange (serial finds with path halving, per check: 84, 492 and 6 686 µs on
 // the geodesic 32k, the bunny and the dragon; on two threads 102, 416 and 5 498; spliced, serial:
@@ -30,8 +30,8 @@ void unite_corners(const TriMesh<Real>& m, UnionFind& parts) {
   for (std::size_t t = 0; t < nt; ++t) {
     if (!m.triangle_alive[t]) continue;
     const Triangle& tri = m.triangle[t];
-    parts.unite_spliced(tri[0], tri[1]);
-    parts.unite_spliced(tri[0], tri[2]);
+    parts.unite(tri[0], tri[1]);
+    parts.unite(tri[0], tri[2]);
   }
 }
 
