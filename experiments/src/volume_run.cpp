@@ -73,6 +73,14 @@ std::map<std::string, std::string> generator_record(const render::VolumeGenerate
           {"permutation", "Perlin 2002 reference"}};
 }
 
+/// The scene's volume for a renderer of linear volumes, with what its load did (the normalisation of
+/// a .vlb/.nrrd file); a blocked volume is refused, naming it.
+render::SceneVolume load_linear_scene_volume(const render::VolumeScene& scene) {
+  render::SceneVolume loaded = render::load_scene_volumes(scene);
+  if (loaded.is_bricked()) (void)render::load_scene_volume(scene);  // throws the refusal
+  return loaded;
+}
+
 /// Seed 003's data choices of a render of a .vlb/.nrrd file (`prefix`data.*); empty otherwise.
 json vsi_data_json(const render::VolumeScene& scene, const std::optional<render::Normalisation>& n,
                    const std::string& prefix = "") {
@@ -399,8 +407,7 @@ VolumeRenderRunResult run_slicing_render(const VolumeRenderRunOptions& o, render
   const std::string scene_name = o.scene_file.string();
   auto named = [&](const auto& call) { run_naming_scene(scene_name, call); };
   const auto t_load = std::chrono::steady_clock::now();
-  render::SceneVolume loaded = render::load_scene_volumes(scene);
-  if (loaded.is_bricked()) (void)render::load_scene_volume(scene);  // refuses a blocked volume, naming it
+  render::SceneVolume loaded = load_linear_scene_volume(scene);
   const render::Volume volume = std::move(loaded.dense);
   const double load_ms = ms_since(t_load);
   render::SlicingScene& sl = *scene.slicing;
@@ -535,8 +542,7 @@ VolumeRenderRunResult run_volume_render(const VolumeRenderRunOptions& o) {
   }
   if (scene.settings.model == render::OpticalModel::kTransferFunction) return run_tf_render(o, scene);
   if (o.sample_counts) throw InputError("--sample-counts is for model transfer_function");
-  const render::SceneVolume loaded = render::load_scene_volumes(scene);
-  if (loaded.is_bricked()) (void)render::load_scene_volume(scene);  // refuses a blocked volume, naming it
+  const render::SceneVolume loaded = load_linear_scene_volume(scene);
   const render::Volume& volume = loaded.dense;
   ImageF background;
   if (scene.mode == render::VolumeOutputMode::kComposite) {

@@ -101,7 +101,10 @@ TEST(Remnants, SplicedUnionsGiveTheParentsOfLinkedFinds) {
     std::uniform_int_distribution<Index> any(0, static_cast<Index>(n) - 1);
     for (auto& [a, b] : pairs) a = any(rng), b = any(rng);
     UnionFind linked(n), spliced(n);
-    for (const auto& [a, b] : pairs) linked.link(linked.find(a), linked.find(b));
+    for (const auto& [a, b] : pairs) {  // both roots found, the larger hung under the smaller
+      const Index ra = linked.find(a), rb = linked.find(b);
+      linked.parent[static_cast<std::size_t>(std::max(ra, rb))] = std::min(ra, rb);
+    }
     std::shuffle(pairs.begin(), pairs.end(), rng);
     for (const auto& [a, b] : pairs) spliced.unite(a, b);
     for (std::size_t v = 0; v < n; ++v) ASSERT_LE(spliced.parent[v], static_cast<Index>(v)) << "round " << round;

@@ -14,8 +14,8 @@
 namespace meltlab::sim {
 
 /// Union-find whose root is always the smallest index of its set (a node's parent is never larger
-/// than the node: unite and link hang larger under smaller), so the roots do not depend on the
-/// order of the unions.
+/// than the node: unite hangs larger under smaller), so the roots do not depend on the order of
+/// the unions.
 struct UnionFind {
   std::vector<Index> parent;
   UnionFind() = default;
@@ -32,18 +32,13 @@ struct UnionFind {
     }
     return x;
   }
-  /// Joins the sets of roots a and b; returns the root of the joined set.
-  Index link(Index a, Index b) {
-    if (a == b) return a;
-    parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
-    return std::min(a, b);
-  }
   /// Joins the sets of x and y (any members) by Rem's algorithm with splicing: both are walked
   /// up together, the one with the larger parent first, and each step moves that node's parent
   /// to the other's (smaller) parent. Every node's parent stays no larger than the node, so each
-  /// root is its set's smallest index, as with link(); the sets and, after flatten(), the parents
-  /// are the same as any other sequence of unions of the same pairs gives. (Against find() of both
-  /// and link(): 1.4-1.7x faster in the remnant check, docs/melt-core.md, issue 20 step 30.)
+  /// root is its set's smallest index; the sets and, after flatten(), the parents are the same as
+  /// any other sequence of unions of the same pairs gives. (Against finding both roots and hanging
+  /// the larger under the smaller: 1.4-1.7x faster in the remnant check, docs/melt-core.md, issue 20
+  /// step 30.)
   void unite(Index x, Index y) {
     Index* const p = parent.data();
     auto at = [p](Index v) -> Index& { return p[static_cast<std::size_t>(v)]; };
