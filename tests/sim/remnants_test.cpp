@@ -116,7 +116,7 @@ TEST(Remnants, SplicedUnionsGiveTheParentsOfLinkedFinds) {
 // The parts the check finds (each slot's root after flatten: the smallest index of its part) against
 // the reference, serial and on the threads (more than 2 x 2048 triangles: the volumes are summed in chunks), on
 // twelve spheres and forty strips with their vertices renumbered at random, in their generated
-// triangle order (the loops then take most corners' roots from the triangle before) and shuffled,
+// triangle order (consecutive unions share corners: short spliced walks) and shuffled (long ones),
 // with every fifth triangle dead (a sphere may fall apart into pieces, a strip does).
 TEST(Remnants, PartsAreTheSmallestVertexOfEachComponent) {
   IndexedMesh all;
